@@ -1,0 +1,289 @@
+//! The backend trait, solver settings and solve outcomes.
+
+use std::time::Duration;
+
+use nalgebra::DMatrix;
+
+use crate::error::LmiError;
+use crate::problem::{Block, SdpProblem};
+
+/// How a solve ended. Infeasibility is an outcome, not an error.
+///
+/// "Primal" is the problem in `x`, "dual" the problem in `Y` (see [`crate::problem`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SolveStatus {
+    /// Not solved yet (a freshly allocated [`SdpSolution`]).
+    Unsolved,
+    /// Optimal within the requested tolerances.
+    Solved,
+    /// Optimal within the relaxed ("reduced") tolerances only.
+    AlmostSolved,
+    /// No `x` makes `Σ xᵢFᵢ − F₀ ⪰ 0`; `dual` holds a certificate `Y`.
+    PrimalInfeasible,
+    /// The dual equalities have no solution `Y ⪰ 0`; `x` holds a certificate (an improving ray).
+    DualInfeasible,
+    /// Primal infeasibility detected within relaxed tolerances only.
+    AlmostPrimalInfeasible,
+    /// Dual infeasibility detected within relaxed tolerances only.
+    AlmostDualInfeasible,
+    /// The iteration limit was reached before convergence.
+    IterationLimit,
+    /// The time limit was reached before convergence.
+    TimeLimit,
+    /// The method stalled or broke down numerically (for example a factorisation failed).
+    NumericalTrouble,
+}
+
+impl SolveStatus {
+    /// `Solved` or `AlmostSolved`.
+    pub fn is_optimal(self) -> bool {
+        matches!(self, SolveStatus::Solved | SolveStatus::AlmostSolved)
+    }
+
+    /// A short lower-case label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            SolveStatus::Unsolved => "unsolved",
+            SolveStatus::Solved => "solved",
+            SolveStatus::AlmostSolved => "almost solved",
+            SolveStatus::PrimalInfeasible => "primal infeasible",
+            SolveStatus::DualInfeasible => "dual infeasible",
+            SolveStatus::AlmostPrimalInfeasible => "almost primal infeasible",
+            SolveStatus::AlmostDualInfeasible => "almost dual infeasible",
+            SolveStatus::IterationLimit => "iteration limit",
+            SolveStatus::TimeLimit => "time limit",
+            SolveStatus::NumericalTrouble => "numerical trouble",
+        }
+    }
+}
+
+impl std::fmt::Display for SolveStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
+/// The result of a solve. Allocated once per structure ([`SdpSolution::new`]) and overwritten by
+/// every solve, so that repeated solves need not allocate.
+#[derive(Debug, Clone)]
+pub struct SdpSolution {
+    /// How the solve ended.
+    pub status: SolveStatus,
+    /// Primal decision vector `x` (a certificate ray when `status` is dual infeasible).
+    pub x: Vec<f64>,
+    /// Dual matrix `Y`, one dense symmetric matrix per block; diagonal for nonnegative blocks
+    /// (a certificate when `status` is primal infeasible).
+    pub dual: Vec<DMatrix<f64>>,
+    /// `cᵀx`.
+    pub primal_objective: f64,
+    /// `tr(F₀ Y)`.
+    pub dual_objective: f64,
+    /// Interior-point iterations performed.
+    pub iterations: u32,
+    /// Relative primal residual reported by the backend (infeasibility of `x`).
+    pub primal_residual: f64,
+    /// Relative dual residual reported by the backend (`‖tr(Fᵢ Y) − cᵢ‖` scaled).
+    pub dual_residual: f64,
+    /// Wall-clock time of the numeric solve (not of the setup).
+    pub solve_time: Duration,
+}
+
+impl SdpSolution {
+    /// Allocates a solution sized for `problem`.
+    pub fn new(problem: &SdpProblem) -> Self {
+        Self {
+            status: SolveStatus::Unsolved,
+            x: vec![0.0; problem.num_vars()],
+            dual: problem
+                .blocks()
+                .iter()
+                .map(|b| DMatrix::zeros(b.size(), b.size()))
+                .collect(),
+            primal_objective: f64::NAN,
+            dual_objective: f64::NAN,
+            iterations: 0,
+            primal_residual: f64::NAN,
+            dual_residual: f64::NAN,
+            solve_time: Duration::ZERO,
+        }
+    }
+
+    /// Whether this solution is sized for `problem`.
+    pub fn fits(&self, problem: &SdpProblem) -> bool {
+        self.x.len() == problem.num_vars()
+            && self.dual.len() == problem.blocks().len()
+            && self
+                .dual
+                .iter()
+                .zip(problem.blocks())
+                .all(|(y, b): (&DMatrix<f64>, &Block)| y.nrows() == b.size() && y.ncols() == b.size())
+    }
+
+    /// Relative duality gap `|cᵀx − tr(F₀Y)| / (1 + |cᵀx| + |tr(F₀Y)|)`.
+    pub fn relative_gap(&self) -> f64 {
+        (self.primal_objective - self.dual_objective).abs()
+            / (1.0 + self.primal_objective.abs() + self.dual_objective.abs())
+    }
+}
+
+/// Settings shared by all backends. Build with [`SolverSettings::builder`] (validated) or use
+/// [`SolverSettings::default`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverSettings {
+    /// Maximum number of interior-point iterations.
+    pub max_iterations: u32,
+    /// Relative duality-gap tolerance for `Solved`.
+    pub tol_gap_rel: f64,
+    /// Absolute duality-gap tolerance for `Solved`.
+    pub tol_gap_abs: f64,
+    /// Relative primal and dual feasibility tolerance for `Solved`.
+    pub tol_feas: f64,
+    /// Tolerance of infeasibility certificates.
+    pub tol_infeas: f64,
+    /// Factor by which the tolerances are relaxed for the `Almost…` outcomes.
+    pub reduced_tol_factor: f64,
+    /// Optional wall-clock limit for one solve.
+    pub time_limit: Option<Duration>,
+    /// Print iteration logs to standard error.
+    pub verbose: bool,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 100,
+            tol_gap_rel: 1e-9,
+            tol_gap_abs: 1e-9,
+            tol_feas: 1e-9,
+            tol_infeas: 1e-8,
+            reduced_tol_factor: 1e3,
+            time_limit: None,
+            verbose: false,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// A builder starting from the defaults.
+    pub fn builder() -> SolverSettingsBuilder {
+        SolverSettingsBuilder { settings: Self::default() }
+    }
+
+    /// Checks every field; called by each backend's constructor.
+    pub fn validate(&self) -> Result<(), LmiError> {
+        let positive = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(LmiError::InvalidSetting { name, reason: format!("must be finite and positive, got {v}") })
+            }
+        };
+        if self.max_iterations == 0 {
+            return Err(LmiError::InvalidSetting { name: "max_iterations", reason: "must be at least 1".into() });
+        }
+        positive("tol_gap_rel", self.tol_gap_rel)?;
+        positive("tol_gap_abs", self.tol_gap_abs)?;
+        positive("tol_feas", self.tol_feas)?;
+        positive("tol_infeas", self.tol_infeas)?;
+        if !(self.reduced_tol_factor.is_finite() && self.reduced_tol_factor >= 1.0) {
+            return Err(LmiError::InvalidSetting {
+                name: "reduced_tol_factor",
+                reason: format!("must be finite and at least 1, got {}", self.reduced_tol_factor),
+            });
+        }
+        if let Some(t) = self.time_limit {
+            if t.is_zero() {
+                return Err(LmiError::InvalidSetting { name: "time_limit", reason: "must be positive".into() });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Validated construction of [`SolverSettings`].
+#[derive(Debug, Clone)]
+pub struct SolverSettingsBuilder {
+    settings: SolverSettings,
+}
+
+impl SolverSettingsBuilder {
+    /// Maximum number of iterations (at least 1).
+    pub fn max_iterations(mut self, n: u32) -> Self {
+        self.settings.max_iterations = n;
+        self
+    }
+    /// Sets the gap (relative and absolute) and feasibility tolerances at once.
+    pub fn tolerance(mut self, tol: f64) -> Self {
+        self.settings.tol_gap_rel = tol;
+        self.settings.tol_gap_abs = tol;
+        self.settings.tol_feas = tol;
+        self
+    }
+    /// Infeasibility-certificate tolerance.
+    pub fn tol_infeas(mut self, tol: f64) -> Self {
+        self.settings.tol_infeas = tol;
+        self
+    }
+    /// Wall-clock limit of one solve.
+    pub fn time_limit(mut self, limit: Duration) -> Self {
+        self.settings.time_limit = Some(limit);
+        self
+    }
+    /// Iteration logs on standard error.
+    pub fn verbose(mut self, verbose: bool) -> Self {
+        self.settings.verbose = verbose;
+        self
+    }
+    /// Validates and returns the settings.
+    pub fn build(self) -> Result<SolverSettings, LmiError> {
+        self.settings.validate()?;
+        Ok(self.settings)
+    }
+}
+
+/// An SDP solver: set up once for a structure, then solve many problems of that structure.
+///
+/// Implementations hold their settings and every buffer a solve needs. `setup` analyses the
+/// structure (sizes, which entries of which `Fᵢ` are nonzero); `solve` reads only values. A
+/// problem that is infeasible, or a solve that stalls, ends with an [`SolveStatus`]; `Err` is
+/// only for bad input (a structure that differs from the one set up, NaN data).
+pub trait SdpBackend {
+    /// Short name used in tables and on the command line.
+    fn name(&self) -> &'static str;
+
+    /// Analyses `problem`'s structure and allocates what solves need.
+    fn setup(&mut self, problem: &SdpProblem) -> Result<(), LmiError>;
+
+    /// Solves `problem`, which must have the structure given to [`SdpBackend::setup`], writing
+    /// into `solution` (sized by [`SdpSolution::new`]).
+    fn solve(&mut self, problem: &SdpProblem, solution: &mut SdpSolution) -> Result<(), LmiError>;
+
+    /// Convenience: `setup`, then `solve` into a fresh solution.
+    fn setup_and_solve(&mut self, problem: &SdpProblem) -> Result<SdpSolution, LmiError> {
+        self.setup(problem)?;
+        let mut solution = SdpSolution::new(problem);
+        self.solve(problem, &mut solution)?;
+        Ok(solution)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_are_validated_with_named_errors() {
+        assert!(SolverSettings::builder().build().is_ok());
+        let err = SolverSettings::builder().max_iterations(0).build().unwrap_err().to_string();
+        assert!(err.contains("max_iterations"), "{err}");
+        let err = SolverSettings::builder().tolerance(f64::NAN).build().unwrap_err().to_string();
+        assert!(err.contains("tol_gap_rel") && err.contains("NaN"), "{err}");
+        let err = SolverSettings::builder().tol_infeas(-1.0).build().unwrap_err().to_string();
+        assert!(err.contains("tol_infeas"), "{err}");
+        let err = SolverSettings::builder().time_limit(Duration::ZERO).build().unwrap_err().to_string();
+        assert!(err.contains("time_limit"), "{err}");
+        let mut s = SolverSettings::default();
+        s.reduced_tol_factor = 0.5;
+        assert!(s.validate().unwrap_err().to_string().contains("reduced_tol_factor"));
+    }
+}

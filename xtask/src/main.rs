@@ -1,0 +1,2 @@
+//! `cargo xtask`: the repository's automation entry point.
+fn main() {}
