@@ -152,7 +152,7 @@ fn intersection_case() -> impl Strategy<Value = (Ellipsoid, MeasurementSet, DVec
 }
 
 proptest! {
-    #![proptest_config(config(5000))]
+    #![proptest_config(config(256))]
 
     #[test]
     fn minkowski_bounds_contain_sums(
@@ -432,5 +432,44 @@ proptest! {
         let s = 1.7;
         let lv = e.scaled(s).expect("ok").log_volume() - e.log_volume();
         prop_assert!((lv - n as f64 * s.ln()).abs() <= 1e-10);
+    }
+}
+
+proptest! {
+    #![proptest_config(config(32))]
+
+    /// Larger dimensions (as used by the estimators): the main operations stay consistent.
+    #[test]
+    fn large_dimensions(
+        (a, b, cvals, seed) in (10usize..=20).prop_flat_map(|n| (
+            ellipsoid(n, 3.0),
+            ellipsoid(n, 3.0),
+            prop::collection::vec(-2.0..2.0f64, 4 * n),
+            any::<u64>(),
+        ))
+    ) {
+        let n = a.dim();
+        let mut rng = Rng(seed);
+        let (sum, _) = a.minkowski_sum_min_trace(&b).expect("ok");
+        for _ in 0..10 {
+            let x = rng.sample(&a, true) + rng.sample(&b, true);
+            prop_assert!(sum.normalized_distance(&x).expect("dim") <= 1.0 + TOL);
+        }
+        prop_assert!(sum.contains_ellipsoid(&a.translated(b.center()).expect("ok")).expect("ok"));
+        let s = 0.999;
+        prop_assert!(a.contains_ellipsoid(&a.scaled(s).expect("ok")).expect("ok"));
+        prop_assert!(!a.contains_ellipsoid(&a.scaled(1.0 / s).expect("ok")).expect("ok"));
+
+        let c = DMatrix::from_row_slice(4, n, &cvals);
+        let x0 = rng.sample(&a, false);
+        let noise = DMatrix::<f64>::identity(4, 4) * 0.5;
+        let y = &c * &x0 + rng.ball_point(4, false) * 0.5f64.sqrt();
+        let meas = MeasurementSet::new(c, y, noise).expect("valid");
+        let (bound, _) = a.intersect_measurement_min_trace(&meas).expect("ok");
+        let e = bound.ellipsoid().expect("x0 is common");
+        for x in common_points(&a, &meas, &x0, &mut rng) {
+            prop_assert!(e.normalized_distance(&x).expect("dim") <= 1.0 + TOL);
+        }
+        prop_assert!(e.trace() <= a.trace() * (1.0 + 1e-12));
     }
 }

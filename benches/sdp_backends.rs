@@ -1,0 +1,93 @@
+//! SDP backends side by side: the filter LMI (28) for (n, m) = (4, 3), (4, 4), (8, 4) — setup +
+//! solve and solve only — and SDPLIB `hinf1`, `control1`, `truss1`, for every backend compiled in
+//! (`cargo bench --bench sdp_backends`; add `--features clarabel` for Clarabel).
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use lmi::filter_sdp::{FilterSdp, FilterSdpData};
+use lmi::{SdpSolution, SolverSettings, backend_by_name, backend_names};
+use nalgebra::{DMatrix, DVector};
+
+/// A deterministic stable `n × n` system with `m` outputs (the reference case of the `lmi` issue
+/// for n = 4, m = 3; otherwise a lightly coupled damped chain).
+fn filter_case(n: usize, m: usize) -> FilterSdp {
+    #[rustfmt::skip]
+    let a4 = [
+        0.755139296689566, -0.019699090506075354, -0.04774305144944732, -0.0018915821287349352,
+        -0.009311961979518266, 0.9417205179851139, 0.0002699108914448061, 1.0206142568712238e-05,
+        -0.0007011828373116359, -3.020454597046461e-05, 0.9998073936269428, 0.00999272470285723,
+        -0.13392137898100265, -0.005464612817309362, -0.03728944211821784, 0.9985252052798118,
+    ];
+    let a = if n == 4 {
+        DMatrix::from_row_slice(4, 4, &a4)
+    } else {
+        DMatrix::from_fn(n, n, |i, j| match (i as isize) - (j as isize) {
+            0 => 0.95 - 0.01 * i as f64,
+            -1 => 0.05,
+            1 => -0.03,
+            _ => 0.002 * ((i * 7 + j * 3) % 5) as f64,
+        })
+    };
+    // Measure the last m states (the first, like the sideslip, is unmeasured when m < n).
+    let c = DMatrix::from_fn(m, n, |i, j| if j == n - m + i { 1.0 } else { 0.0 });
+    let q = DMatrix::identity(n, n) * 0.01;
+    let r = DMatrix::identity(m, m) * 0.05;
+    let p = DMatrix::identity(n, n) * 0.5;
+    let x = DVector::zeros(n);
+    FilterSdp::new(&FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x }).expect("valid case")
+}
+
+fn filter_lmi(crit: &mut Criterion) {
+    let mut group = crit.benchmark_group("filter_lmi_28");
+    for (n, m) in [(4, 3), (4, 4), (8, 4)] {
+        let sdp = filter_case(n, m);
+        let problem = sdp.problem();
+        for name in backend_names() {
+            let label = format!("{name}/n{n}m{m}");
+            group.bench_function(BenchmarkId::new("setup+solve", &label), |b| {
+                b.iter(|| {
+                    let mut backend = backend_by_name(name, SolverSettings::default()).unwrap();
+                    black_box(backend.setup_and_solve(black_box(problem)).unwrap().status)
+                })
+            });
+            let mut backend = backend_by_name(name, SolverSettings::default()).unwrap();
+            backend.setup(problem).unwrap();
+            let mut sol = SdpSolution::new(problem);
+            group.bench_function(BenchmarkId::new("solve", &label), |b| {
+                b.iter(|| {
+                    backend.solve(black_box(problem), &mut sol).unwrap();
+                    black_box(sol.status)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn sdplib(crit: &mut Criterion) {
+    let Some(dir) = lmi::sdplib::sdplib_dir() else {
+        eprintln!("SDPLIB directory not found (set SDPLIB_DIR); skipping the SDPLIB benchmarks");
+        return;
+    };
+    let mut group = crit.benchmark_group("sdplib");
+    group.sample_size(20);
+    for name in ["hinf1", "control1", "truss1"] {
+        let problem = lmi::read_sdpa_file(&dir.join(format!("{name}.dat-s"))).expect("SDPLIB file");
+        for backend_name in backend_names() {
+            let mut backend = backend_by_name(backend_name, SolverSettings::default()).unwrap();
+            backend.setup(&problem).unwrap();
+            let mut sol = SdpSolution::new(&problem);
+            group.bench_function(BenchmarkId::new(backend_name, name), |b| {
+                b.iter(|| {
+                    backend.solve(black_box(&problem), &mut sol).unwrap();
+                    black_box(sol.status)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, filter_lmi, sdplib);
+criterion_main!(benches);

@@ -1,0 +1,221 @@
+//! The SDPLIB peer test suite: locating the problems and their reference outcomes.
+//!
+//! The problems are read from a directory (by default `../shared/sdplib` next to the workspace,
+//! or the directory named by the environment variable `SDPLIB_DIR`), and the expected outcomes
+//! from the table in that directory's `README.md` (`| problem | m | blocks | optimum |`), so that
+//! the reference values live in one place.
+//!
+//! Naming of infeasible problems: the README's labels use SDPA's naming, the same as this crate
+//! (primal = the problem in `x`). `infp1` is [`SolveStatus::PrimalInfeasible`] (a certificate
+//! `Y ⪰ 0`, `tr(FᵢY) = 0`, `tr(F₀Y) > 0` exists) and `infd1` is [`SolveStatus::DualInfeasible`];
+//! [`check_certificate`] verifies each certificate independently of the solver, which is how
+//! this was established (CSDP and the SDPLIB paper call the problem in `Y` the primal, so the
+//! labels there are swapped).
+
+use std::path::{Path, PathBuf};
+
+use crate::error::LmiError;
+use crate::problem::SdpProblem;
+use crate::solver::{SdpSolution, SolveStatus};
+
+/// Environment variable that overrides the SDPLIB directory.
+pub const SDPLIB_DIR_VAR: &str = "SDPLIB_DIR";
+
+/// The SDPLIB directory: `$SDPLIB_DIR` if set, else `<workspace>/../shared/sdplib`; `None` if
+/// it does not exist.
+pub fn sdplib_dir() -> Option<PathBuf> {
+    let dir = match std::env::var_os(SDPLIB_DIR_VAR) {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/sdplib"),
+    };
+    dir.is_dir().then_some(dir)
+}
+
+/// What a problem of the suite should end with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Expected {
+    /// An optimum with this objective, given to `digits` significant digits.
+    Optimal {
+        /// The reference objective value.
+        value: f64,
+        /// Significant digits of the reference.
+        digits: u32,
+    },
+    /// Infeasibility on the side named by the status (this crate's naming).
+    Infeasible(SolveStatus),
+}
+
+impl Expected {
+    /// Tolerance on the objective: relative `1e-6` where the reference has at least 7
+    /// significant digits, otherwise half a unit in its last digit.
+    pub fn tolerance(&self) -> f64 {
+        match *self {
+            Expected::Optimal { value, digits } => {
+                if digits >= 7 {
+                    1e-6 * value.abs()
+                } else {
+                    let exponent = value.abs().log10().floor() as i32;
+                    0.5 * 10f64.powi(exponent + 1 - digits as i32)
+                }
+            }
+            Expected::Infeasible(_) => 0.0,
+        }
+    }
+}
+
+/// One problem of the suite.
+#[derive(Debug, Clone)]
+pub struct SuiteProblem {
+    /// Name (file stem), e.g. `control1`.
+    pub name: String,
+    /// Path of the `.dat-s` file.
+    pub path: PathBuf,
+    /// The reference outcome.
+    pub expected: Expected,
+}
+
+/// Parses the reference table of the suite's `README.md` and pairs it with the files present.
+/// Problems listed without a file, or files without a reference, are errors.
+pub fn suite(dir: &Path) -> Result<Vec<SuiteProblem>, LmiError> {
+    let readme = dir.join("README.md");
+    let text = std::fs::read_to_string(&readme)
+        .map_err(|e| LmiError::Sdpa { line: 0, message: format!("{}: {e}", readme.display()) })?;
+    let mut out = Vec::new();
+    for (lineno, line) in text.lines().enumerate() {
+        let cells: Vec<&str> = line.trim().trim_matches('|').split('|').map(str::trim).collect();
+        if cells.len() != 4 || cells[0] == "problem" || cells[0].starts_with("---") {
+            continue;
+        }
+        let name = cells[0];
+        if cells[1].parse::<usize>().is_err() {
+            continue;
+        }
+        let expected = parse_outcome(cells[3]).ok_or_else(|| LmiError::Sdpa {
+            line: lineno + 1,
+            message: format!("{}: cannot read the reference outcome {:?}", readme.display(), cells[3]),
+        })?;
+        let path = dir.join(format!("{name}.dat-s"));
+        if !path.is_file() {
+            return Err(LmiError::Sdpa { line: lineno + 1, message: format!("{} is listed but missing", path.display()) });
+        }
+        out.push(SuiteProblem { name: name.to_owned(), path, expected });
+    }
+    if out.is_empty() {
+        return Err(LmiError::Sdpa { line: 0, message: format!("{}: no reference table found", readme.display()) });
+    }
+    Ok(out)
+}
+
+fn parse_outcome(cell: &str) -> Option<Expected> {
+    match cell {
+        "primal infeasible" => return Some(Expected::Infeasible(SolveStatus::PrimalInfeasible)),
+        "dual infeasible" => return Some(Expected::Infeasible(SolveStatus::DualInfeasible)),
+        _ => {}
+    }
+    let s = cell.replace('\u{2212}', "-");
+    let value: f64 = s.parse().ok()?;
+    let mantissa = s.trim_start_matches(['-', '+']).split(['e', 'E']).next()?;
+    let digits = mantissa.trim_start_matches(['0', '.']).chars().filter(char::is_ascii_digit).count() as u32;
+    Some(Expected::Optimal { value, digits: digits.max(1) })
+}
+
+/// Checks an infeasibility certificate independently of the solver, returning a description
+/// of what is wrong, if anything. For [`SolveStatus::PrimalInfeasible`]: `Y ⪰ 0`,
+/// `tr(FᵢY) ≈ 0`, `tr(F₀Y) > 0`; for [`SolveStatus::DualInfeasible`]: `Σ xᵢFᵢ ⪰ 0`, `cᵀx < 0`
+/// (both up to relative tolerance `tol`).
+pub fn check_certificate(problem: &SdpProblem, solution: &SdpSolution, tol: f64) -> Result<(), String> {
+    match solution.status {
+        SolveStatus::PrimalInfeasible | SolveStatus::AlmostPrimalInfeasible => {
+            let t = problem.traces(&solution.dual).map_err(|e| e.to_string())?;
+            let scale = t[0];
+            if scale <= 0.0 {
+                return Err(format!("tr(F0 Y) = {scale} is not positive"));
+            }
+            let worst = t[1..].iter().fold(0.0f64, |m, v| m.max(v.abs())) / scale;
+            if worst > tol {
+                return Err(format!("max |tr(Fi Y)| / tr(F0 Y) = {worst:e}"));
+            }
+            let min_eig = solution
+                .dual
+                .iter()
+                .map(|y| y.clone().symmetric_eigenvalues().min())
+                .fold(f64::INFINITY, f64::min);
+            let ynorm = solution.dual.iter().map(|y| y.norm()).fold(0.0, f64::max);
+            if min_eig < -tol * ynorm {
+                return Err(format!("Y has eigenvalue {min_eig:e}"));
+            }
+            Ok(())
+        }
+        SolveStatus::DualInfeasible | SolveStatus::AlmostDualInfeasible => {
+            let cx: f64 = problem.c().iter().zip(&solution.x).map(|(c, x)| c * x).sum();
+            if cx >= 0.0 {
+                return Err(format!("c'x = {cx} is not negative"));
+            }
+            // Σ xᵢFᵢ = slack(x) + F₀; scale by |cᵀx|.
+            let zero = vec![0.0; problem.num_vars()];
+            let f0 = problem.slack(&zero).map_err(|e| e.to_string())?;
+            let s = problem.slack(&solution.x).map_err(|e| e.to_string())?;
+            for (sb, f0b) in s.iter().zip(&f0) {
+                let ray = sb - f0b; // Σ xᵢFᵢ (slack(0) = −F₀)
+                let min_eig = ray.symmetric_eigenvalues().min();
+                if min_eig < -tol * cx.abs() {
+                    return Err(format!("sum x_i F_i has eigenvalue {min_eig:e} (c'x = {cx:e})"));
+                }
+            }
+            Ok(())
+        }
+        s => Err(format!("status {s} is not an infeasibility status")),
+    }
+}
+
+/// Whether `solution` matches `expected`: an optimal status with the objective within
+/// [`Expected::tolerance`], or infeasibility on the expected side (an `Almost…` status on that
+/// side counts) with a certificate that passes [`check_certificate`] at `1e-6`. `Err` says why not.
+pub fn check_outcome(expected: &Expected, problem: &SdpProblem, solution: &SdpSolution) -> Result<(), String> {
+    match *expected {
+        Expected::Optimal { value, .. } => {
+            let err = (solution.primal_objective - value).abs();
+            if !solution.status.is_optimal() {
+                Err(format!("status {} (expected an optimum)", solution.status))
+            } else if err > expected.tolerance() {
+                Err(format!(
+                    "objective {} differs from {value} by {err:.2e} (tolerance {:.2e})",
+                    solution.primal_objective,
+                    expected.tolerance()
+                ))
+            } else {
+                Ok(())
+            }
+        }
+        Expected::Infeasible(side) => {
+            let same_side = solution.status == side
+                || matches!(
+                    (side, solution.status),
+                    (SolveStatus::PrimalInfeasible, SolveStatus::AlmostPrimalInfeasible)
+                        | (SolveStatus::DualInfeasible, SolveStatus::AlmostDualInfeasible)
+                );
+            if !same_side {
+                return Err(format!("status {} (expected {side})", solution.status));
+            }
+            check_certificate(problem, solution, 1e-6).map_err(|e| format!("certificate: {e}"))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn outcomes_and_tolerances() {
+        assert_eq!(parse_outcome("1.778463e+01"), Some(Expected::Optimal { value: 17.78463, digits: 7 }));
+        assert_eq!(parse_outcome("\u{2212}8.999996e+00"), Some(Expected::Optimal { value: -8.999996, digits: 7 }));
+        assert_eq!(parse_outcome("5.69e+01"), Some(Expected::Optimal { value: 56.9, digits: 3 }));
+        assert_eq!(parse_outcome("primal infeasible"), Some(Expected::Infeasible(SolveStatus::PrimalInfeasible)));
+        assert_eq!(parse_outcome("dual infeasible"), Some(Expected::Infeasible(SolveStatus::DualInfeasible)));
+        assert_eq!(parse_outcome("nonsense"), None);
+        assert!((Expected::Optimal { value: 56.9, digits: 3 }.tolerance() - 0.05).abs() < 1e-15);
+        assert!((Expected::Optimal { value: 2.0326, digits: 5 }.tolerance() - 5e-5).abs() < 1e-15);
+        assert!((Expected::Optimal { value: 17.78463, digits: 7 }.tolerance() - 17.78463e-6).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,121 @@
+//! CSV files and SVG figures of a scenario's runs.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use nalgebra::DVector;
+
+use super::runner::Run;
+use super::scenarios::{STATES, TS};
+use crate::plot::{Chart, PALETTE, Series};
+
+/// A file-name-safe identifier of an estimator label.
+pub fn slug(label: &str) -> String {
+    let mut s: String = label
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' })
+        .collect();
+    while s.contains("__") {
+        s = s.replace("__", "_");
+    }
+    s.trim_matches('_').to_owned()
+}
+
+/// One CSV per run: `k,t,x1..xn,xhat1..xhatn,lo1..lon,hi1..hin,trace,tau1,tau2,tau3,fallback`.
+pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>]) -> std::io::Result<()> {
+    let n = truth[0].len();
+    let mut out = String::new();
+    let cols = |p: &str| (1..=n).map(|i| format!("{p}{i}")).collect::<Vec<_>>().join(",");
+    let _ = writeln!(
+        out,
+        "k,t,{},{},{},{},trace,tau1,tau2,tau3,fallback",
+        cols("x"),
+        cols("xhat"),
+        cols("lo"),
+        cols("hi")
+    );
+    for (k, s) in run.snapshots.iter().enumerate() {
+        let mut line = format!("{k},{}", k as f64 * TS);
+        for v in truth[k].iter().chain(s.centre.iter()) {
+            let _ = write!(line, ",{v:e}");
+        }
+        for sign in [-1.0, 1.0] {
+            for i in 0..n {
+                let _ = write!(line, ",{:e}", s.centre[i] + sign * s.shape[(i, i)].max(0.0).sqrt());
+            }
+        }
+        let _ = write!(line, ",{:e}", s.shape.trace());
+        match s.tau {
+            Some(t) => {
+                let _ = write!(line, ",{:e},{:e},{:e}", t[0], t[1], t[2]);
+            }
+            None => line.push_str(",,,"),
+        }
+        let _ = writeln!(line, ",{}", u8::from(s.fallback));
+        out.push_str(&line);
+    }
+    std::fs::write(path, out)
+}
+
+/// The paper's Figures 3–6 (per state: truth, bounds of the set filters, Kalman estimate) and
+/// 7–10 (errors) for one scenario; returns the written file names (relative to `dir`).
+pub fn write_figures(
+    dir: &Path,
+    scenario_id: &str,
+    scenario_title: &str,
+    truth: &[DVector<f64>],
+    bound_runs: &[&Run],
+    estimate_runs: &[&Run],
+) -> std::io::Result<Vec<(String, String)>> {
+    let mut files = Vec::new();
+    let steps = bound_runs.iter().chain(estimate_runs).map(|r| r.snapshots.len()).min().unwrap_or(0);
+    let t: Vec<f64> = (0..steps).map(|k| k as f64 * TS).collect();
+    for (i, (id, name, unit)) in STATES.iter().enumerate() {
+        let fig = 3 + i;
+        let mut chart = Chart::new(
+            format!("Fig. {fig} — {name}: truth and bounds ({scenario_title})"),
+            "time t [s]",
+            format!("{name} [{unit}]"),
+        );
+        for (j, run) in bound_runs.iter().enumerate() {
+            let color = PALETTE[1 + j % (PALETTE.len() - 1)];
+            let lo: Vec<f64> =
+                run.snapshots[..steps].iter().map(|s| s.centre[i] - s.shape[(i, i)].max(0.0).sqrt()).collect();
+            let hi: Vec<f64> =
+                run.snapshots[..steps].iter().map(|s| s.centre[i] + s.shape[(i, i)].max(0.0).sqrt()).collect();
+            if j == 0 {
+                chart.add(Series::band(format!("{} bounds", run.label), t.clone(), lo, hi, color));
+            } else {
+                chart.add(Series::dashed(format!("{} upper", run.label), t.clone(), hi, color));
+                chart.add(Series::dashed(format!("{} lower", run.label), t.clone(), lo, color));
+            }
+        }
+        for (j, run) in estimate_runs.iter().enumerate() {
+            let color = PALETTE[(1 + bound_runs.len() + j) % PALETTE.len()];
+            let y = run.snapshots[..steps].iter().map(|s| s.centre[i]).collect();
+            chart.add(Series::line(format!("{} estimate", run.label), t.clone(), y, color));
+        }
+        chart.add(Series::line("truth", t.clone(), truth[..steps].iter().map(|x| x[i]).collect(), PALETTE[0]));
+        let file = format!("{scenario_id}_fig{fig}_{id}.svg");
+        chart.write(&dir.join(&file))?;
+        files.push((file, format!("Fig. {fig}: {name}")));
+    }
+    for (i, (id, name, unit)) in STATES.iter().enumerate() {
+        let fig = 7 + i;
+        let mut chart = Chart::new(
+            format!("Fig. {fig} — {name}: estimation error ({scenario_title})"),
+            "time t [s]",
+            format!("error in {name} [{unit}]"),
+        );
+        for (j, run) in bound_runs.iter().chain(estimate_runs).enumerate() {
+            let color = PALETTE[(1 + j) % PALETTE.len()];
+            let y = run.snapshots[..steps].iter().zip(truth).map(|(s, x)| s.centre[i] - x[i]).collect();
+            let what = if run.is_set { "centre − truth" } else { "estimate − truth" };
+            chart.add(Series::line(format!("{} {what}", run.label), t.clone(), y, color));
+        }
+        let file = format!("{scenario_id}_fig{fig}_{id}_error.svg");
+        chart.write(&dir.join(&file))?;
+        files.push((file, format!("Fig. {fig}: error in {name}")));
+    }
+    Ok(files)
+}

@@ -1,0 +1,168 @@
+//! Running estimators over a simulated trajectory and measuring them.
+
+use std::time::Instant;
+
+use carrier_dynamics::{StepMatrices, Trajectory};
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// What the reproduction needs from one estimator (adapters in `filters.rs`).
+pub trait Filter {
+    /// Label for tables and legends.
+    fn label(&self) -> String;
+    /// Whether the estimate is a guaranteed set (set-membership) rather than a mean/covariance.
+    fn is_set(&self) -> bool;
+    /// One step: consumes `u_k` and `y_{k+1}` with the step's matrices. Timed by the caller.
+    fn step(&mut self, m: &StepMatrices, u: &DVector<f64>, y: &DVector<f64>) -> Result<(), String>;
+    /// The current centre and shape (covariance for the Kalman filter), and the step's report.
+    fn current(&self) -> Snapshot;
+}
+
+/// A copy of an estimator's state after a step.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    /// Centre (or mean).
+    pub centre: DVector<f64>,
+    /// Shape `P` (or covariance).
+    pub shape: DMatrix<f64>,
+    /// S-procedure multipliers of the step, if any.
+    pub tau: Option<[f64; 3]>,
+    /// Whether the step fell back to a feasible multiplier because the solver failed.
+    pub fallback: bool,
+}
+
+/// The recorded run of one estimator: `k = 0` is the initial estimate.
+pub struct Run {
+    /// Estimator label.
+    pub label: String,
+    /// Whether it publishes guaranteed sets.
+    pub is_set: bool,
+    /// Snapshots for `k = 0..=steps`.
+    pub snapshots: Vec<Snapshot>,
+    /// Wall-clock time of each step, in nanoseconds.
+    pub step_ns: Vec<u64>,
+}
+
+/// Runs `filter` over the first `max_steps` steps of `traj` (timing only the step calls).
+pub fn run_filter(
+    filter: &mut dyn Filter,
+    steps: &[StepMatrices],
+    traj: &Trajectory,
+    max_steps: usize,
+) -> Result<Run, String> {
+    let n = max_steps.min(steps.len());
+    let mut snapshots = Vec::with_capacity(n + 1);
+    let mut step_ns = Vec::with_capacity(n);
+    snapshots.push(filter.current());
+    for k in 0..n {
+        let (u, y) = (&traj.inputs[k], &traj.measurements[k + 1]);
+        let t0 = Instant::now();
+        let r = filter.step(&steps[k], u, y);
+        step_ns.push(t0.elapsed().as_nanos() as u64);
+        r.map_err(|e| format!("{} at step {k}: {e}", filter.label()))?;
+        snapshots.push(filter.current());
+    }
+    Ok(Run { label: filter.label(), is_set: filter.is_set(), snapshots, step_ns })
+}
+
+/// `(x − c)ᵀ P⁻¹ (x − c)`, or `+∞` if `P` is not positive definite.
+pub fn normalized_distance(x: &DVector<f64>, centre: &DVector<f64>, shape: &DMatrix<f64>) -> f64 {
+    match shape.clone().cholesky() {
+        Some(ch) => {
+            let d = x - centre;
+            d.dot(&ch.solve(&d))
+        }
+        None => f64::INFINITY,
+    }
+}
+
+/// Per-estimator figures of one scenario (`summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Metrics {
+    /// Estimator label.
+    pub estimator: String,
+    /// Steps run (`k = 1..=steps` are the published estimates).
+    pub steps: usize,
+    /// Published sets (k ≥ 1) that do not contain the true state (set-membership filters only).
+    pub steps_outside: Option<usize>,
+    /// Largest `(x − x̂)ᵀ P⁻¹ (x − x̂)` over k ≥ 1 (set-membership filters only).
+    pub max_normalized_distance: Option<f64>,
+    /// `(x₀ − x̂₀)ᵀ P₀⁻¹ (x₀ − x̂₀)`: whether the initial set contains the initial state.
+    pub initial_normalized_distance: f64,
+    /// Root-mean-square error of the centre per state (k ≥ 1).
+    pub rmse: Vec<f64>,
+    /// Largest absolute error of the centre per state (k ≥ 1).
+    pub max_abs_error: Vec<f64>,
+    /// Standard deviation of the error per state (its "fluctuation", k ≥ 1).
+    pub error_std: Vec<f64>,
+    /// Mean width `2√P_ii` of the bounds per state (set-membership filters only, k ≥ 1).
+    pub mean_bound_width: Option<Vec<f64>>,
+    /// Mean trace of the published shape (k ≥ 1).
+    pub mean_trace: f64,
+    /// Steps that used the fallback multiplier.
+    pub fallback_steps: usize,
+    /// Median wall-clock time of a step, microseconds.
+    pub median_step_us: f64,
+}
+
+/// Median of a sample of nanoseconds, in microseconds.
+pub fn median_us(ns: &[u64]) -> f64 {
+    if ns.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = ns.to_vec();
+    v.sort_unstable();
+    let m = v.len() / 2;
+    let med = if v.len() % 2 == 0 { (v[m - 1] + v[m]) as f64 / 2.0 } else { v[m] as f64 };
+    med / 1e3
+}
+
+/// Tolerance on the normalised distance when counting steps outside a set.
+pub const OUTSIDE_TOL: f64 = 1e-9;
+
+/// Computes [`Metrics`] of a run against the true states.
+pub fn metrics(run: &Run, truth: &[DVector<f64>]) -> Metrics {
+    let n = truth[0].len();
+    let steps = run.snapshots.len() - 1;
+    let mut sq = vec![0.0; n];
+    let mut sum = vec![0.0; n];
+    let mut max_abs = vec![0.0f64; n];
+    let mut width = vec![0.0; n];
+    let mut outside = 0;
+    let mut max_d = 0.0f64;
+    let mut trace = 0.0;
+    for k in 1..=steps {
+        let s = &run.snapshots[k];
+        let e = &s.centre - &truth[k];
+        for i in 0..n {
+            sq[i] += e[i] * e[i];
+            sum[i] += e[i];
+            max_abs[i] = max_abs[i].max(e[i].abs());
+            width[i] += 2.0 * s.shape[(i, i)].max(0.0).sqrt();
+        }
+        trace += s.shape.trace();
+        if run.is_set {
+            let d = normalized_distance(&truth[k], &s.centre, &s.shape);
+            max_d = max_d.max(d);
+            if !(d <= 1.0 + OUTSIDE_TOL) {
+                outside += 1;
+            }
+        }
+    }
+    let cnt = steps.max(1) as f64;
+    let s0 = &run.snapshots[0];
+    Metrics {
+        estimator: run.label.clone(),
+        steps,
+        steps_outside: run.is_set.then_some(outside),
+        max_normalized_distance: run.is_set.then_some(max_d),
+        initial_normalized_distance: normalized_distance(&truth[0], &s0.centre, &s0.shape),
+        rmse: sq.iter().map(|s| (s / cnt).sqrt()).collect(),
+        max_abs_error: max_abs,
+        error_std: sq.iter().zip(&sum).map(|(s, m)| (s / cnt - (m / cnt).powi(2)).max(0.0).sqrt()).collect(),
+        mean_bound_width: run.is_set.then(|| width.iter().map(|w| w / cnt).collect()),
+        mean_trace: trace / cnt,
+        fallback_steps: run.snapshots.iter().filter(|s| s.fallback).count(),
+        median_step_us: median_us(&run.step_ns),
+    }
+}

@@ -1,0 +1,68 @@
+//! `cargo xtask sdplib [--dir D] [--backend NAME]`: solve the SDPLIB suite, print a table.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use lmi::sdplib::{Expected, check_outcome, sdplib_dir, suite};
+use lmi::{SolverSettings, backend_by_name, backend_names, read_sdpa_file};
+
+use crate::args::Args;
+
+pub fn run(args: &[String]) -> Result<(), String> {
+    let args = Args::parse(args, &["dir", "backend"], &[])?;
+    let dir = match args.value("dir") {
+        Some(d) => PathBuf::from(d),
+        None => sdplib_dir().ok_or("SDPLIB directory not found: pass --dir or set SDPLIB_DIR")?,
+    };
+    let problems = suite(&dir).map_err(|e| e.to_string())?;
+    let backends: Vec<String> = match args.value("backend") {
+        Some(b) => vec![b.to_owned()],
+        None => backend_names().into_iter().map(str::to_owned).collect(),
+    };
+    if backends.is_empty() {
+        return Err("no SDP backend compiled in".into());
+    }
+    println!(
+        "| backend | problem | status | objective | reference | rel. error | iterations | solve time | setup+solve |"
+    );
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|");
+    let mut failures = 0;
+    for name in &backends {
+        for p in &problems {
+            let problem = read_sdpa_file(&p.path).map_err(|e| format!("{}: {e}", p.path.display()))?;
+            let mut backend = backend_by_name(name, SolverSettings::default()).map_err(|e| e.to_string())?;
+            let t0 = Instant::now();
+            let sol = backend.setup_and_solve(&problem).map_err(|e| e.to_string())?;
+            let total = t0.elapsed();
+            let verdict = check_outcome(&p.expected, &problem, &sol);
+            let ok = verdict.is_ok();
+            let (reference, err) = match p.expected {
+                Expected::Optimal { value, .. } => (
+                    format!("{value:.6e}"),
+                    format!("{:.1e}", (sol.primal_objective - value).abs() / value.abs().max(1.0)),
+                ),
+                Expected::Infeasible(side) => (
+                    side.label().to_owned(),
+                    if ok { "certificate ok".to_owned() } else { "certificate FAILED".to_owned() },
+                ),
+            };
+            if !ok {
+                failures += 1;
+            }
+            println!(
+                "| {name} | {} | {}{} | {:.9e} | {reference} | {err} | {} | {:.3} ms | {:.3} ms |",
+                p.name,
+                sol.status.label(),
+                if ok { "" } else { " (MISMATCH)" },
+                sol.primal_objective,
+                sol.iterations,
+                sol.solve_time.as_secs_f64() * 1e3,
+                total.as_secs_f64() * 1e3
+            );
+        }
+    }
+    if failures > 0 {
+        return Err(format!("{failures} problem(s) did not match their reference"));
+    }
+    Ok(())
+}
