@@ -3,10 +3,7 @@
 //! Always run through the alias in `.cargo/config.toml`, which builds it optimised, so that the
 //! numbers and timings it prints never come from a debug build.
 
-mod args;
-mod plot;
-mod reproduce;
-mod sdplib;
+use xtask::{filter, reproduce, sdplib};
 
 use std::process::ExitCode;
 
@@ -19,6 +16,9 @@ Commands:
                          figures, CSV, summary.json and report.md in DIR (default out/reproduce)
   sdplib [--dir D] [--backend NAME]
                          Solve the SDPLIB suite and print a table (default: every compiled backend)
+  filter --model MODEL.toml --input DATA.csv --output OUT.csv [--estimator smf|kf|yang-li] [--solver NAME]
+                         Run an estimator over logged data (formats: README); --solver is
+                         two-multiplier (default) or an SDP backend (faer-ipm, clarabel)
   help                   This text
 ";
 
@@ -29,6 +29,7 @@ fn main() -> ExitCode {
     let result = match command.as_deref() {
         Some("reproduce") => reproduce::run(&rest),
         Some("sdplib") => sdplib::run(&rest),
+        Some("filter") => filter::run(&rest),
         Some("help") | Some("--help") | Some("-h") | None => {
             print!("{HELP}");
             Ok(())

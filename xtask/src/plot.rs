@@ -6,9 +6,6 @@
 //! bound that contains the truth still visibly contains it. Non-finite samples break a line into
 //! pieces and never reach the axis ranges.
 
-// A small general-purpose API: a binary using it needn't use every style (or `grid`).
-#![allow(dead_code)]
-
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::Path;

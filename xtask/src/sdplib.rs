@@ -8,6 +8,7 @@ use lmi::{SolverSettings, backend_by_name, backend_names, read_sdpa_file};
 
 use crate::args::Args;
 
+/// Runs `cargo xtask sdplib` with the given arguments.
 pub fn run(args: &[String]) -> Result<(), String> {
     let args = Args::parse(args, &["dir", "backend"], &[])?;
     let dir = match args.value("dir") {

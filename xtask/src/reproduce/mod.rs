@@ -1,11 +1,11 @@
 //! `cargo xtask reproduce [--quick] [--out DIR] [--seed S] [--runs R]`: the straddle-carrier
 //! experiment of the paper, extended scenarios, a Monte Carlo study, figures and an honest report.
 
-mod filters;
-mod outputs;
-mod report;
-mod runner;
-mod scenarios;
+pub mod filters;
+pub mod outputs;
+pub mod report;
+pub mod runner;
+pub mod scenarios;
 
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
@@ -198,7 +198,7 @@ fn monte_carlo(sizes: Sizes, base_seed: u64) -> Result<MonteCarloSummary, String
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(sizes.mc_runs.max(1));
     let t0 = Instant::now();
     let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
+    let done = Mutex::new(0usize);
     let results: Mutex<Vec<Option<(Metrics, Metrics)>>> = Mutex::new((0..sizes.mc_runs).map(|_| None).collect());
     let error: Mutex<Option<String>> = Mutex::new(None);
     let tty = std::io::stderr().is_terminal();
@@ -223,7 +223,9 @@ fn monte_carlo(sizes: Sizes, base_seed: u64) -> Result<MonteCarloSummary, String
                         Ok(r) => results.lock().unwrap()[i] = Some(r),
                         Err(e) => *error.lock().unwrap() = Some(e),
                     }
-                    let d = done.fetch_add(1, Ordering::SeqCst) + 1;
+                    let mut done = done.lock().unwrap();
+                    *done += 1;
+                    let d = *done;
                     if tty || d == sizes.mc_runs || d % (sizes.mc_runs / 10).max(1) == 0 {
                         let w = 30 * d / sizes.mc_runs;
                         eprint!(
@@ -267,12 +269,25 @@ pub fn run(args: &[String]) -> Result<(), String> {
     let out = PathBuf::from(args.value("out").unwrap_or("out/reproduce"));
     let seed: u64 = match args.value("seed") {
         Some(s) => s.parse().map_err(|_| format!("--seed: not an integer: {s:?}"))?,
-        None => 2024,
+        None => DEFAULT_SEED,
     };
     let runs = match args.value("runs") {
         Some(s) => Some(s.parse::<usize>().ok().filter(|r| *r > 0).ok_or(format!("--runs: not a positive integer: {s:?}"))?),
         None => None,
     };
+    let summary = reproduce(quick, &out, seed, runs)?;
+    println!("{}", report::console(&summary));
+    println!("Wrote {} (report.md, summary.json, figures/, csv/) in {:.1} s.", out.display(), summary.total_seconds);
+    Ok(())
+}
+
+/// Default base seed of the reproduction.
+pub const DEFAULT_SEED: u64 = 2024;
+
+/// Runs the whole reproduction into `out` and returns its summary (also written as
+/// `summary.json`, with `report.md`, `figures/` and `csv/`). `runs` overrides the number of
+/// Monte Carlo runs.
+pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Result<Summary, String> {
     let sizes = Sizes::new(quick, runs);
     let t0 = Instant::now();
     for sub in ["figures", "csv"] {
@@ -314,7 +329,65 @@ pub fn run(args: &[String]) -> Result<(), String> {
     std::fs::write(out.join("summary.json"), json).map_err(|e| e.to_string())?;
     let md = report::markdown(&summary);
     std::fs::write(out.join("report.md"), &md).map_err(|e| e.to_string())?;
-    println!("{}", report::console(&summary));
-    println!("Wrote {} (report.md, summary.json, figures/, csv/) in {:.1} s.", out.display(), summary.total_seconds);
-    Ok(())
+    Ok(summary)
+}
+
+impl Summary {
+    /// The deterministic part of the summary (no timings, no machine-dependent solver figures),
+    /// with numbers rounded to 6 significant digits: what snapshot tests compare.
+    pub fn deterministic_view(&self) -> serde_json::Value {
+        use serde_json::json;
+        let r = |v: f64| -> serde_json::Value {
+            if v.is_finite() && v != 0.0 {
+                let e = v.abs().log10().floor() as i32;
+                let f = 10f64.powi(5 - e);
+                json!((v * f).round() / f)
+            } else {
+                json!(v)
+            }
+        };
+        let rv = |v: &[f64]| v.iter().map(|x| r(*x)).collect::<Vec<_>>();
+        let scenarios: Vec<_> = self
+            .scenarios
+            .iter()
+            .map(|s| {
+                let est: Vec<_> = s
+                    .estimators
+                    .iter()
+                    .filter(|m| !m.estimator.starts_with(filters::PROPOSED_VIA))
+                    .map(|m| {
+                        json!({
+                            "estimator": m.estimator,
+                            "steps": m.steps,
+                            "steps_outside": m.steps_outside,
+                            "max_normalized_distance": m.max_normalized_distance.map(r),
+                            "initial_normalized_distance": r(m.initial_normalized_distance),
+                            "rmse": rv(&m.rmse),
+                            "mean_bound_width": m.mean_bound_width.as_deref().map(rv),
+                            "mean_trace": r(m.mean_trace),
+                            "fallback_steps": m.fallback_steps,
+                        })
+                    })
+                    .collect();
+                json!({
+                    "id": s.id, "steps": s.steps, "seed": s.seed, "estimators": est,
+                    "proposed_inside_reference17": r(s.proposed_inside_reference17),
+                    "figures": s.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+        let mc = &self.monte_carlo;
+        json!({
+            "quick": self.quick,
+            "seed": self.seed,
+            "sizes": self.sizes,
+            "scenarios": scenarios,
+            "monte_carlo": {
+                "runs": mc.runs, "steps": mc.steps, "steps_outside": mc.steps_outside,
+                "max_normalized_distance": r(mc.max_normalized_distance),
+            },
+            "claims": self.claims.iter().filter(|c| !c.claim.starts_with("Run time") && !c.claim.starts_with("All three"))
+                .map(|c| json!({"claim": c.claim, "verdict": c.verdict})).collect::<Vec<_>>(),
+        })
+    }
 }
