@@ -1,4 +1,48 @@
-//! State estimators for port vehicles.
+//! State estimators for port vehicles: a Kalman filter and the set-membership filters of the
+//! straddle-carrier paper (Lin, Zhang, Ding & Niu, *Control and Decision* 39(1), 2024), with
+//! certified containment.
 //!
-//! Planned (see the project's issues): a Kalman filter and the improved set-membership filter of
-//! the straddle-carrier paper, eqs (13)–(29), with certified containment. Nothing is implemented yet.
+//! # Conventions
+//!
+//! Discrete-time linear time-varying models
+//!
+//! ```text
+//! x_{k+1} = A_k x_k + B_k u_k + w_k,      y_{k+1} = C_{k+1} x_{k+1} + v_{k+1}
+//! ```
+//!
+//! with the matrices passed per step ([`StepModel`]). One step consumes `u_k` and the
+//! measurement `y_{k+1}` taken after it, and returns the estimate of `x_{k+1}`. Matrices are
+//! [`nalgebra::DMatrix`] (column-major), dimensions fixed at construction: `n` states, `p`
+//! inputs, `m` outputs.
+//!
+//! * [`KalmanFilter`]: `Q`, `R` are covariances; Joseph-form update.
+//! * [`SetMembershipFilter`]: unknown-but-bounded noise `w ∈ 𝓔(0, Q)`, `v ∈ 𝓔(0, R)` (8)–(9),
+//!   `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}`; the update (13)–(29) with any
+//!   [`UpdateSolver`]: the exact [`TwoMultiplierSolver`] (module [`two_multiplier`], the
+//!   reduction and its derivatives) or an SDP backend ([`SdpUpdateSolver`]). The published shape
+//!   is certified (module [`smf`]: the inflation rule and the fallback).
+//! * [`yang_li`]: the reconstruction of the paper's reference \[17\].
+//!
+//! Every step validates its input (dimensions, NaN/∞) and returns a typed [`EstimatorError`]
+//! leaving the filter unchanged; nothing panics on input. After construction, a Kalman step and
+//! a two-multiplier set-membership step perform no heap allocation, and return borrowed
+//! views of the filter's estimate.
+
+mod dense;
+pub mod error;
+pub mod kalman;
+pub mod model;
+pub mod sdp_solver;
+pub mod smf;
+pub mod two_multiplier;
+pub mod yang_li;
+
+pub use error::EstimatorError;
+pub use kalman::{GaussianEstimate, KalmanFilter};
+pub use model::StepModel;
+pub use sdp_solver::SdpUpdateSolver;
+pub use smf::{
+    FallbackReason, Inflation, InputModel, SetEstimate, SetMembershipFilter, StepReport, UpdateProblem, UpdateSolution,
+    UpdateSolver,
+};
+pub use two_multiplier::{TAU_FLOOR, TwoMultiplierSolver};

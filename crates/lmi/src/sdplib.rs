@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::LmiError;
 use crate::problem::SdpProblem;
-use crate::solver::{SdpSolution, SolveStatus};
+use crate::solver::{SdpSolution, SolveStatus, SolverSettings};
 
 /// Environment variable that overrides the SDPLIB directory.
 pub const SDPLIB_DIR_VAR: &str = "SDPLIB_DIR";
@@ -198,6 +198,86 @@ pub fn check_outcome(expected: &Expected, problem: &SdpProblem, solution: &SdpSo
                 return Err(format!("status {} (expected {side})", solution.status));
             }
             check_certificate(problem, solution, 1e-6).map_err(|e| format!("certificate: {e}"))
+        }
+    }
+}
+
+/// Settings for the suite: tolerances `1e-9`, tighter than the defaults, because several
+/// references are given to 7 digits and the `hinf*` problems are ill-conditioned (with `1e-8`
+/// Clarabel stops `5.8e-4` away from `hinf2`'s reference).
+pub fn suite_settings() -> SolverSettings {
+    SolverSettings::builder().tolerance(1e-9).build().expect("valid settings")
+}
+
+/// A documented deviation from the reference table, with the relaxed relative tolerance that
+/// still applies. Each reason is backed by a strictly feasible `x` (whose `cᵀx` is an upper bound
+/// on the optimum of the minimisation), which `tests/sdplib_conformance.rs` re-establishes.
+#[derive(Debug, Clone, Copy)]
+pub struct KnownDeviation {
+    /// Problem name.
+    pub problem: &'static str,
+    /// Backend it applies to (`None`: every backend).
+    pub backend: Option<&'static str>,
+    /// Relaxed relative tolerance on the objective.
+    pub rel_tol: f64,
+    /// Why.
+    pub reason: &'static str,
+}
+
+/// The known deviations (see [`KnownDeviation`]).
+pub const KNOWN_DEVIATIONS: &[KnownDeviation] = &[
+    KnownDeviation {
+        problem: "hinf5",
+        backend: None,
+        rel_tol: 1e-2,
+        reason: "the reference 3.63e+02 is inconsistent with its own digits: faer-ipm returns a strictly feasible x \
+                 (smallest eigenvalue of X ≈ 1.5e-7) with cᵀx = 362.2252, so the optimum is at most 362.23 < 362.5",
+    },
+    KnownDeviation {
+        problem: "hinf1",
+        backend: Some("clarabel"),
+        rel_tol: 1e-4,
+        reason: "Clarabel stops about 5e-5 relative above the strictly feasible point cᵀx = 2.032609 that faer-ipm \
+                 finds (reference 2.0326); the problem is ill-conditioned (‖x‖∞ ≈ 7e3) and Clarabel's answer moves at \
+                 this level with the BLAS threading",
+    },
+    KnownDeviation {
+        problem: "hinf2",
+        backend: Some("clarabel"),
+        rel_tol: 1e-4,
+        reason: "Clarabel stops up to 5e-5 relative above the strictly feasible point cᵀx = 10.967127 that faer-ipm \
+                 finds (reference 10.967); its answer moves at this level with the BLAS threading",
+    },
+];
+
+/// The outcome of one problem for one backend.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    /// Matches the reference.
+    Pass,
+    /// Matches only within a [`KnownDeviation`]'s relaxed tolerance; the reason is attached.
+    KnownDeviation(&'static str),
+    /// Does not match; what is wrong.
+    Fail(String),
+}
+
+/// [`check_outcome`], then the [`KNOWN_DEVIATIONS`] for `backend` if it fails.
+pub fn verdict(p: &SuiteProblem, backend: &str, problem: &SdpProblem, solution: &SdpSolution) -> Verdict {
+    match check_outcome(&p.expected, problem, solution) {
+        Ok(()) => Verdict::Pass,
+        Err(e) => {
+            let known = KNOWN_DEVIATIONS
+                .iter()
+                .find(|d| d.problem == p.name && d.backend.is_none_or(|b| b == backend));
+            match (known, p.expected) {
+                (Some(d), Expected::Optimal { value, .. })
+                    if solution.status.is_optimal()
+                        && (solution.primal_objective - value).abs() <= d.rel_tol * value.abs() =>
+                {
+                    Verdict::KnownDeviation(d.reason)
+                }
+                _ => Verdict::Fail(e),
+            }
         }
     }
 }

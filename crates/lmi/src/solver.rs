@@ -127,7 +127,8 @@ impl SdpSolution {
 }
 
 /// Settings shared by all backends. Build with [`SolverSettings::builder`] (validated) or use
-/// [`SolverSettings::default`].
+/// [`SolverSettings::default`] (tolerances `1e-8`, as Clarabel's defaults; relaxed by
+/// `reduced_tol_factor` for the `Almost…` outcomes).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSettings {
     /// Maximum number of interior-point iterations.
@@ -152,9 +153,9 @@ impl Default for SolverSettings {
     fn default() -> Self {
         Self {
             max_iterations: 100,
-            tol_gap_rel: 1e-9,
-            tol_gap_abs: 1e-9,
-            tol_feas: 1e-9,
+            tol_gap_rel: 1e-8,
+            tol_gap_abs: 1e-8,
+            tol_feas: 1e-8,
             tol_infeas: 1e-8,
             reduced_tol_factor: 1e3,
             time_limit: None,
@@ -282,8 +283,7 @@ mod tests {
         assert!(err.contains("tol_infeas"), "{err}");
         let err = SolverSettings::builder().time_limit(Duration::ZERO).build().unwrap_err().to_string();
         assert!(err.contains("time_limit"), "{err}");
-        let mut s = SolverSettings::default();
-        s.reduced_tol_factor = 0.5;
+        let s = SolverSettings { reduced_tol_factor: 0.5, ..SolverSettings::default() };
         assert!(s.validate().unwrap_err().to_string().contains("reduced_tol_factor"));
     }
 }

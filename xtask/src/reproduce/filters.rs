@@ -83,12 +83,15 @@ pub fn kalman(sc: &Scenario) -> Result<Box<dyn Filter>, String> {
     Ok(Box::new(Kalman(kf)))
 }
 
+/// An estimator and the number of steps it runs.
+pub type ScheduledFilter = (Box<dyn Filter>, usize);
+
 /// Every estimator of a scenario with the number of steps it runs (SDP backends may run on a
 /// prefix only, to keep the reproduction short).
-pub fn for_scenario(sc: &Scenario) -> Result<Vec<(Box<dyn Filter>, usize)>, String> {
+pub fn for_scenario(sc: &Scenario) -> Result<Vec<ScheduledFilter>, String> {
     let e = |e: estimators::EstimatorError| e.to_string();
     let n = sc.len();
-    let mut out: Vec<(Box<dyn Filter>, usize)> = vec![(proposed(sc)?, n)];
+    let mut out: Vec<ScheduledFilter> = vec![(proposed(sc)?, n)];
     for name in lmi::backend_names() {
         let solver = SdpUpdateSolver::by_name(name, SolverSettings::default()).map_err(e)?;
         let inner = SetMembershipFilter::new(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), inputs(sc), solver)

@@ -294,7 +294,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
     }
     let e = sizes.extended_steps;
-    let list = vec![
+    let list = [
         scenarios::paper(seed)?,
         scenarios::no_sideslip(e, sizes.sdp_steps, seed + 1)?,
         scenarios::load(0, e, sizes.sdp_steps, seed + 2)?,
@@ -305,7 +305,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
     let mut summaries = Vec::new();
     let mut paper_runs = Vec::new();
     for (i, sc) in list.iter().enumerate() {
-        let (s, runs) = run_scenario(sc, &out)?;
+        let (s, runs) = run_scenario(sc, out)?;
         if i == 0 {
             paper_runs = runs;
         }

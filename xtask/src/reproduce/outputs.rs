@@ -21,6 +21,11 @@ pub fn slug(label: &str) -> String {
     s.trim_matches('_').to_owned()
 }
 
+/// Colour of the `j`-th estimator: the palette without black (the truth) and the pale yellow.
+fn series_color(j: usize) -> &'static str {
+    PALETTE[1 + j % 6]
+}
+
 /// One CSV per run: `k,t,x1..xn,xhat1..xhatn,lo1..lon,hi1..hin,trace,tau1,tau2,tau3,fallback`.
 pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>]) -> std::io::Result<()> {
     let n = truth[0].len();
@@ -78,7 +83,7 @@ pub fn write_figures(
             format!("{name} [{unit}]"),
         );
         for (j, run) in bound_runs.iter().enumerate() {
-            let color = PALETTE[1 + j % (PALETTE.len() - 1)];
+            let color = series_color(j);
             let lo: Vec<f64> =
                 run.snapshots[..steps].iter().map(|s| s.centre[i] - s.shape[(i, i)].max(0.0).sqrt()).collect();
             let hi: Vec<f64> =
@@ -91,7 +96,7 @@ pub fn write_figures(
             }
         }
         for (j, run) in estimate_runs.iter().enumerate() {
-            let color = PALETTE[(1 + bound_runs.len() + j) % PALETTE.len()];
+            let color = series_color(bound_runs.len() + j);
             let y = run.snapshots[..steps].iter().map(|s| s.centre[i]).collect();
             chart.add(Series::line(format!("{} estimate", run.label), t.clone(), y, color));
         }
@@ -108,7 +113,7 @@ pub fn write_figures(
             format!("error in {name} [{unit}]"),
         );
         for (j, run) in bound_runs.iter().chain(estimate_runs).enumerate() {
-            let color = PALETTE[(1 + j) % PALETTE.len()];
+            let color = series_color(j);
             let y = run.snapshots[..steps].iter().zip(truth).map(|(s, x)| s.centre[i] - x[i]).collect();
             let what = if run.is_set { "centre − truth" } else { "estimate − truth" };
             chart.add(Series::line(format!("{} {what}", run.label), t.clone(), y, color));

@@ -52,8 +52,8 @@ pub fn inconsistencies(paper: &Scenario, runs: &[Run]) -> Result<Vec<Inconsisten
     });
     let p = CarrierParams::paper_preset();
     let mh2 = p.mass * p.cg_height * p.cg_height;
-    let literal = CarrierModel::new(p.clone().with_roll_inertia_eq(2_119_600.0));
-    let eig = CarrierModel::new(p.clone())
+    let literal = CarrierModel::new(p.with_roll_inertia_eq(2_119_600.0));
+    let eig = CarrierModel::new(p)
         .ok()
         .and_then(|m| m.eigenvalues())
         .map(|e| e.iter().map(|z| format!("{:.3}{:+.3}j", z.re, z.im)).collect::<Vec<_>>().join(", "))

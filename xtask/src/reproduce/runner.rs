@@ -144,7 +144,8 @@ pub fn metrics(run: &Run, truth: &[DVector<f64>]) -> Metrics {
         if run.is_set {
             let d = normalized_distance(&truth[k], &s.centre, &s.shape);
             max_d = max_d.max(d);
-            if !(d <= 1.0 + OUTSIDE_TOL) {
+            // NaN counts as outside.
+            if d.is_nan() || d > 1.0 + OUTSIDE_TOL {
                 outside += 1;
             }
         }

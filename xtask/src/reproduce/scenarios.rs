@@ -34,7 +34,7 @@ pub struct Scenario {
     /// Measurement-noise shape given to the filters (a covariance for the Kalman filter).
     pub r: DMatrix<f64>,
     /// Known input range `[lo, hi]` per input (used by the [17]-style filter without input).
-    pub input_range: (DVector<f64>, DVector<f64>),
+    pub input_range: InputRange,
     /// Whether the SDP backends run on every step (else only on the first `sdp_steps`).
     pub sdp_steps: usize,
     /// Choices made where the paper is silent, for the report.
@@ -45,6 +45,11 @@ impl Scenario {
     /// Number of filter steps.
     pub fn len(&self) -> usize {
         self.steps.len()
+    }
+
+    /// Whether the scenario has no steps.
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
     }
 }
 
@@ -117,8 +122,11 @@ pub fn sensors() -> Sensors {
     Sensors { c, r, q }
 }
 
+/// A box of inputs `[lo, hi]`.
+pub type InputRange = (DVector<f64>, DVector<f64>);
+
 /// A slalom: front rows steer `5° sin(2π·0.2·t)`, rear rows counter-steer with half the angle.
-pub fn slalom_inputs(n_steps: usize) -> (Vec<DVector<f64>>, (DVector<f64>, DVector<f64>)) {
+pub fn slalom_inputs(n_steps: usize) -> (Vec<DVector<f64>>, InputRange) {
     let amp = 5f64.to_radians();
     let profile = [1.0, 1.0, -0.5, -0.5];
     let inputs = (0..n_steps)

@@ -1,0 +1,253 @@
+//! Small allocation-free dense kernels on column-major `DMatrix` storage.
+//!
+//! Every function writes into a preallocated output whose dimensions the caller guarantees
+//! (checked by `debug_assert!`). Sizes are those of the filter (a few states), so plain loops
+//! beat blocked BLAS here.
+
+use nalgebra::{DMatrix, DVector};
+
+/// `out = alpha · a · b + beta · out`.
+pub(crate) fn mul_nn(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
+    let (r, k) = a.shape();
+    let c = b.ncols();
+    debug_assert_eq!(b.nrows(), k);
+    debug_assert_eq!(out.shape(), (r, c));
+    let a = a.as_slice();
+    let b = b.as_slice();
+    let o = out.as_mut_slice();
+    for j in 0..c {
+        let oc = &mut o[j * r..(j + 1) * r];
+        scale_col(oc, beta);
+        for l in 0..k {
+            let s = alpha * b[j * k + l];
+            if s != 0.0 {
+                let ac = &a[l * r..(l + 1) * r];
+                for i in 0..r {
+                    oc[i] += s * ac[i];
+                }
+            }
+        }
+    }
+}
+
+/// `out = alpha · a · bᵀ + beta · out`.
+pub(crate) fn mul_nt(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
+    let (r, k) = a.shape();
+    let c = b.nrows();
+    debug_assert_eq!(b.ncols(), k);
+    debug_assert_eq!(out.shape(), (r, c));
+    let a = a.as_slice();
+    let b = b.as_slice();
+    let o = out.as_mut_slice();
+    for j in 0..c {
+        let oc = &mut o[j * r..(j + 1) * r];
+        scale_col(oc, beta);
+        for l in 0..k {
+            let s = alpha * b[l * c + j];
+            if s != 0.0 {
+                let ac = &a[l * r..(l + 1) * r];
+                for i in 0..r {
+                    oc[i] += s * ac[i];
+                }
+            }
+        }
+    }
+}
+
+/// `out = alpha · a · x + beta · out` (matrix–vector).
+pub(crate) fn gemv(alpha: f64, a: &DMatrix<f64>, x: &DVector<f64>, beta: f64, out: &mut DVector<f64>) {
+    let (r, k) = a.shape();
+    debug_assert_eq!(x.len(), k);
+    debug_assert_eq!(out.len(), r);
+    let a = a.as_slice();
+    let o = out.as_mut_slice();
+    scale_col(o, beta);
+    for l in 0..k {
+        let s = alpha * x[l];
+        if s != 0.0 {
+            let ac = &a[l * r..(l + 1) * r];
+            for i in 0..r {
+                o[i] += s * ac[i];
+            }
+        }
+    }
+}
+
+fn scale_col(c: &mut [f64], beta: f64) {
+    if beta == 0.0 {
+        c.iter_mut().for_each(|v| *v = 0.0);
+    } else if beta != 1.0 {
+        c.iter_mut().for_each(|v| *v *= beta);
+    }
+}
+
+/// `Σ aᵢ bᵢ`; for matrices of equal shape, the Frobenius inner product `⟨A, B⟩ = tr(Aᵀ B)`.
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), b.len());
+    let mut s = 0.0;
+    for i in 0..a.len() {
+        s += a[i] * b[i];
+    }
+    s
+}
+
+/// Frobenius norm.
+pub(crate) fn fro(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// `out = x · a + y · b` entrywise (same shapes).
+pub(crate) fn lin2(out: &mut [f64], x: f64, a: &[f64], y: f64, b: &[f64]) {
+    for i in 0..out.len() {
+        out[i] = x * a[i] + y * b[i];
+    }
+}
+
+/// `out += alpha · a` entrywise.
+pub(crate) fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
+    for i in 0..out.len() {
+        out[i] += alpha * a[i];
+    }
+}
+
+/// In-place lower Cholesky factor `S = G Gᵀ` of a symmetric matrix (only the lower triangle is
+/// read; the strict upper triangle is zeroed). Returns `false` if a pivot is not positive and
+/// finite.
+pub(crate) fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
+    let m = s.nrows();
+    debug_assert_eq!(s.ncols(), m);
+    let g = s.as_mut_slice();
+    for j in 0..m {
+        let mut d = g[j * m + j];
+        for k in 0..j {
+            d -= g[k * m + j] * g[k * m + j];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+        let d = d.sqrt();
+        g[j * m + j] = d;
+        for i in j + 1..m {
+            let mut v = g[j * m + i];
+            for k in 0..j {
+                v -= g[k * m + i] * g[k * m + j];
+            }
+            g[j * m + i] = v / d;
+        }
+        for i in 0..j {
+            g[j * m + i] = 0.0;
+        }
+    }
+    true
+}
+
+/// `x ← x · G⁻ᵀ` for a lower-triangular `G` (solves `Y Gᵀ = X` column by column).
+pub(crate) fn solve_right_lower_t(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
+    let (r, m) = x.shape();
+    debug_assert_eq!(g.shape(), (m, m));
+    let g = g.as_slice();
+    let x = x.as_mut_slice();
+    for j in 0..m {
+        for k in 0..j {
+            let s = g[k * m + j];
+            if s != 0.0 {
+                let (done, rest) = x.split_at_mut(j * r);
+                let yk = &done[k * r..(k + 1) * r];
+                let xj = &mut rest[..r];
+                for i in 0..r {
+                    xj[i] -= s * yk[i];
+                }
+            }
+        }
+        let d = 1.0 / g[j * m + j];
+        x[j * r..(j + 1) * r].iter_mut().for_each(|v| *v *= d);
+    }
+}
+
+/// `x ← x · G⁻¹` for a lower-triangular `G` (solves `Y G = X`, last column first).
+pub(crate) fn solve_right_lower(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
+    let (r, m) = x.shape();
+    debug_assert_eq!(g.shape(), (m, m));
+    let g = g.as_slice();
+    let x = x.as_mut_slice();
+    for j in (0..m).rev() {
+        for k in j + 1..m {
+            let s = g[j * m + k];
+            if s != 0.0 {
+                let (head, tail) = x.split_at_mut(k * r);
+                let yk = &tail[..r];
+                let xj = &mut head[j * r..(j + 1) * r];
+                for i in 0..r {
+                    xj[i] -= s * yk[i];
+                }
+            }
+        }
+        let d = 1.0 / g[j * m + j];
+        x[j * r..(j + 1) * r].iter_mut().for_each(|v| *v *= d);
+    }
+}
+
+/// `a ← (a + aᵀ)/2`.
+pub(crate) fn symmetrize(a: &mut DMatrix<f64>) {
+    let n = a.nrows();
+    for j in 0..n {
+        for i in j + 1..n {
+            let v = 0.5 * (a[(i, j)] + a[(j, i)]);
+            a[(i, j)] = v;
+            a[(j, i)] = v;
+        }
+    }
+}
+
+/// `out = I − L C` (`L` is `n × m`, `C` is `m × n`).
+pub(crate) fn i_minus_lc(l: &DMatrix<f64>, c: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    mul_nn(-1.0, l, c, 0.0, out);
+    let n = out.nrows();
+    for i in 0..n {
+        out[(i, i)] += 1.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn m(r: usize, c: usize, seed: u64) -> DMatrix<f64> {
+        let mut s = seed;
+        DMatrix::from_fn(r, c, |_, _| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        })
+    }
+
+    #[test]
+    fn kernels_match_nalgebra() {
+        let a = m(3, 4, 1);
+        let b = m(4, 2, 2);
+        let bt = b.transpose();
+        let mut o = DMatrix::from_element(3, 2, 1.0);
+        mul_nn(2.0, &a, &b, 0.5, &mut o);
+        assert!((&o - (&a * &b * 2.0 + DMatrix::from_element(3, 2, 0.5))).amax() < 1e-14);
+        mul_nt(1.0, &a, &bt, 0.0, &mut o);
+        assert!((&o - &a * &b).amax() < 1e-14);
+        let x = DVector::from_column_slice(&[1.0, -2.0, 0.5, 3.0]);
+        let mut y = DVector::zeros(3);
+        gemv(1.0, &a, &x, 0.0, &mut y);
+        assert!((&y - &a * &x).amax() < 1e-14);
+
+        let h = m(3, 3, 3);
+        let s = &h * h.transpose() + DMatrix::identity(3, 3);
+        let mut g = s.clone();
+        assert!(cholesky_in_place(&mut g));
+        assert!((&g * g.transpose() - &s).amax() < 1e-13);
+        let rhs = m(5, 3, 4);
+        let mut y = rhs.clone();
+        solve_right_lower_t(&mut y, &g);
+        assert!((&y * g.transpose() - &rhs).amax() < 1e-12);
+        let mut y = rhs.clone();
+        solve_right_lower(&mut y, &g);
+        assert!((&y * &g - &rhs).amax() < 1e-12);
+        let mut bad = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
+        assert!(!cholesky_in_place(&mut bad));
+    }
+}

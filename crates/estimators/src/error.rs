@@ -1,0 +1,58 @@
+//! Errors of the estimators: what is wrong with the caller's input. A failed call leaves the
+//! filter's state unchanged.
+
+use lmi::LmiError;
+
+/// Everything a filter can reject.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EstimatorError {
+    /// A vector or matrix has the wrong size.
+    #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// What has the wrong size.
+        what: &'static str,
+        /// The size that was expected.
+        expected: usize,
+        /// The size that was given.
+        found: usize,
+    },
+    /// An entry is NaN or infinite.
+    #[error("{what} has a non-finite entry at index {index} (column-major)")]
+    NonFinite {
+        /// Which argument.
+        what: &'static str,
+        /// Index of the first offending entry (column-major for matrices).
+        index: usize,
+    },
+    /// A matrix that must be symmetric is not (beyond `1e-10` relative).
+    #[error("{what} is not symmetric")]
+    NotSymmetric {
+        /// Which matrix.
+        what: &'static str,
+    },
+    /// A matrix that must be symmetric positive definite is not.
+    #[error("{what} is not positive definite")]
+    NotPositiveDefinite {
+        /// Which matrix.
+        what: &'static str,
+    },
+    /// The input range of the Yang–Li filter is not a box (`lower ≤ upper`, finite).
+    #[error("invalid input bounds at index {index}: lower {lower} > upper {upper} or not finite")]
+    InvalidInputBounds {
+        /// Input component.
+        index: usize,
+        /// Lower bound given.
+        lower: f64,
+        /// Upper bound given.
+        upper: f64,
+    },
+    /// The filter needs at least one state and one output.
+    #[error("empty system: {0}")]
+    EmptySystem(&'static str),
+    /// The step produced a non-finite estimate (for example, an unstable model overflowed).
+    #[error("numerical failure: {0}")]
+    NumericalFailure(&'static str),
+    /// Setting up an SDP backend failed.
+    #[error("SDP backend: {0}")]
+    Lmi(#[from] LmiError),
+}

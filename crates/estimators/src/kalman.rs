@@ -1,0 +1,171 @@
+//! The Kalman filter with a Joseph-form update.
+//!
+//! ```text
+//! predict:  x⁻ = A x + B u,            P⁻ = A P Aᵀ + Q
+//! update:   S = C P⁻ Cᵀ + R = G Gᵀ,    K = P⁻ Cᵀ S⁻¹  (two triangular solves with G)
+//!           x = x⁻ + K (y − C x⁻),     P = (I − K C) P⁻ (I − K C)ᵀ + K R Kᵀ   (Joseph form)
+//! ```
+//!
+//! `Q` and `R` are covariances here (not ellipsoid shapes). All buffers are allocated in
+//! [`KalmanFilter::new`]; [`KalmanFilter::step`] allocates nothing.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::dense;
+use crate::error::EstimatorError;
+use crate::model::{StepModel, check_finite, check_model, check_spd, check_vec};
+
+/// The Kalman estimate after a step: mean, covariance and per-state standard deviations.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaussianEstimate {
+    /// Posterior mean `x̂_{k+1}`.
+    pub mean: DVector<f64>,
+    /// Posterior covariance `P_{k+1}` (symmetric).
+    pub covariance: DMatrix<f64>,
+    /// `√P_ii`.
+    pub std_dev: DVector<f64>,
+}
+
+/// A Kalman filter for `x_{k+1} = A_k x_k + B_k u_k + w_k`, `y = C x + v`, `w ~ (0, Q)`,
+/// `v ~ (0, R)`.
+#[derive(Debug, Clone)]
+pub struct KalmanFilter {
+    n: usize,
+    p: usize,
+    m: usize,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    est: GaussianEstimate,
+    // workspace
+    x_pred: DVector<f64>,
+    p_pred: DMatrix<f64>,
+    ap: DMatrix<f64>,
+    pct: DMatrix<f64>,
+    s: DMatrix<f64>,
+    k: DMatrix<f64>,
+    ikc: DMatrix<f64>,
+    tmp: DMatrix<f64>,
+    kr: DMatrix<f64>,
+    innov: DVector<f64>,
+    x_new: DVector<f64>,
+    p_new: DMatrix<f64>,
+}
+
+impl KalmanFilter {
+    /// A filter with initial mean `x0`, covariance `p0` (`n × n`), process covariance `q`
+    /// (`n × n`), measurement covariance `r` (`m × m`) and `inputs` input components.
+    pub fn new(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        q: DMatrix<f64>,
+        r: DMatrix<f64>,
+        inputs: usize,
+    ) -> Result<Self, EstimatorError> {
+        let n = x0.len();
+        let m = r.nrows();
+        if n == 0 {
+            return Err(EstimatorError::EmptySystem("no states"));
+        }
+        if m == 0 {
+            return Err(EstimatorError::EmptySystem("no outputs"));
+        }
+        check_finite("x0", x0.as_slice())?;
+        let p0 = check_spd("P0", &p0, n)?;
+        let q = check_spd("Q", &q, n)?;
+        let r = check_spd("R", &r, m)?;
+        let std_dev = p0.diagonal().map(f64::sqrt);
+        Ok(Self {
+            n,
+            p: inputs,
+            m,
+            q,
+            r,
+            est: GaussianEstimate { mean: x0, covariance: p0, std_dev },
+            x_pred: DVector::zeros(n),
+            p_pred: DMatrix::zeros(n, n),
+            ap: DMatrix::zeros(n, n),
+            pct: DMatrix::zeros(n, m),
+            s: DMatrix::zeros(m, m),
+            k: DMatrix::zeros(n, m),
+            ikc: DMatrix::zeros(n, n),
+            tmp: DMatrix::zeros(n, n),
+            kr: DMatrix::zeros(n, m),
+            innov: DVector::zeros(m),
+            x_new: DVector::zeros(n),
+            p_new: DMatrix::zeros(n, n),
+        })
+    }
+
+    /// Number of states, inputs, outputs `(n, p, m)`.
+    pub fn dims(&self) -> (usize, usize, usize) {
+        (self.n, self.p, self.m)
+    }
+
+    /// The current estimate.
+    pub fn estimate(&self) -> &GaussianEstimate {
+        &self.est
+    }
+
+    /// Replaces the process covariance (symmetric positive definite, `n × n`).
+    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        self.q = check_spd("Q", q, self.n)?;
+        Ok(())
+    }
+
+    /// Replaces the measurement covariance (symmetric positive definite, `m × m`).
+    pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        self.r = check_spd("R", r, self.m)?;
+        Ok(())
+    }
+
+    /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
+    /// state is unchanged. Allocation-free.
+    pub fn step(
+        &mut self,
+        model: &StepModel<'_>,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        check_vec("u", u, self.p)?;
+        check_vec("y", y, self.m)?;
+        // Predict.
+        dense::gemv(1.0, model.a, &self.est.mean, 0.0, &mut self.x_pred);
+        dense::gemv(1.0, model.b, u, 1.0, &mut self.x_pred);
+        dense::mul_nn(1.0, model.a, &self.est.covariance, 0.0, &mut self.ap);
+        self.p_pred.copy_from(&self.q);
+        dense::mul_nt(1.0, &self.ap, model.a, 1.0, &mut self.p_pred);
+        dense::symmetrize(&mut self.p_pred);
+        // Gain K = P⁻Cᵀ S⁻¹, S = C P⁻ Cᵀ + R.
+        dense::mul_nt(1.0, &self.p_pred, model.c, 0.0, &mut self.pct);
+        self.s.copy_from(&self.r);
+        dense::mul_nn(1.0, model.c, &self.pct, 1.0, &mut self.s);
+        if !dense::cholesky_in_place(&mut self.s) {
+            return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
+        }
+        self.k.copy_from(&self.pct);
+        dense::solve_right_lower_t(&mut self.k, &self.s);
+        dense::solve_right_lower(&mut self.k, &self.s);
+        // Mean.
+        self.innov.copy_from(y);
+        dense::gemv(-1.0, model.c, &self.x_pred, 1.0, &mut self.innov);
+        self.x_new.copy_from(&self.x_pred);
+        dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
+        // Joseph form.
+        dense::i_minus_lc(&self.k, model.c, &mut self.ikc);
+        dense::mul_nn(1.0, &self.ikc, &self.p_pred, 0.0, &mut self.tmp);
+        dense::mul_nt(1.0, &self.tmp, &self.ikc, 0.0, &mut self.p_new);
+        dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
+        dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
+        dense::symmetrize(&mut self.p_new);
+        if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
+        }
+        std::mem::swap(&mut self.est.mean, &mut self.x_new);
+        std::mem::swap(&mut self.est.covariance, &mut self.p_new);
+        for i in 0..self.n {
+            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
+        }
+        Ok(&self.est)
+    }
+}

@@ -1,0 +1,91 @@
+//! Solving (29) with any [`lmi::SdpBackend`]: the filter SDP (28) of
+//! [`lmi::filter_sdp::FilterSdp`] is built on the first step, its numbers rewritten at each
+//! later step, the backend set up once and called every step. Only `(L, τ)` are read back;
+//! the filter recomputes and certifies `P_{k+1}` itself. This path allocates (building the
+//! problem's values); the two-multiplier solver is the allocation-free one.
+
+use lmi::filter_sdp::{FilterSdp, FilterSdpData};
+use lmi::{SdpBackend, SdpSolution, SolverSettings};
+
+use crate::error::EstimatorError;
+use crate::smf::{UpdateProblem, UpdateSolution, UpdateSolver};
+
+/// An [`UpdateSolver`] backed by an SDP solver.
+pub struct SdpUpdateSolver {
+    backend: Box<dyn SdpBackend>,
+    sdp: Option<FilterSdp>,
+    solution: Option<SdpSolution>,
+}
+
+impl std::fmt::Debug for SdpUpdateSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SdpUpdateSolver").field("backend", &self.backend.name()).finish()
+    }
+}
+
+impl SdpUpdateSolver {
+    /// Wraps a backend.
+    pub fn new(backend: Box<dyn SdpBackend>) -> Self {
+        Self { backend, sdp: None, solution: None }
+    }
+
+    /// The backend called `name` (see [`lmi::backend_names`]) with the given settings.
+    pub fn by_name(name: &str, settings: SolverSettings) -> Result<Self, EstimatorError> {
+        Ok(Self::new(lmi::backend_by_name(name, settings)?))
+    }
+
+    /// The backend's name.
+    pub fn backend_name(&self) -> &'static str {
+        self.backend.name()
+    }
+
+    /// The last raw SDP solution (for diagnostics).
+    pub fn last_solution(&self) -> Option<&SdpSolution> {
+        self.solution.as_ref()
+    }
+}
+
+impl UpdateSolver for SdpUpdateSolver {
+    fn name(&self) -> &str {
+        self.backend.name()
+    }
+
+    fn prepare(&mut self, _n: usize, _m: usize) -> Result<(), EstimatorError> {
+        // The SDP needs the first step's matrices; it is built then.
+        self.sdp = None;
+        self.solution = None;
+        Ok(())
+    }
+
+    fn solve(
+        &mut self,
+        pr: &UpdateProblem<'_>,
+        _warm: [f64; 3],
+        out: &mut UpdateSolution,
+    ) -> Result<(), EstimatorError> {
+        let data = FilterSdpData { a: pr.a, c: pr.c, q: pr.q, r: pr.r, p: pr.p, x_hat: pr.x_hat };
+        out.status = lmi::SolveStatus::Unsolved;
+        out.iterations = 0;
+        match self.sdp.as_mut() {
+            Some(sdp) => sdp.update(&data)?,
+            None => {
+                let sdp = FilterSdp::new(&data)?;
+                self.backend.setup(sdp.problem())?;
+                self.solution = Some(SdpSolution::new(sdp.problem()));
+                self.sdp = Some(sdp);
+            }
+        }
+        let (Some(sdp), Some(sol)) = (self.sdp.as_ref(), self.solution.as_mut()) else {
+            return Err(EstimatorError::NumericalFailure("SDP not set up"));
+        };
+        self.backend.solve(sdp.problem(), sol)?;
+        out.status = sol.status;
+        out.iterations = sol.iterations;
+        if sol.status.is_optimal() {
+            let read = sdp.read(&sol.x, &data)?;
+            out.l.copy_from(&read.l);
+            out.tau = read.tau;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,170 @@
+//! The two-multiplier solver against the reference case, the paper's degenerate case, the
+//! `τ₃ = 0` edge, and every SDP backend: trace to 1e-6 relative, centre to 1e-6 in the squared
+//! P-norm `(x̂₁ − x̂₂)ᵀ P⁻¹ (x̂₁ − x̂₂)` (the trace is flat at the optimum, so an SDP solved to a
+//! gap `δ` fixes `L`, hence the centre, only to about `√δ`; the printed figures give the
+//! unsquared distance too).
+
+mod common;
+
+use carrier_dynamics::{CarrierModel, CarrierParams, Xoshiro256StarStar};
+use estimators::{SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver};
+use lmi::SolverSettings;
+use nalgebra::{DMatrix, DVector};
+
+struct Case {
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    c: DMatrix<f64>,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    p: DMatrix<f64>,
+    x: DVector<f64>,
+    u: DVector<f64>,
+    y: DVector<f64>,
+}
+
+fn one_step<S: UpdateSolver>(case: &Case, solver: S) -> estimators::SetEstimate {
+    let mut f =
+        SetMembershipFilter::new(case.x.clone(), case.p.clone(), case.q.clone(), case.r.clone(), case.u.len(), solver)
+            .unwrap();
+    f.step(&StepModel::new(&case.a, &case.b, &case.c), &case.u, &case.y).unwrap().clone()
+}
+
+fn reference_case() -> Case {
+    Case {
+        a: common::reference_a(),
+        b: DMatrix::zeros(4, 1),
+        c: common::reference_c(),
+        q: DMatrix::identity(4, 4) * 0.01,
+        r: DMatrix::identity(3, 3) * 0.05,
+        p: DMatrix::identity(4, 4) * 0.5,
+        x: DVector::zeros(4),
+        u: DVector::zeros(1),
+        y: DVector::zeros(3),
+    }
+}
+
+/// Compares the two-multiplier step with an SDP step; returns (relative trace gap, P-norm
+/// centre distance `√((x̂₁ − x̂₂)ᵀ P⁻¹ (x̂₁ − x̂₂))`), or `None` if the backend did not solve.
+fn compare(case: &Case, exact: &estimators::SetEstimate, backend: Box<dyn lmi::SdpBackend>) -> Option<(f64, f64)> {
+    let sdp = one_step(case, SdpUpdateSolver::new(backend));
+    if sdp.report.fallback.is_some() {
+        return None;
+    }
+    let rel = (sdp.trace() - exact.trace()).abs() / exact.trace();
+    let d = common::normalized_distance(&exact.shape, &exact.center, &sdp.center).sqrt();
+    Some((rel, d))
+}
+
+fn settings() -> SolverSettings {
+    SolverSettings::default()
+}
+
+#[test]
+fn reference_case_matches_the_published_numbers_and_every_backend() {
+    let case = reference_case();
+    let e = one_step(&case, TwoMultiplierSolver::new());
+    assert!(e.report.fallback.is_none());
+    assert!((e.trace() - 0.98464424).abs() < 1e-7, "trace {}", e.trace());
+    let tau = e.report.tau;
+    for (got, want) in tau.iter().zip([0.55710, 0.10383, 0.33907]) {
+        assert!((got - want).abs() < 1e-4, "tau {tau:?}");
+    }
+    assert!(e.report.inflation.absolute < 1e-13 && e.report.inflation.relative == 0.0, "{:?}", e.report.inflation);
+    for (name, backend) in common::backends(settings()) {
+        let (rel, d) = compare(&case, &e, backend).expect("backend solves the reference case");
+        println!("reference case vs {name}: trace rel diff {rel:.2e}, centre P-norm {d:.2e}");
+        assert!(rel < 1e-6 && d < 1e-6, "{name}: {rel} {d}");
+    }
+}
+
+#[test]
+fn paper_degenerate_case_returns_the_measurement_ellipsoid() {
+    // C = I, R = 8I, Q = 5I, P₀ = 10I, A = e^{A_c Tₛ} ≈ I: optimum L = I, τ → (0, 0, 1), P = R.
+    let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
+    let (a, b, c) = d.to_dynamic();
+    let case = Case {
+        a,
+        b,
+        c,
+        q: DMatrix::identity(4, 4) * 5.0,
+        r: DMatrix::identity(4, 4) * 8.0,
+        p: DMatrix::identity(4, 4) * 10.0,
+        x: DVector::from_vec(vec![-3.0, -8.0, 2.0, 10.0]),
+        u: DVector::from_element(8, 0.1),
+        y: DVector::from_vec(vec![3.0, -8.0, 2.0, 10.0]),
+    };
+    let e = one_step(&case, TwoMultiplierSolver::new());
+    assert_eq!(e.report.status, lmi::SolveStatus::Solved);
+    assert!(e.report.tau[0] <= 2e-12 && e.report.tau[1] <= 2e-12, "{:?}", e.report.tau);
+    assert!((&e.shape - &case.r).amax() < 1e-9, "{}", e.shape);
+    assert!((&e.center - &case.y).amax() < 1e-9);
+    for (name, backend) in common::backends(settings()) {
+        let (rel, d) = compare(&case, &e, backend).expect("backend solves the degenerate case");
+        println!("degenerate case vs {name}: trace rel diff {rel:.2e}, centre P-norm {d:.2e}");
+        assert!(rel < 1e-6 && d < 1e-6, "{name}: {rel} {d}");
+    }
+}
+
+#[test]
+fn useless_measurement_gives_the_tau3_zero_edge() {
+    // R huge: τ₃ = 0, L = 0, P = X₁/τ₁ + Q/τ₂ with the trace-optimal split.
+    let mut case = reference_case();
+    case.r = DMatrix::identity(3, 3) * 1e8;
+    let e = one_step(&case, TwoMultiplierSolver::new());
+    assert_eq!(e.report.tau[2], 0.0, "{:?}", e.report);
+    let x1 = &case.a * &case.p * case.a.transpose();
+    let (s1, s2) = (x1.trace().sqrt(), case.q.trace().sqrt());
+    let t1 = s1 / (s1 + s2);
+    assert!((e.report.tau[0] - t1).abs() < 1e-8);
+    let p = &x1 / t1 + &case.q / (1.0 - t1);
+    assert!((&e.shape - &p).amax() < 1e-7 * p.amax(), "{}", (&e.shape - &p).amax());
+}
+
+#[test]
+fn random_systems_agree_with_every_sdp_backend() {
+    let mut rng = Xoshiro256StarStar::seed_from_u64(20240501);
+    let mut worst: std::collections::BTreeMap<String, (f64, f64)> = Default::default();
+    let mut cases = 0;
+    let mut failures: std::collections::BTreeMap<String, usize> = Default::default();
+    for i in 0..16 {
+        let n = 1 + (i % 8);
+        let m = 1 + (i * 5 % n);
+        let radius = if i % 2 == 0 { 0.9 } else { 1.3 };
+        let (qc, rc) = if i % 4 < 2 { (3.0, 3.0) } else { (1e4, 1e3) };
+        let case = Case {
+            a: common::random_a(&mut rng, n, radius),
+            b: common::gauss(&mut rng, n, 2),
+            c: common::gauss(&mut rng, m, n),
+            q: common::spd(&mut rng, n, 0.5, qc),
+            r: common::spd(&mut rng, m, 0.3, rc),
+            p: common::spd(&mut rng, n, 2.0, 10.0),
+            x: common::gauss(&mut rng, n, 1).column(0).into(),
+            u: common::gauss(&mut rng, 2, 1).column(0).into(),
+            y: common::gauss(&mut rng, m, 1).column(0).into(),
+        };
+        let e = one_step(&case, TwoMultiplierSolver::new());
+        assert!(e.report.fallback.is_none(), "case {i}: {:?}", e.report);
+        cases += 1;
+        for (name, backend) in common::backends(settings()) {
+            let Some((rel, d)) = compare(&case, &e, backend) else {
+                println!("case {i} (n = {n}, m = {m}): {name} did not solve; not compared");
+                *failures.entry(name).or_insert(0) += 1;
+                continue;
+            };
+            assert!(rel < 1e-6 && d * d < 1e-6, "case {i} (n={n}, m={m}) vs {name}: trace {rel:.2e}, centre {d:.2e}");
+            let w = worst.entry(name).or_insert((0.0, 0.0));
+            w.0 = w.0.max(rel);
+            w.1 = w.1.max(d);
+        }
+    }
+    if worst.is_empty() {
+        println!("no SDP backend compiled in: agreement skipped");
+    }
+    for (name, (rel, d)) in worst {
+        let failed = failures.get(&name).copied().unwrap_or(0);
+        println!(
+            "{cases} random systems vs {name}: {failed} not solved by the backend; worst trace rel diff {rel:.2e}, worst centre P-norm {d:.2e}"
+        );
+    }
+}

@@ -1,0 +1,123 @@
+//! No heap allocation in a Kalman step or a two-multiplier set-membership step after a warm-up
+//! step (a counting global allocator, counting only on this test's thread).
+#![allow(unsafe_code)]
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use estimators::{KalmanFilter, SetMembershipFilter, StepModel, TwoMultiplierSolver, yang_li};
+use nalgebra::{DMatrix, DVector};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+
+fn note() {
+    if COUNTING.with(|c| c.get()) {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+// SAFETY: forwards to the system allocator; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note();
+        // SAFETY: same contract as ours.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as ours.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note();
+        // SAFETY: same contract as ours.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note();
+        // SAFETY: same contract as ours.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn count<R>(f: impl FnOnce() -> R) -> (R, usize) {
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    COUNTING.with(|c| c.set(true));
+    let r = f();
+    COUNTING.with(|c| c.set(false));
+    (r, ALLOCATIONS.load(Ordering::Relaxed) - before)
+}
+
+#[test]
+fn steps_do_not_allocate_after_warm_up() {
+    let a = common::reference_a();
+    let b = DMatrix::from_fn(4, 2, |i, j| 0.01 * (i + 2 * j) as f64);
+    for m in [3, 4] {
+        let c = if m == 3 { common::reference_c() } else { DMatrix::identity(4, 4) };
+        let model = StepModel::new(&a, &b, &c);
+        let u = DVector::from_vec(vec![0.2, -0.1]);
+        let ys: Vec<DVector<f64>> =
+            (0..200).map(|k| DVector::from_fn(m, |i, _| ((k * 7 + i) as f64).sin() * 0.1)).collect();
+        let (x0, p0, q, r) = (
+            DVector::zeros(4),
+            DMatrix::identity(4, 4) * 0.5,
+            DMatrix::identity(4, 4) * 0.01,
+            DMatrix::identity(m, m) * 0.05,
+        );
+
+        let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 2).unwrap();
+        kf.step(&model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                kf.step(&model, &u, y).unwrap();
+            }
+        });
+        assert_eq!(n, 0, "Kalman step allocated (m = {m})");
+
+        let mut smf = SetMembershipFilter::two_multiplier(x0.clone(), p0.clone(), q.clone(), r.clone(), 2).unwrap();
+        smf.step(&model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                smf.step(&model, &u, y).unwrap();
+            }
+        });
+        assert_eq!(n, 0, "two-multiplier step allocated (m = {m})");
+        assert!(smf.estimate().report.fallback.is_none());
+
+        // Also: the fallback path and the Yang–Li (a) reconstruction.
+        smf.set_time_budget(Some(std::time::Duration::ZERO));
+        let (_, n) = count(|| smf.step(&model, &u, &ys[1]).map(|e| e.report.fallback.is_some()));
+        assert_eq!(n, 0, "fallback step allocated (m = {m})");
+        let mut yl = yang_li::without_input(
+            x0.clone(),
+            p0.clone(),
+            q.clone(),
+            r.clone(),
+            &DVector::from_vec(vec![-1.0, -1.0]),
+            &DVector::from_vec(vec![1.0, 1.0]),
+            TwoMultiplierSolver::new(),
+        )
+        .unwrap();
+        yl.step(&model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                yl.step(&model, &u, y).unwrap();
+            }
+        });
+        assert_eq!(n, 0, "Yang-Li step allocated (m = {m})");
+        // Errors allocate nothing either (their messages are static).
+        let (_, n) = count(|| smf.step(&model, &DVector::zeros(0), &ys[0]).is_err());
+        assert_eq!(n, 0);
+    }
+}

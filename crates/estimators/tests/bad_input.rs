@@ -1,0 +1,173 @@
+//! Bad input: typed errors naming the problem, the filter unchanged (the next valid step is
+//! bit-for-bit what it would have been), no panic.
+
+mod common;
+
+use estimators::{EstimatorError, KalmanFilter, SetMembershipFilter, StepModel};
+use nalgebra::{DMatrix, DVector};
+
+fn system() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    (common::reference_a(), DMatrix::from_fn(4, 2, |i, j| 0.1 * (i + j) as f64), common::reference_c())
+}
+
+fn smf() -> SetMembershipFilter {
+    SetMembershipFilter::two_multiplier(
+        DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
+        DMatrix::identity(4, 4) * 0.5,
+        DMatrix::identity(4, 4) * 0.01,
+        DMatrix::identity(3, 3) * 0.05,
+        2,
+    )
+    .unwrap()
+}
+
+fn kf() -> KalmanFilter {
+    KalmanFilter::new(
+        DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
+        DMatrix::identity(4, 4) * 0.5,
+        DMatrix::identity(4, 4) * 0.01,
+        DMatrix::identity(3, 3) * 0.05,
+        2,
+    )
+    .unwrap()
+}
+
+/// A bad call: the expected error text, then `A`, `B`, `C`, `u`, `y`.
+type BadCall = (&'static str, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DVector<f64>, DVector<f64>);
+
+/// Bad calls, each with a check of the error.
+fn bad_calls() -> Vec<BadCall> {
+    let (a, b, c) = system();
+    let u = DVector::from_vec(vec![0.3, -0.1]);
+    let y = DVector::from_vec(vec![0.1, 0.0, 0.2]);
+    let mut a_nan = a.clone();
+    a_nan[(1, 2)] = f64::NAN;
+    let mut c_inf = c.clone();
+    c_inf[(0, 0)] = f64::INFINITY;
+    let mut b_nan = b.clone();
+    b_nan[(3, 1)] = f64::NAN;
+    vec![
+        ("u has a non-finite", a.clone(), b.clone(), c.clone(), DVector::from_vec(vec![f64::NAN, 0.0]), y.clone()),
+        (
+            "y has a non-finite",
+            a.clone(),
+            b.clone(),
+            c.clone(),
+            u.clone(),
+            DVector::from_vec(vec![0.0, f64::INFINITY, 0.0]),
+        ),
+        ("dimension mismatch for u", a.clone(), b.clone(), c.clone(), DVector::zeros(3), y.clone()),
+        ("dimension mismatch for y", a.clone(), b.clone(), c.clone(), u.clone(), DVector::zeros(4)),
+        ("dimension mismatch for A", DMatrix::zeros(3, 4), b.clone(), c.clone(), u.clone(), y.clone()),
+        ("dimension mismatch for B", a.clone(), DMatrix::zeros(4, 3), c.clone(), u.clone(), y.clone()),
+        ("dimension mismatch for C", a.clone(), b.clone(), DMatrix::zeros(2, 4), u.clone(), y.clone()),
+        ("A has a non-finite", a_nan, b.clone(), c.clone(), u.clone(), y.clone()),
+        ("B has a non-finite", a.clone(), b_nan, c.clone(), u.clone(), y.clone()),
+        ("C has a non-finite", a.clone(), b.clone(), c_inf, u.clone(), y.clone()),
+    ]
+}
+
+#[test]
+fn set_membership_filter_is_unchanged_by_bad_calls() {
+    let (a, b, c) = system();
+    let model = StepModel::new(&a, &b, &c);
+    let u = DVector::from_vec(vec![0.3, -0.1]);
+    let y = DVector::from_vec(vec![0.1, 0.0, 0.2]);
+    let mut reference = smf();
+    let mut tested = smf();
+    for k in 0..3 {
+        reference.step(&model, &u, &y).unwrap();
+        tested.step(&model, &u, &y).unwrap();
+        for (what, a2, b2, c2, u2, y2) in bad_calls() {
+            let err = tested.step(&StepModel::new(&a2, &b2, &c2), &u2, &y2).unwrap_err();
+            assert!(err.to_string().contains(what), "{what}: {err}");
+        }
+        // Setters with bad matrices are rejected and change nothing.
+        let bad_q = DMatrix::from_row_slice(
+            4,
+            4,
+            &[1.0, 2.0, 0.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        );
+        assert_eq!(tested.set_process_noise(&bad_q).unwrap_err(), EstimatorError::NotPositiveDefinite { what: "Q" });
+        let mut asym = DMatrix::identity(3, 3);
+        asym[(0, 1)] = 0.5;
+        assert_eq!(tested.set_measurement_noise(&asym).unwrap_err(), EstimatorError::NotSymmetric { what: "R" });
+        let r = reference.step(&model, &u, &y).unwrap().clone();
+        let t = tested.step(&model, &u, &y).unwrap().clone();
+        assert_eq!(r.center.as_slice(), t.center.as_slice(), "step {k}");
+        assert_eq!(r.shape.as_slice(), t.shape.as_slice(), "step {k}");
+        assert_eq!(r.report.tau, t.report.tau);
+    }
+}
+
+#[test]
+fn kalman_filter_is_unchanged_by_bad_calls() {
+    let (a, b, c) = system();
+    let model = StepModel::new(&a, &b, &c);
+    let u = DVector::from_vec(vec![0.3, -0.1]);
+    let y = DVector::from_vec(vec![0.1, 0.0, 0.2]);
+    let mut reference = kf();
+    let mut tested = kf();
+    for (what, a2, b2, c2, u2, y2) in bad_calls() {
+        let err = tested.step(&StepModel::new(&a2, &b2, &c2), &u2, &y2).unwrap_err();
+        assert!(err.to_string().contains(what), "{what}: {err}");
+    }
+    let r = reference.step(&model, &u, &y).unwrap().clone();
+    let t = tested.step(&model, &u, &y).unwrap().clone();
+    assert_eq!(r.mean.as_slice(), t.mean.as_slice());
+    assert_eq!(r.covariance.as_slice(), t.covariance.as_slice());
+}
+
+#[test]
+fn constructors_reject_bad_matrices_with_named_errors() {
+    let i4 = DMatrix::identity(4, 4);
+    let i3 = DMatrix::identity(3, 3);
+    let x = DVector::zeros(4);
+    let not_pd = -DMatrix::identity(4, 4);
+    let e = SetMembershipFilter::two_multiplier(x.clone(), not_pd.clone(), i4.clone(), i3.clone(), 1).unwrap_err();
+    assert_eq!(e, EstimatorError::NotPositiveDefinite { what: "P0" });
+    let e = SetMembershipFilter::two_multiplier(x.clone(), i4.clone(), not_pd.clone(), i3.clone(), 1).unwrap_err();
+    assert_eq!(e, EstimatorError::NotPositiveDefinite { what: "Q" });
+    let e =
+        SetMembershipFilter::two_multiplier(x.clone(), i4.clone(), i4.clone(), DMatrix::zeros(3, 3), 1).unwrap_err();
+    assert_eq!(e, EstimatorError::NotPositiveDefinite { what: "R" });
+    let e =
+        SetMembershipFilter::two_multiplier(x.clone(), DMatrix::identity(3, 3), i4.clone(), i3.clone(), 1).unwrap_err();
+    assert!(matches!(e, EstimatorError::DimensionMismatch { what: "P0", .. }), "{e}");
+    let mut nan_q = i4.clone();
+    nan_q[(2, 2)] = f64::NAN;
+    let e = KalmanFilter::new(x.clone(), i4.clone(), nan_q, i3.clone(), 1).unwrap_err();
+    assert_eq!(e, EstimatorError::NonFinite { what: "Q", index: 10 });
+    let e = KalmanFilter::new(DVector::from_element(4, f64::NAN), i4.clone(), i4.clone(), i3.clone(), 1).unwrap_err();
+    assert_eq!(e, EstimatorError::NonFinite { what: "x0", index: 0 });
+    let e = SetMembershipFilter::two_multiplier(DVector::zeros(0), DMatrix::zeros(0, 0), i4.clone(), i3.clone(), 1);
+    assert!(matches!(e, Err(EstimatorError::EmptySystem(_))));
+    let e = SetMembershipFilter::two_multiplier(x.clone(), i4.clone(), i4.clone(), i3.clone(), 2)
+        .unwrap()
+        .with_input_bounds(&DVector::from_vec(vec![1.0, 0.0]), &DVector::from_vec(vec![0.0, 1.0]))
+        .unwrap_err();
+    assert!(matches!(e, EstimatorError::InvalidInputBounds { index: 0, .. }), "{e}");
+}
+
+#[test]
+fn extreme_values_give_errors_or_results_never_panics() {
+    let (a, b, c) = system();
+    let big_a = &a * 1e150;
+    let mut f = smf();
+    let mut k = kf();
+    let u = DVector::from_vec(vec![1e300, -1e300]);
+    let y = DVector::from_vec(vec![1e300, 0.0, -1e300]);
+    for _ in 0..5 {
+        let model = StepModel::new(&big_a, &b, &c);
+        let before = f.estimate().clone();
+        if f.step(&model, &u, &y).is_err() {
+            assert_eq!(&before, f.estimate());
+        }
+        let _ = k.step(&model, &u, &y);
+        let _ = f.step(&StepModel::new(&a, &b, &c), &u, &y);
+    }
+    // The filter still works afterwards when it did not accept the bad data... or it holds
+    // finite numbers if it did.
+    assert!(f.estimate().center.iter().all(|v| v.is_finite()));
+    assert!(f.estimate().shape.iter().all(|v| v.is_finite()));
+}
