@@ -51,7 +51,8 @@ fn steps(crit: &mut Criterion) {
             })
         });
 
-        let mut smf = SetMembershipFilter::two_multiplier(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8).unwrap();
+        let mut smf =
+            SetMembershipFilter::two_multiplier(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8).unwrap();
         group.bench_function(BenchmarkId::new("smf-two-multiplier", &label), |b| {
             b.iter(|| {
                 k = (k + 1) % cs.ys.len();
@@ -61,7 +62,8 @@ fn steps(crit: &mut Criterion) {
 
         for name in lmi::backend_names() {
             let solver = SdpUpdateSolver::by_name(name, SolverSettings::default()).unwrap();
-            let mut f = SetMembershipFilter::new(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8, solver).unwrap();
+            let mut f =
+                SetMembershipFilter::new(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8, solver).unwrap();
             group.bench_function(BenchmarkId::new(format!("smf-{name}"), &label), |b| {
                 b.iter(|| {
                     k = (k + 1) % cs.ys.len();

@@ -8,7 +8,9 @@ fn readme_filter_example_runs_for_every_estimator() {
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     assert!(readme.contains("cargo xtask filter --model examples/filter/model.toml --input examples/filter/data.csv"));
     let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
-    for (estimator, header_end) in [("smf", ",trace,tau1,tau2,tau3"), ("yang-li", ",trace,tau1,tau2,tau3"), ("kf", ",trace")] {
+    for (estimator, header_end) in
+        [("smf", ",trace,tau1,tau2,tau3"), ("yang-li", ",trace,tau1,tau2,tau3"), ("kf", ",trace")]
+    {
         let out = out_dir.join(format!("filter-example-{estimator}.csv"));
         let args: Vec<String> = [
             "--model",

@@ -188,7 +188,12 @@ pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<Data
         col_pos += cols[j].len() + 1;
     }
     if cols.len() > expected.len() {
-        return Err(format!("{}:{}:{col_pos}: unexpected extra header column {:?}", path.display(), hl + 1, cols[expected.len()]));
+        return Err(format!(
+            "{}:{}:{col_pos}: unexpected extra header column {:?}",
+            path.display(),
+            hl + 1,
+            cols[expected.len()]
+        ));
     }
     let mut rows = Vec::new();
     for (li, line) in lines {
@@ -208,10 +213,14 @@ pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<Data
             ));
         }
         let (kc, ks) = fields[0];
-        let k: u64 = ks.parse().map_err(|_| format!("{}:{}:{kc}: k = {ks:?} is not a nonnegative integer", path.display(), li + 1))?;
+        let k: u64 = ks
+            .parse()
+            .map_err(|_| format!("{}:{}:{kc}: k = {ks:?} is not a nonnegative integer", path.display(), li + 1))?;
         let mut vals = Vec::with_capacity(p + m);
         for (j, &(c, s)) in fields.iter().enumerate().skip(1) {
-            let v: f64 = s.parse().map_err(|_| format!("{}:{}:{c}: {} = {s:?} is not a number", path.display(), li + 1, expected[j]))?;
+            let v: f64 = s
+                .parse()
+                .map_err(|_| format!("{}:{}:{c}: {} = {s:?} is not a number", path.display(), li + 1, expected[j]))?;
             if !v.is_finite() {
                 return Err(format!("{}:{}:{c}: {} = {s} is not finite", path.display(), li + 1, expected[j]));
             }
@@ -235,7 +244,8 @@ pub fn run_filter(model: &Model, data: &[DataRow], estimator: &str, solver: &str
     match estimator {
         "kf" => {
             out.push('\n');
-            let mut kf = KalmanFilter::new(model.x0.clone(), model.p0.clone(), model.q.clone(), model.r.clone(), p).map_err(e)?;
+            let mut kf = KalmanFilter::new(model.x0.clone(), model.p0.clone(), model.q.clone(), model.r.clone(), p)
+                .map_err(e)?;
             for row in data {
                 let est = kf.step(&sm, &row.u, &row.y).map_err(|err| format!("row k = {}: {err}", row.k))?;
                 let _ = write!(out, "{}", row.k + 1);
@@ -265,7 +275,13 @@ pub fn run_filter(model: &Model, data: &[DataRow], estimator: &str, solver: &str
     }
 }
 
-fn run_set<S: UpdateSolver>(model: &Model, data: &[DataRow], estimator: &str, solver: S, out: &mut String) -> Result<(), String> {
+fn run_set<S: UpdateSolver>(
+    model: &Model,
+    data: &[DataRow],
+    estimator: &str,
+    solver: S,
+    out: &mut String,
+) -> Result<(), String> {
     let e = |e: estimators::EstimatorError| e.to_string();
     let (x0, p0, q, r) = (model.x0.clone(), model.p0.clone(), model.q.clone(), model.r.clone());
     let mut f = if estimator == "yang-li" {
@@ -294,7 +310,8 @@ fn run_set<S: UpdateSolver>(model: &Model, data: &[DataRow], estimator: &str, so
 pub fn run(args: &[String]) -> Result<(), String> {
     let args = Args::parse(args, &["model", "input", "output", "estimator", "solver"], &[])?;
     let need = |k: &str| args.value(k).ok_or(format!("--{k} is required (see `cargo xtask help`)"));
-    let (model_path, input_path, output_path) = (Path::new(need("model")?), Path::new(need("input")?), Path::new(need("output")?));
+    let (model_path, input_path, output_path) =
+        (Path::new(need("model")?), Path::new(need("input")?), Path::new(need("output")?));
     let read = |p: &Path| std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()));
     let model = read_model(model_path, &read(model_path)?)?;
     let data = read_data(input_path, &read(input_path)?, model.b.ncols(), model.c.nrows())?;

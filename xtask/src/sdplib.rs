@@ -58,7 +58,13 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 "| {name} | {} | {}{} | {:.9e} | {reference} | {err} | {} | {:.3} ms | {:.3} ms |",
                 p.name,
                 sol.status.label(),
-                if !ok { " (MISMATCH)" } else if matches!(verdict, Verdict::KnownDeviation(_)) { " (known deviation)" } else { "" },
+                if !ok {
+                    " (MISMATCH)"
+                } else if matches!(verdict, Verdict::KnownDeviation(_)) {
+                    " (known deviation)"
+                } else {
+                    ""
+                },
                 sol.primal_objective,
                 sol.iterations,
                 sol.solve_time.as_secs_f64() * 1e3,

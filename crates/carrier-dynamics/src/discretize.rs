@@ -16,16 +16,7 @@ const THETA_13: f64 = 5.371_920_351_148_152;
 
 const B3: [f64; 4] = [120.0, 60.0, 12.0, 1.0];
 const B5: [f64; 6] = [30_240.0, 15_120.0, 3_360.0, 420.0, 30.0, 1.0];
-const B7: [f64; 8] = [
-    17_297_280.0,
-    8_648_640.0,
-    1_995_840.0,
-    277_200.0,
-    25_200.0,
-    1_512.0,
-    56.0,
-    1.0,
-];
+const B7: [f64; 8] = [17_297_280.0, 8_648_640.0, 1_995_840.0, 277_200.0, 25_200.0, 1_512.0, 56.0, 1.0];
 const B9: [f64; 10] = [
     17_643_225_600.0,
     8_821_612_800.0,
@@ -57,9 +48,7 @@ const B13: [f64; 14] = [
 
 /// Maximum absolute column sum.
 fn one_norm(m: &DMatrix<f64>) -> f64 {
-    m.column_iter()
-        .map(|c| c.iter().map(|x| x.abs()).sum::<f64>())
-        .fold(0.0, f64::max)
+    m.column_iter().map(|c| c.iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max)
 }
 
 /// `U` (odd part) and `V` (even part) of the degree-`m` Padé numerator for m ∈ {3, 5, 7, 9}:
@@ -88,17 +77,9 @@ fn pade13(a: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
     let a2 = a * a;
     let a4 = &a2 * &a2;
     let a6 = &a4 * &a2;
-    let u_inner = &a6 * (&a6 * b[13] + &a4 * b[11] + &a2 * b[9])
-        + &a6 * b[7]
-        + &a4 * b[5]
-        + &a2 * b[3]
-        + &id * b[1];
+    let u_inner = &a6 * (&a6 * b[13] + &a4 * b[11] + &a2 * b[9]) + &a6 * b[7] + &a4 * b[5] + &a2 * b[3] + &id * b[1];
     let u = a * u_inner;
-    let v = &a6 * (&a6 * b[12] + &a4 * b[10] + &a2 * b[8])
-        + &a6 * b[6]
-        + &a4 * b[4]
-        + &a2 * b[2]
-        + &id * b[0];
+    let v = &a6 * (&a6 * b[12] + &a4 * b[10] + &a2 * b[8]) + &a6 * b[6] + &a4 * b[4] + &a2 * b[2] + &id * b[0];
     (u, v)
 }
 
@@ -106,9 +87,7 @@ fn pade13(a: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
 fn solve_pade(u: &DMatrix<f64>, v: &DMatrix<f64>) -> Result<DMatrix<f64>, DynamicsError> {
     let p = v + u;
     let q = v - u;
-    q.lu()
-        .solve(&p)
-        .ok_or(DynamicsError::SingularPadeDenominator)
+    q.lu().solve(&p).ok_or(DynamicsError::SingularPadeDenominator)
 }
 
 /// Matrix exponential `e^M` by scaling and squaring with Padé approximants of degree
@@ -175,11 +154,7 @@ pub struct ZohDiscretization {
 /// [`DynamicsError::InvalidSamplingPeriod`] unless `ts` is positive and finite;
 /// [`DynamicsError::DimensionMismatch`] if `A` is not square or `B` has another number of rows;
 /// [`DynamicsError::NonFiniteEntry`] for NaN/∞ entries; exponential failures of [`expm`].
-pub fn zoh_discretize(
-    a: &DMatrix<f64>,
-    b: &DMatrix<f64>,
-    ts: f64,
-) -> Result<ZohDiscretization, DynamicsError> {
+pub fn zoh_discretize(a: &DMatrix<f64>, b: &DMatrix<f64>, ts: f64) -> Result<ZohDiscretization, DynamicsError> {
     if !(ts.is_finite() && ts > 0.0) {
         return Err(DynamicsError::InvalidSamplingPeriod(ts));
     }
@@ -194,11 +169,7 @@ pub fn zoh_discretize(
     block.view_mut((0, n), (n, p)).copy_from(&(b * ts));
     check_finite("scaled block matrix [[A, B], [0, 0]] T_s", &block)?;
     let e = expm(&block)?;
-    Ok(ZohDiscretization {
-        a_p: e.view((0, 0), (n, n)).into_owned(),
-        b_p: e.view((0, n), (n, p)).into_owned(),
-        ts,
-    })
+    Ok(ZohDiscretization { a_p: e.view((0, 0), (n, n)).into_owned(), b_p: e.view((0, n), (n, p)).into_owned(), ts })
 }
 
 /// [`zoh_discretize`] for fixed-size matrices (e.g. the carrier's 4 × 4 and 4 × 8), returning
@@ -238,10 +209,7 @@ mod tests {
         for &lam in &[1e-4, 0.1, 0.5, 1.5, 4.0, 40.0] {
             let d: [f64; 3] = [-lam, 0.3 * lam, -2.0 * lam];
             let m = DMatrix::from_diagonal(&nalgebra::DVector::from_row_slice(&d));
-            let want = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
-                3,
-                d.iter().map(|x| x.exp()),
-            ));
+            let want = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(3, d.iter().map(|x| x.exp())));
             let err = max_rel_err(&expm(&m).unwrap(), &want);
             assert!(err < 1e-13, "lambda = {lam}: {err}");
         }
@@ -286,12 +254,7 @@ mod tests {
     fn scalar_and_rotation_zoh_closed_forms() {
         // ẋ = −a x + u: A_p = e^{−aT}, B_p = (1 − e^{−aT})/a.
         let (a, t) = (3.0_f64, 0.4);
-        let d = zoh_discretize(
-            &DMatrix::from_element(1, 1, -a),
-            &DMatrix::from_element(1, 1, 1.0),
-            t,
-        )
-        .unwrap();
+        let d = zoh_discretize(&DMatrix::from_element(1, 1, -a), &DMatrix::from_element(1, 1, 1.0), t).unwrap();
         assert!((d.a_p[(0, 0)] - (-a * t).exp()).abs() < 1e-15);
         assert!((d.b_p[(0, 0)] - (1.0 - (-a * t).exp()) / a).abs() < 1e-15);
         // Rotation A = [[0, ω], [−ω, 0]], B = I: ∫₀^T e^{Aτ} dτ = [[s, 1 − c], [c − 1, s]]/ω.
@@ -360,10 +323,7 @@ mod tests {
         for ts in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let e = zoh_discretize(&a, &b, ts).unwrap_err();
             assert!(matches!(e, DynamicsError::InvalidSamplingPeriod(_)));
-            assert!(
-                e.to_string()
-                    .starts_with("sampling period T_s must be positive and finite, got")
-            );
+            assert!(e.to_string().starts_with("sampling period T_s must be positive and finite, got"));
         }
         let e = zoh_discretize(&DMatrix::zeros(2, 3), &b, 1.0).unwrap_err();
         assert_eq!(e.to_string(), "state matrix A: expected 2x2, got 2x3");
@@ -372,49 +332,25 @@ mod tests {
         let mut bad = a.clone();
         bad[(1, 0)] = f64::NAN;
         let e = zoh_discretize(&bad, &b, 1.0).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "state matrix A has a non-finite entry at (1, 0)"
-        );
+        assert_eq!(e.to_string(), "state matrix A has a non-finite entry at (1, 0)");
         let mut bad_b = b.clone();
         bad_b[(0, 0)] = f64::NEG_INFINITY;
         let e = zoh_discretize(&a, &bad_b, 1.0).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "input matrix B has a non-finite entry at (0, 0)"
-        );
+        assert_eq!(e.to_string(), "input matrix B has a non-finite entry at (0, 0)");
         let huge = DMatrix::from_element(1, 1, 1e300);
         let e = zoh_discretize(&huge, &DMatrix::zeros(1, 0), 1e10).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "scaled block matrix [[A, B], [0, 0]] T_s has a non-finite entry at (0, 0)"
-        );
+        assert_eq!(e.to_string(), "scaled block matrix [[A, B], [0, 0]] T_s has a non-finite entry at (0, 0)");
         let e = expm(&DMatrix::from_element(1, 1, 1000.0)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "matrix exponential overflowed: e^M has non-finite entries (1-norm of M = 1000)"
-        );
+        assert_eq!(e.to_string(), "matrix exponential overflowed: e^M has non-finite entries (1-norm of M = 1000)");
         let e = expm(&DMatrix::from_element(2, 2, 1e308)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "matrix exponential overflowed: e^M has non-finite entries (1-norm of M = inf)"
-        );
+        assert_eq!(e.to_string(), "matrix exponential overflowed: e^M has non-finite entries (1-norm of M = inf)");
         let e = expm(&DMatrix::zeros(2, 3)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "matrix to exponentiate: expected 2x2, got 2x3"
-        );
+        assert_eq!(e.to_string(), "matrix to exponentiate: expected 2x2, got 2x3");
         let e = expm(&DMatrix::from_element(1, 1, f64::NAN)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "matrix to exponentiate has a non-finite entry at (0, 0)"
-        );
+        assert_eq!(e.to_string(), "matrix to exponentiate has a non-finite entry at (0, 0)");
         // A singular Padé denominator (not reachable through expm's scaling) is an error.
         let e = solve_pade(&DMatrix::identity(2, 2), &DMatrix::identity(2, 2)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "matrix exponential: the Pade denominator q(M) is singular"
-        );
+        assert_eq!(e.to_string(), "matrix exponential: the Pade denominator q(M) is singular");
         // Empty systems are fine.
         assert_eq!(expm(&DMatrix::zeros(0, 0)).unwrap().nrows(), 0);
         let d = zoh_discretize(&a, &DMatrix::zeros(2, 0), 0.1).unwrap();

@@ -87,9 +87,7 @@ pub enum DynamicsError {
         value: f64,
     },
     /// The ellipsoid shape matrix `Q` is not symmetric.
-    #[error(
-        "ellipsoid shape matrix Q is not symmetric: max |Q - Q^T| = {asymmetry} exceeds {tolerance}"
-    )]
+    #[error("ellipsoid shape matrix Q is not symmetric: max |Q - Q^T| = {asymmetry} exceeds {tolerance}")]
     NotSymmetric {
         /// `max |Q_ij − Q_ji|`.
         asymmetry: f64,
@@ -119,10 +117,7 @@ pub enum DynamicsError {
 }
 
 /// Checks that every entry of a matrix is finite, naming it in the error.
-pub(crate) fn check_finite<R, C, S>(
-    what: &str,
-    m: &nalgebra::Matrix<f64, R, C, S>,
-) -> Result<(), DynamicsError>
+pub(crate) fn check_finite<R, C, S>(what: &str, m: &nalgebra::Matrix<f64, R, C, S>) -> Result<(), DynamicsError>
 where
     R: nalgebra::Dim,
     C: nalgebra::Dim,
@@ -131,11 +126,7 @@ where
     for col in 0..m.ncols() {
         for row in 0..m.nrows() {
             if !m[(row, col)].is_finite() {
-                return Err(DynamicsError::NonFiniteEntry {
-                    what: what.to_owned(),
-                    row,
-                    col,
-                });
+                return Err(DynamicsError::NonFiniteEntry { what: what.to_owned(), row, col });
             }
         }
     }

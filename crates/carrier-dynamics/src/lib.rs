@@ -64,12 +64,9 @@ pub use discretize::{ZohDiscretization, expm, zoh_discretize, zoh_discretize_fix
 pub use error::DynamicsError;
 pub use load::RigidBody;
 pub use model::{
-    CarrierModel, DiscreteCarrier, INPUT_DIM, InputMatrix, InputVector, OUTPUT_DIM, STATE_DIM,
-    StateMatrix, StateVector,
+    CarrierModel, DiscreteCarrier, INPUT_DIM, InputMatrix, InputVector, OUTPUT_DIM, STATE_DIM, StateMatrix, StateVector,
 };
 pub use noise::{BoundedNoise, NoiseDistribution};
 pub use params::{CarrierParams, RollInertia};
 pub use rng::Xoshiro256StarStar;
-pub use simulate::{
-    ConstantModel, FnModel, LinearTimeVarying, SimulationConfig, StepMatrices, Trajectory, simulate,
-};
+pub use simulate::{ConstantModel, FnModel, LinearTimeVarying, SimulationConfig, StepMatrices, Trajectory, simulate};

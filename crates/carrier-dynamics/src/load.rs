@@ -74,12 +74,7 @@ impl RigidBody {
     /// The mass properties of Table 1 (carrier with one container).
     #[must_use]
     pub fn of_params(p: &CarrierParams) -> Self {
-        Self {
-            mass: p.mass,
-            cg_height: p.cg_height,
-            roll_inertia_cg: p.roll_inertia_cg(),
-            yaw_inertia: p.yaw_inertia,
-        }
+        Self { mass: p.mass, cg_height: p.cg_height, roll_inertia_cg: p.roll_inertia_cg(), yaw_inertia: p.yaw_inertia }
     }
 
     /// Roll inertia about the roll axis, `I_xeq = I_x + m h²`.
@@ -99,10 +94,7 @@ impl RigidBody {
         Self {
             mass,
             cg_height,
-            roll_inertia_cg: self.roll_inertia_cg
-                + self.mass * d1 * d1
-                + other.roll_inertia_cg
-                + other.mass * d2 * d2,
+            roll_inertia_cg: self.roll_inertia_cg + self.mass * d1 * d1 + other.roll_inertia_cg + other.mass * d2 * d2,
             yaw_inertia: self.yaw_inertia + other.yaw_inertia,
         }
     }
@@ -130,8 +122,7 @@ impl RigidBody {
 /// The empty carrier: Table 1 minus the first container (see the module assumptions).
 #[must_use]
 pub fn empty_carrier() -> RigidBody {
-    RigidBody::of_params(&CarrierParams::paper_preset())
-        .remove(&RigidBody::container(FIRST_CONTAINER_CG_HEIGHT))
+    RigidBody::of_params(&CarrierParams::paper_preset()).remove(&RigidBody::container(FIRST_CONTAINER_CG_HEIGHT))
 }
 
 impl CarrierParams {
@@ -146,8 +137,7 @@ impl CarrierParams {
         let body = match containers {
             0 => empty_carrier(),
             1 => return Ok(preset),
-            2 => RigidBody::of_params(&preset)
-                .combine(&RigidBody::container(SECOND_CONTAINER_CG_HEIGHT)),
+            2 => RigidBody::of_params(&preset).combine(&RigidBody::container(SECOND_CONTAINER_CG_HEIGHT)),
             _ => return Err(DynamicsError::UnsupportedLoad { containers }),
         };
         Ok(Self {
@@ -171,17 +161,12 @@ mod tests {
 
     #[test]
     fn one_container_is_exactly_table_1() {
-        assert_eq!(
-            CarrierParams::for_load(1).unwrap(),
-            CarrierParams::paper_preset()
-        );
+        assert_eq!(CarrierParams::for_load(1).unwrap(), CarrierParams::paper_preset());
     }
 
     #[test]
     fn load_cases_are_consistent_and_physical() {
-        let p: Vec<CarrierParams> = (0..=2)
-            .map(|n| CarrierParams::for_load(n).unwrap())
-            .collect();
+        let p: Vec<CarrierParams> = (0..=2).map(|n| CarrierParams::for_load(n).unwrap()).collect();
         // Mass linear in n, exactly (integers in f64).
         assert_eq!(p[0].mass, 64_000.0);
         assert_eq!(p[1].mass - p[0].mass, CONTAINER_MASS);
@@ -211,18 +196,14 @@ mod tests {
     fn more_than_two_containers_is_rejected() {
         let e = CarrierParams::for_load(3).unwrap_err();
         assert_eq!(e, DynamicsError::UnsupportedLoad { containers: 3 });
-        assert_eq!(
-            e.to_string(),
-            "unsupported load of 3 containers: the load model covers 0, 1 or 2"
-        );
+        assert_eq!(e.to_string(), "unsupported load of 3 containers: the load model covers 0, 1 or 2");
     }
 
     #[test]
     fn all_loads_are_stable_from_2_to_10_m_per_s() {
         for n in 0..=2 {
             for v in [2.0, 4.0, 6.0, 8.0, 10.0] {
-                let model =
-                    CarrierModel::new(CarrierParams::for_load(n).unwrap().with_speed(v)).unwrap();
+                let model = CarrierModel::new(CarrierParams::for_load(n).unwrap().with_speed(v)).unwrap();
                 let eig = model.eigenvalues().unwrap();
                 for l in eig.iter() {
                     assert!(l.re < 0.0, "n = {n}, v = {v}: eigenvalue {l}");

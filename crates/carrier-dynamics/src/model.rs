@@ -26,11 +26,7 @@ pub type InputVector = SVector<f64, INPUT_DIM>;
 /// Row (0-based, rows 1..4 → 0..3) and stiffness of input `j` (0..8): inputs 0..4 are the
 /// left wheels of rows 1..4, inputs 4..8 the right wheels.
 fn wheel(p: &CarrierParams, j: usize) -> (usize, f64) {
-    if j < 4 {
-        (j, p.stiffness_left[j])
-    } else {
-        (j - 4, p.stiffness_right[j - 4])
-    }
+    if j < 4 { (j, p.stiffness_left[j]) } else { (j - 4, p.stiffness_right[j - 4]) }
 }
 
 /// `+1` for rows 1, 2 (ahead of the CG), `−1` for rows 3, 4 (behind).
@@ -144,8 +140,7 @@ impl CarrierModel {
     /// computation fails).
     #[must_use]
     pub fn is_stable(&self) -> bool {
-        self.eigenvalues()
-            .is_some_and(|e| e.iter().all(|l| l.re < 0.0))
+        self.eigenvalues().is_some_and(|e| e.iter().all(|l| l.re < 0.0))
     }
 
     /// Exact zero-order-hold discretisation with period `ts` \[s\] (eqs (10)–(11)):
@@ -156,12 +151,7 @@ impl CarrierModel {
     /// exponential failure (see [`crate::expm`]).
     pub fn discretize(&self, ts: f64) -> Result<DiscreteCarrier, DynamicsError> {
         let (a_p, b_p) = zoh_discretize_fixed(&self.a, &self.b, ts)?;
-        Ok(DiscreteCarrier {
-            a_p,
-            b_p,
-            c_p: self.c(),
-            ts,
-        })
+        Ok(DiscreteCarrier { a_p, b_p, c_p: self.c(), ts })
     }
 }
 
@@ -204,18 +194,10 @@ mod tests {
         let i_xeq = p.roll_inertia_eq();
         let (mut sum_f, mut moment) = (0.0, 0.0);
         for j in 0..8 {
-            let (row, k) = if j < 4 {
-                (j, p.stiffness_left[j])
-            } else {
-                (j - 4, p.stiffness_right[j - 4])
-            };
+            let (row, k) = if j < 4 { (j, p.stiffness_left[j]) } else { (j - 4, p.stiffness_right[j - 4]) };
             let l = p.row_distances[row];
             let front = row < 2;
-            let alpha = if front {
-                beta + l * gamma / v - u[j]
-            } else {
-                beta - l * gamma / v - u[j]
-            };
+            let alpha = if front { beta + l * gamma / v - u[j] } else { beta - l * gamma / v - u[j] };
             let f = -k * alpha;
             sum_f += f;
             moment += if front { l * f } else { -l * f };
@@ -223,8 +205,7 @@ mod tests {
         // (4): m v β̇ − m h φ̈ = ΣF − m v γ
         // (6): −m h v β̇ + I_xeq φ̈ = m h v γ + m g h φ − C_φ φ̇ − K_φ φ
         let r1 = sum_f - m * v * gamma;
-        let r2 =
-            m * h * v * gamma + m * g * h * phi - p.roll_damping * phi_dot - p.roll_stiffness * phi;
+        let r2 = m * h * v * gamma + m * g * h * phi - p.roll_damping * phi_dot - p.roll_stiffness * phi;
         let (a11, a12, a21, a22) = (m * v, -m * h, -m * h * v, i_xeq);
         let det = a11 * a22 - a12 * a21;
         let beta_dot = (r1 * a22 - a12 * r2) / det;
@@ -237,9 +218,7 @@ mod tests {
         let mut rng = Xoshiro256StarStar::seed_from_u64(7);
         for n in 0..=2 {
             // Also unequal stiffnesses and distances, to exercise every index.
-            let mut p = CarrierParams::for_load(n)
-                .unwrap()
-                .with_speed(2.0 + 3.0 * n as f64);
+            let mut p = CarrierParams::for_load(n).unwrap().with_speed(2.0 + 3.0 * n as f64);
             if n == 2 {
                 p.stiffness_left = [5.0e5, 5.5e5, 4.0e5, 4.5e5];
                 p.stiffness_right = [5.2e5, 5.7e5, 4.2e5, 4.7e5];
@@ -253,8 +232,7 @@ mod tests {
                 let got = model.derivative(&x, &u);
                 // Relative to the size of the terms of each row (the sums may cancel).
                 for i in 0..4 {
-                    let row_scale = (model.a().row(i).abs() * x.abs()).sum()
-                        + (model.b().row(i).abs() * u.abs()).sum();
+                    let row_scale = (model.a().row(i).abs() * x.abs()).sum() + (model.b().row(i).abs() * u.abs()).sum();
                     assert!(
                         (got[i] - want[i]).abs() <= 1e-12 * row_scale,
                         "n = {n}, state {i}: {} vs {}",
@@ -302,29 +280,17 @@ mod tests {
             assert!(model.is_stable(), "v = {v}: {:?}", model.eigenvalues());
         }
         // A top-heavy carrier (K_φ < m g h) is a valid model, and reported unstable.
-        let top_heavy = CarrierParams {
-            roll_stiffness: 5.0e6,
-            ..CarrierParams::paper_preset()
-        };
+        let top_heavy = CarrierParams { roll_stiffness: 5.0e6, ..CarrierParams::paper_preset() };
         assert!(!CarrierModel::new(top_heavy).unwrap().is_stable());
     }
 
     #[test]
     fn overflowing_parameters_are_reported() {
-        let p = CarrierParams {
-            mass: 1e-305,
-            ..CarrierParams::paper_preset()
-        };
+        let p = CarrierParams { mass: 1e-305, ..CarrierParams::paper_preset() };
         let e = CarrierModel::new(p).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "continuous-time state matrix A has a non-finite entry at (0, 0)"
-        );
+        assert_eq!(e.to_string(), "continuous-time state matrix A has a non-finite entry at (0, 0)");
         let e = CarrierModel::new(CarrierParams::paper_preset().with_speed(-1.0)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "parameter v (forward speed) must be positive, got -1"
-        );
+        assert_eq!(e.to_string(), "parameter v (forward speed) must be positive, got -1");
     }
 
     #[test]
@@ -342,9 +308,6 @@ mod tests {
         assert_eq!(b[(3, 7)], d.b_p[(3, 7)]);
         assert_eq!(c, DMatrix::identity(4, 4));
         let e = model.discretize(0.0).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "sampling period T_s must be positive and finite, got 0"
-        );
+        assert_eq!(e.to_string(), "sampling period T_s must be positive and finite, got 0");
     }
 }

@@ -40,13 +40,7 @@ impl BoundedNoise {
     /// No noise, of dimension `dim`.
     #[must_use]
     pub fn none(dim: usize) -> Self {
-        Self {
-            distribution: NoiseDistribution::None,
-            half_widths: None,
-            shape: None,
-            factor: None,
-            dim,
-        }
+        Self { distribution: NoiseDistribution::None, half_widths: None, shape: None, factor: None, dim }
     }
 
     /// Components independently uniform in `[−a_i, a_i)` (the paper's `|w_k| ≤ 0.3`).
@@ -95,20 +89,14 @@ impl BoundedNoise {
         Self::ellipsoid(shape, NoiseDistribution::EllipsoidBoundary)
     }
 
-    fn ellipsoid(
-        shape: DMatrix<f64>,
-        distribution: NoiseDistribution,
-    ) -> Result<Self, DynamicsError> {
+    fn ellipsoid(shape: DMatrix<f64>, distribution: NoiseDistribution) -> Result<Self, DynamicsError> {
         let n = shape.nrows();
         check_dims("ellipsoid shape matrix Q", &shape, n, n)?;
         check_finite("ellipsoid shape matrix Q", &shape)?;
         let asymmetry = (&shape - shape.transpose()).amax();
         let tolerance = SYMMETRY_TOL * shape.amax();
         if asymmetry > tolerance {
-            return Err(DynamicsError::NotSymmetric {
-                asymmetry,
-                tolerance,
-            });
+            return Err(DynamicsError::NotSymmetric { asymmetry, tolerance });
         }
         let shape = (&shape + shape.transpose()) * 0.5;
         let factor = shape
@@ -117,13 +105,7 @@ impl BoundedNoise {
             .map(|c| c.l())
             .filter(|l| l.diagonal().iter().all(|d| d.is_finite() && *d > 0.0))
             .ok_or(DynamicsError::NotPositiveDefinite)?;
-        Ok(Self {
-            distribution,
-            half_widths: None,
-            shape: Some(shape),
-            factor: Some(factor),
-            dim: n,
-        })
+        Ok(Self { distribution, half_widths: None, shape: Some(shape), factor: Some(factor), dim: n })
     }
 
     /// Dimension of the noise vector.
@@ -224,10 +206,7 @@ mod tests {
         let q = test_shape();
         let inside = BoundedNoise::uniform_ellipsoid(q.clone()).unwrap();
         let boundary = BoundedNoise::ellipsoid_boundary(q.clone()).unwrap();
-        assert_eq!(
-            boundary.distribution(),
-            NoiseDistribution::EllipsoidBoundary
-        );
+        assert_eq!(boundary.distribution(), NoiseDistribution::EllipsoidBoundary);
         assert_eq!(inside.shape(), Some(&q));
         let mut rng = Xoshiro256StarStar::seed_from_u64(11);
         let n = 4000;
@@ -268,40 +247,21 @@ mod tests {
     #[test]
     fn invalid_noise_parameters_are_named() {
         let e = BoundedNoise::uniform_box(DVector::from_row_slice(&[0.1, -0.2])).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "box noise half-width 1 must be finite and non-negative, got -0.2"
-        );
+        assert_eq!(e.to_string(), "box noise half-width 1 must be finite and non-negative, got -0.2");
         let e = BoundedNoise::uniform_cube(2, f64::NAN).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "box noise half-width 0 must be finite and non-negative, got NaN"
-        );
+        assert_eq!(e.to_string(), "box noise half-width 0 must be finite and non-negative, got NaN");
         let e = BoundedNoise::uniform_ellipsoid(DMatrix::zeros(2, 3)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "ellipsoid shape matrix Q: expected 2x2, got 2x3"
-        );
+        assert_eq!(e.to_string(), "ellipsoid shape matrix Q: expected 2x2, got 2x3");
         let mut q = DMatrix::identity(2, 2);
         q[(0, 1)] = f64::INFINITY;
         let e = BoundedNoise::uniform_ellipsoid(q).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "ellipsoid shape matrix Q has a non-finite entry at (0, 1)"
-        );
+        assert_eq!(e.to_string(), "ellipsoid shape matrix Q has a non-finite entry at (0, 1)");
         let q = DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.4, 1.0]);
         let e = BoundedNoise::ellipsoid_boundary(q).unwrap_err();
-        assert!(
-            e.to_string()
-                .starts_with("ellipsoid shape matrix Q is not symmetric: max |Q - Q^T| = 0.09999"),
-            "{e}"
-        );
+        assert!(e.to_string().starts_with("ellipsoid shape matrix Q is not symmetric: max |Q - Q^T| = 0.09999"), "{e}");
         let q = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
         let e = BoundedNoise::uniform_ellipsoid(q).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "ellipsoid shape matrix Q is not positive definite (Cholesky factorisation failed)"
-        );
+        assert_eq!(e.to_string(), "ellipsoid shape matrix Q is not positive definite (Cholesky factorisation failed)");
         let e = BoundedNoise::uniform_ellipsoid(DMatrix::zeros(2, 2)).unwrap_err();
         assert_eq!(e, DynamicsError::NotPositiveDefinite);
         // Round-off asymmetry is tolerated and removed.

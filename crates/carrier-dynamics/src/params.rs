@@ -122,10 +122,7 @@ impl CarrierParams {
     /// validation then requires `I_x = I_xeq − m h² > 0`.
     #[must_use]
     pub fn with_roll_inertia_eq(self, i_xeq: f64) -> Self {
-        Self {
-            roll_inertia: RollInertia::AboutRollAxis(i_xeq),
-            ..self
-        }
+        Self { roll_inertia: RollInertia::AboutRollAxis(i_xeq), ..self }
     }
 
     /// `m h²` \[kg m²\], the parallel-axis term.
@@ -230,111 +227,39 @@ mod tests {
     fn every_parameter_is_named_in_its_error() {
         let base = CarrierParams::paper_preset;
         let cases: Vec<(CarrierParams, &str)> = vec![
+            (CarrierParams { mass: 0.0, ..base() }, "m (mass) must be positive"),
+            (CarrierParams { mass: f64::NAN, ..base() }, "m (mass) must be finite"),
+            (CarrierParams { cg_height: -1.0, ..base() }, "h (CG height above the roll axis) must be non-negative"),
+            (CarrierParams { cg_height: f64::INFINITY, ..base() }, "h (CG height above the roll axis) must be finite"),
             (
-                CarrierParams {
-                    mass: 0.0,
-                    ..base()
-                },
-                "m (mass) must be positive",
-            ),
-            (
-                CarrierParams {
-                    mass: f64::NAN,
-                    ..base()
-                },
-                "m (mass) must be finite",
-            ),
-            (
-                CarrierParams {
-                    cg_height: -1.0,
-                    ..base()
-                },
-                "h (CG height above the roll axis) must be non-negative",
-            ),
-            (
-                CarrierParams {
-                    cg_height: f64::INFINITY,
-                    ..base()
-                },
-                "h (CG height above the roll axis) must be finite",
-            ),
-            (
-                CarrierParams {
-                    row_distances: [3.85, 1.95, -1.95, 3.85],
-                    ..base()
-                },
+                CarrierParams { row_distances: [3.85, 1.95, -1.95, 3.85], ..base() },
                 "L_3 (distance of row 3 from the CG) must be positive",
             ),
             (
-                CarrierParams {
-                    stiffness_left: [5.6e5, 5.6e5, 4.6e5, 0.0],
-                    ..base()
-                },
+                CarrierParams { stiffness_left: [5.6e5, 5.6e5, 4.6e5, 0.0], ..base() },
                 "K_l4 (cornering stiffness, left wheel of row 4) must be positive",
             ),
             (
-                CarrierParams {
-                    stiffness_right: [f64::NAN, 5.6e5, 4.6e5, 4.6e5],
-                    ..base()
-                },
+                CarrierParams { stiffness_right: [f64::NAN, 5.6e5, 4.6e5, 4.6e5], ..base() },
                 "K_r1 (cornering stiffness, right wheel of row 1) must be finite",
             ),
+            (CarrierParams { roll_stiffness: -1.0, ..base() }, "K_phi (roll stiffness) must be positive"),
+            (CarrierParams { roll_damping: -1.0, ..base() }, "C_phi (roll damping) must be non-negative"),
+            (CarrierParams { yaw_inertia: 0.0, ..base() }, "I_z (yaw inertia) must be positive"),
             (
-                CarrierParams {
-                    roll_stiffness: -1.0,
-                    ..base()
-                },
-                "K_phi (roll stiffness) must be positive",
-            ),
-            (
-                CarrierParams {
-                    roll_damping: -1.0,
-                    ..base()
-                },
-                "C_phi (roll damping) must be non-negative",
-            ),
-            (
-                CarrierParams {
-                    yaw_inertia: 0.0,
-                    ..base()
-                },
-                "I_z (yaw inertia) must be positive",
-            ),
-            (
-                CarrierParams {
-                    roll_inertia: RollInertia::AboutCg(0.0),
-                    ..base()
-                },
+                CarrierParams { roll_inertia: RollInertia::AboutCg(0.0), ..base() },
                 "I_x (roll inertia about the CG) must be positive",
             ),
-            (
-                base().with_roll_inertia_eq(-5.0),
-                "I_xeq (roll inertia about the roll axis) must be positive",
-            ),
+            (base().with_roll_inertia_eq(-5.0), "I_xeq (roll inertia about the roll axis) must be positive"),
             (base().with_speed(0.0), "v (forward speed) must be positive"),
-            (
-                base().with_speed(f64::INFINITY),
-                "v (forward speed) must be finite",
-            ),
-            (
-                CarrierParams {
-                    gravity: -9.81,
-                    ..base()
-                },
-                "g (gravity) must be positive",
-            ),
+            (base().with_speed(f64::INFINITY), "v (forward speed) must be finite"),
+            (CarrierParams { gravity: -9.81, ..base() }, "g (gravity) must be positive"),
         ];
         for (p, expected) in cases {
             let m = message(p);
             assert!(m.contains(expected), "message {m:?} lacks {expected:?}");
         }
         // Zero damping and zero CG height are allowed.
-        CarrierParams {
-            roll_damping: 0.0,
-            cg_height: 0.0,
-            ..base()
-        }
-        .validate()
-        .unwrap();
+        CarrierParams { roll_damping: 0.0, cg_height: 0.0, ..base() }.validate().unwrap();
     }
 }

@@ -33,12 +33,7 @@ impl Xoshiro256StarStar {
     #[must_use]
     pub fn seed_from_u64(seed: u64) -> Self {
         let mut sm = seed;
-        let s = [
-            splitmix64(&mut sm),
-            splitmix64(&mut sm),
-            splitmix64(&mut sm),
-            splitmix64(&mut sm),
-        ];
+        let s = [splitmix64(&mut sm), splitmix64(&mut sm), splitmix64(&mut sm), splitmix64(&mut sm)];
         Self { s }
     }
 
@@ -76,12 +71,8 @@ impl Xoshiro256StarStar {
     /// Advances the state by 2¹²⁸ draws, giving a non-overlapping stream (the reference
     /// `jump` of xoshiro256).
     pub fn jump(&mut self) {
-        const JUMP: [u64; 4] = [
-            0x180e_c6d3_3cfd_0aba,
-            0xd5a6_1266_f0c9_392c,
-            0xa958_2618_e03f_c9aa,
-            0x39ab_dc45_29b1_661c,
-        ];
+        const JUMP: [u64; 4] =
+            [0x180e_c6d3_3cfd_0aba, 0xd5a6_1266_f0c9_392c, 0xa958_2618_e03f_c9aa, 0x39ab_dc45_29b1_661c];
         let mut acc = [0u64; 4];
         for word in JUMP {
             for bit in 0..64 {
@@ -105,15 +96,7 @@ mod tests {
     fn splitmix64_reference_outputs() {
         let mut s = 0u64;
         let got: Vec<u64> = (0..4).map(|_| splitmix64(&mut s)).collect();
-        assert_eq!(
-            got,
-            [
-                0xe220_a839_7b1d_cdaf,
-                0x6e78_9e6a_a1b9_65f4,
-                0x06c4_5d18_8009_454f,
-                0xf88b_b8a8_724c_81ec
-            ]
-        );
+        assert_eq!(got, [0xe220_a839_7b1d_cdaf, 0x6e78_9e6a_a1b9_65f4, 0x06c4_5d18_8009_454f, 0xf88b_b8a8_724c_81ec]);
     }
 
     #[test]
@@ -138,24 +121,12 @@ mod tests {
 
     /// First draws for seed 42, fixed forever (cross-checked against an independent
     /// transcription of SplitMix64 + xoshiro256**).
-    const GOLDEN_42: [u64; 3] = [
-        1_546_998_764_402_558_742,
-        6_990_951_692_964_543_102,
-        12_544_586_762_248_559_009,
-    ];
+    const GOLDEN_42: [u64; 3] = [1_546_998_764_402_558_742, 6_990_951_692_964_543_102, 12_544_586_762_248_559_009];
 
     #[test]
     fn seeding_is_splitmix_and_golden() {
         let rng = Xoshiro256StarStar::seed_from_u64(0);
-        assert_eq!(
-            rng.s,
-            [
-                0xe220_a839_7b1d_cdaf,
-                0x6e78_9e6a_a1b9_65f4,
-                0x06c4_5d18_8009_454f,
-                0xf88b_b8a8_724c_81ec
-            ]
-        );
+        assert_eq!(rng.s, [0xe220_a839_7b1d_cdaf, 0x6e78_9e6a_a1b9_65f4, 0x06c4_5d18_8009_454f, 0xf88b_b8a8_724c_81ec]);
         let mut rng = Xoshiro256StarStar::seed_from_u64(42);
         let first: Vec<u64> = (0..3).map(|_| rng.next_u64()).collect();
         assert_eq!(first, GOLDEN_42);

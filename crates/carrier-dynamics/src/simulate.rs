@@ -56,9 +56,7 @@ impl ConstantModel {
         check_finite("A", &a)?;
         check_finite("B", &b)?;
         check_finite("C", &c)?;
-        Ok(Self {
-            matrices: StepMatrices { a, b, c },
-        })
+        Ok(Self { matrices: StepMatrices { a, b, c } })
     }
 
     /// The constant matrices.
@@ -112,10 +110,7 @@ where
     /// `state_dim` n, `input_dim` p, `output_dim` q and the per-step closure; the simulator
     /// checks every step's matrices against these dimensions.
     pub fn new(state_dim: usize, input_dim: usize, output_dim: usize, f: F) -> Self {
-        Self {
-            dims: (state_dim, input_dim, output_dim),
-            f,
-        }
+        Self { dims: (state_dim, input_dim, output_dim), f }
     }
 }
 
@@ -186,10 +181,7 @@ impl Trajectory {
     }
 }
 
-fn check_step(
-    model: &(impl LinearTimeVarying + ?Sized),
-    k: usize,
-) -> Result<StepMatrices, DynamicsError> {
+fn check_step(model: &(impl LinearTimeVarying + ?Sized), k: usize) -> Result<StepMatrices, DynamicsError> {
     let (n, p, q) = (model.state_dim(), model.input_dim(), model.output_dim());
     let m = model.matrices(k)?;
     check_dims(&format!("A_{k}"), &m.a, n, n)?;
@@ -286,26 +278,20 @@ mod tests {
     use crate::{CarrierModel, CarrierParams};
 
     fn carrier_config(seed: u64, steps: usize) -> SimulationConfig {
-        let u_max = DVector::from_row_slice(&[22.0, 16.0, 16.0, 21.0, 20.0, 15.0, 15.0, 19.0])
-            * (std::f64::consts::PI / 180.0);
+        let u_max =
+            DVector::from_row_slice(&[22.0, 16.0, 16.0, 21.0, 20.0, 15.0, 15.0, 19.0]) * (std::f64::consts::PI / 180.0);
         SimulationConfig {
             x0: DVector::from_row_slice(&[0.03, -0.08, 0.02, 0.1]),
-            inputs: (0..steps)
-                .map(|k| &u_max * (k as f64 / steps as f64))
-                .collect(),
+            inputs: (0..steps).map(|k| &u_max * (k as f64 / steps as f64)).collect(),
             process_noise: BoundedNoise::uniform_cube(4, 1e-3).unwrap(),
-            measurement_noise: BoundedNoise::ellipsoid_boundary(DMatrix::identity(4, 4) * 1e-4)
-                .unwrap(),
+            measurement_noise: BoundedNoise::ellipsoid_boundary(DMatrix::identity(4, 4) * 1e-4).unwrap(),
             seed,
         }
     }
 
     #[test]
     fn same_seed_same_run_and_recursion_holds() {
-        let d = CarrierModel::new(CarrierParams::paper_preset())
-            .unwrap()
-            .discretize(1e-3)
-            .unwrap();
+        let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
         let cfg = carrier_config(42, 100);
         let t1 = simulate(&d, &cfg).unwrap();
         let t2 = simulate(&d, &cfg).unwrap();
@@ -315,14 +301,7 @@ mod tests {
         assert_eq!(t1.measurements.len(), 101);
         assert_eq!(t1.measurement_noises.len(), 101);
         assert_eq!(t1.process_noises.len(), 100);
-        let other = simulate(
-            &d,
-            &SimulationConfig {
-                seed: 43,
-                ..cfg.clone()
-            },
-        )
-        .unwrap();
+        let other = simulate(&d, &SimulationConfig { seed: 43, ..cfg.clone() }).unwrap();
         assert_ne!(other.process_noises, t1.process_noises);
         assert_ne!(other.measurement_noises, t1.measurement_noises);
         assert_eq!(other.states[0], t1.states[0]);
@@ -330,10 +309,7 @@ mod tests {
         let mut x = nalgebra::Vector4::from_column_slice(cfg.x0.as_slice());
         for k in 0..100 {
             let y = x + nalgebra::Vector4::from_column_slice(t1.measurement_noises[k].as_slice());
-            assert!(
-                (y - nalgebra::Vector4::from_column_slice(t1.measurements[k].as_slice())).amax()
-                    < 1e-15
-            );
+            assert!((y - nalgebra::Vector4::from_column_slice(t1.measurements[k].as_slice())).amax() < 1e-15);
             let u = nalgebra::SVector::<f64, 8>::from_column_slice(t1.inputs[k].as_slice());
             let w = nalgebra::Vector4::from_column_slice(t1.process_noises[k].as_slice());
             x = d.a_p * x + d.b_p * u + w;
@@ -351,20 +327,10 @@ mod tests {
 
     #[test]
     fn noise_streams_are_independent_of_each_other() {
-        let d = CarrierModel::new(CarrierParams::paper_preset())
-            .unwrap()
-            .discretize(1e-3)
-            .unwrap();
+        let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
         let cfg = carrier_config(7, 20);
         let a = simulate(&d, &cfg).unwrap();
-        let b = simulate(
-            &d,
-            &SimulationConfig {
-                measurement_noise: BoundedNoise::none(4),
-                ..cfg.clone()
-            },
-        )
-        .unwrap();
+        let b = simulate(&d, &SimulationConfig { measurement_noise: BoundedNoise::none(4), ..cfg.clone() }).unwrap();
         assert_eq!(a.process_noises, b.process_noises);
         assert_eq!(a.states, b.states);
         assert_eq!(b.measurements, b.states);
@@ -398,9 +364,8 @@ mod tests {
         let ts = 0.01;
         let carrier = FnModel::new(4, 8, 4, |k: usize| {
             let v = 4.0 + 0.04 * k as f64;
-            let (a, b, c) = CarrierModel::new(CarrierParams::paper_preset().with_speed(v))?
-                .discretize(ts)?
-                .to_dynamic();
+            let (a, b, c) =
+                CarrierModel::new(CarrierParams::paper_preset().with_speed(v))?.discretize(ts)?.to_dynamic();
             Ok(StepMatrices { a, b, c })
         });
         let mut cfg = carrier_config(1, 100);
@@ -412,22 +377,15 @@ mod tests {
             x = &m.a * &x + &m.b * &cfg.inputs[k];
         }
         assert!((&x - &t.states[100]).amax() < 1e-12);
-        let constant = CarrierModel::new(CarrierParams::paper_preset().with_speed(4.0))
-            .unwrap()
-            .discretize(ts)
-            .unwrap();
+        let constant =
+            CarrierModel::new(CarrierParams::paper_preset().with_speed(4.0)).unwrap().discretize(ts).unwrap();
         let tc = simulate(&constant, &cfg).unwrap();
         assert!((&tc.states[100] - &t.states[100]).amax() > 1e-6);
     }
 
     #[test]
     fn simulation_errors_are_named() {
-        let ok = ConstantModel::new(
-            DMatrix::identity(2, 2),
-            DMatrix::zeros(2, 1),
-            DMatrix::identity(1, 2),
-        )
-        .unwrap();
+        let ok = ConstantModel::new(DMatrix::identity(2, 2), DMatrix::zeros(2, 1), DMatrix::identity(1, 2)).unwrap();
         assert_eq!(ok.matrices().c.shape(), (1, 2));
         let cfg = SimulationConfig {
             x0: DVector::zeros(2),
@@ -439,17 +397,11 @@ mod tests {
         simulate(&ok, &cfg).unwrap();
         let msg = |c: SimulationConfig| simulate(&ok, &c).unwrap_err().to_string();
         assert_eq!(
-            msg(SimulationConfig {
-                x0: DVector::zeros(3),
-                ..cfg.clone()
-            }),
+            msg(SimulationConfig { x0: DVector::zeros(3), ..cfg.clone() }),
             "initial state x_0: expected 2x1, got 3x1"
         );
         assert_eq!(
-            msg(SimulationConfig {
-                x0: DVector::from_element(2, f64::NAN),
-                ..cfg.clone()
-            }),
+            msg(SimulationConfig { x0: DVector::from_element(2, f64::NAN), ..cfg.clone() }),
             "initial state x_0 has a non-finite entry at (0, 0)"
         );
         let mut bad_u = cfg.clone();
@@ -459,47 +411,22 @@ mod tests {
         bad_u.inputs[0] = DVector::from_element(1, f64::INFINITY);
         assert_eq!(msg(bad_u), "input u_0 has a non-finite entry at (0, 0)");
         assert_eq!(
-            msg(SimulationConfig {
-                process_noise: BoundedNoise::none(3),
-                ..cfg.clone()
-            }),
+            msg(SimulationConfig { process_noise: BoundedNoise::none(3), ..cfg.clone() }),
             "process noise w_k: expected 2x1, got 3x1"
         );
         assert_eq!(
-            msg(SimulationConfig {
-                measurement_noise: BoundedNoise::none(2),
-                ..cfg.clone()
-            }),
+            msg(SimulationConfig { measurement_noise: BoundedNoise::none(2), ..cfg.clone() }),
             "measurement noise v_k: expected 1x1, got 2x1"
         );
 
-        let e = ConstantModel::new(
-            DMatrix::zeros(2, 3),
-            DMatrix::zeros(2, 1),
-            DMatrix::zeros(1, 2),
-        )
-        .unwrap_err();
+        let e = ConstantModel::new(DMatrix::zeros(2, 3), DMatrix::zeros(2, 1), DMatrix::zeros(1, 2)).unwrap_err();
         assert_eq!(e.to_string(), "A: expected 2x2, got 2x3");
-        let e = ConstantModel::new(
-            DMatrix::zeros(2, 2),
-            DMatrix::zeros(3, 1),
-            DMatrix::zeros(1, 2),
-        )
-        .unwrap_err();
+        let e = ConstantModel::new(DMatrix::zeros(2, 2), DMatrix::zeros(3, 1), DMatrix::zeros(1, 2)).unwrap_err();
         assert_eq!(e.to_string(), "B: expected 2x1, got 3x1");
-        let e = ConstantModel::new(
-            DMatrix::zeros(2, 2),
-            DMatrix::zeros(2, 1),
-            DMatrix::zeros(1, 3),
-        )
-        .unwrap_err();
+        let e = ConstantModel::new(DMatrix::zeros(2, 2), DMatrix::zeros(2, 1), DMatrix::zeros(1, 3)).unwrap_err();
         assert_eq!(e.to_string(), "C: expected 1x2, got 1x3");
-        let e = ConstantModel::new(
-            DMatrix::zeros(2, 2),
-            DMatrix::from_element(2, 1, f64::NAN),
-            DMatrix::zeros(1, 2),
-        )
-        .unwrap_err();
+        let e = ConstantModel::new(DMatrix::zeros(2, 2), DMatrix::from_element(2, 1, f64::NAN), DMatrix::zeros(1, 2))
+            .unwrap_err();
         assert_eq!(e.to_string(), "B has a non-finite entry at (0, 0)");
 
         // Per-step matrices from a closure are checked at every step.
@@ -507,11 +434,7 @@ mod tests {
             Ok(StepMatrices {
                 a: DMatrix::identity(2, 2),
                 b: DMatrix::zeros(2, 1),
-                c: if k == 1 {
-                    DMatrix::zeros(1, 3)
-                } else {
-                    DMatrix::zeros(1, 2)
-                },
+                c: if k == 1 { DMatrix::zeros(1, 3) } else { DMatrix::zeros(1, 2) },
             })
         });
         let e = simulate(&wrong_at_1, &cfg).unwrap_err();
@@ -527,35 +450,18 @@ mod tests {
         assert_eq!(e.to_string(), "A_2 has a non-finite entry at (0, 0)");
         // A model error at some step is passed through.
         let stopping = FnModel::new(4, 8, 4, |k: usize| {
-            let (a, b, c) =
-                CarrierModel::new(CarrierParams::paper_preset().with_speed(1.0 - k as f64))?
-                    .discretize(0.01)?
-                    .to_dynamic();
+            let (a, b, c) = CarrierModel::new(CarrierParams::paper_preset().with_speed(1.0 - k as f64))?
+                .discretize(0.01)?
+                .to_dynamic();
             Ok(StepMatrices { a, b, c })
         });
         let e = simulate(&stopping, &carrier_config(0, 3)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "parameter v (forward speed) must be positive, got 0"
-        );
+        assert_eq!(e.to_string(), "parameter v (forward speed) must be positive, got 0");
         // Divergence.
-        let exploding = ConstantModel::new(
-            DMatrix::identity(2, 2) * 1e200,
-            DMatrix::zeros(2, 1),
-            DMatrix::identity(1, 2),
-        )
-        .unwrap();
-        let e = simulate(
-            &exploding,
-            &SimulationConfig {
-                x0: DVector::from_element(2, 1.0),
-                ..cfg.clone()
-            },
-        )
-        .unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "simulation diverged: state x_2 has a non-finite entry"
-        );
+        let exploding =
+            ConstantModel::new(DMatrix::identity(2, 2) * 1e200, DMatrix::zeros(2, 1), DMatrix::identity(1, 2)).unwrap();
+        let e =
+            simulate(&exploding, &SimulationConfig { x0: DVector::from_element(2, 1.0), ..cfg.clone() }).unwrap_err();
+        assert_eq!(e.to_string(), "simulation diverged: state x_2 has a non-finite entry");
     }
 }

@@ -61,45 +61,20 @@ impl Ellipsoid {
         let m = forward_sub_mat(l1, l2);
         let a = symmetrize(&(m.transpose() * &m));
         let b = m.transpose() * &d;
-        let eig = SymmetricEigen::try_new(a, f64::EPSILON, 1000 * n.max(1)).ok_or(
-            EllipsoidError::EigenDecomposition {
-                what: "Mᵀ M (M = L₁⁻¹ L₂)",
-            },
-        )?;
+        let eig = SymmetricEigen::try_new(a, f64::EPSILON, 1000 * n.max(1))
+            .ok_or(EllipsoidError::EigenDecomposition { what: "Mᵀ M (M = L₁⁻¹ L₂)" })?;
         let top = eig.eigenvalues.imax();
         let lam1 = eig.eigenvalues[top].max(0.0);
-        let gamma: Vec<f64> = eig
-            .eigenvalues
-            .iter()
-            .map(|l| (lam1 - l).max(0.0))
-            .collect();
+        let gamma: Vec<f64> = eig.eigenvalues.iter().map(|l| (lam1 - l).max(0.0)).collect();
         let beta = eig.eigenvectors.transpose() * &b;
         let beta2: Vec<f64> = beta.iter().map(|x| x * x).collect();
         let dd = d.norm_squared();
 
-        let phi = |t: f64| -> f64 {
-            beta2
-                .iter()
-                .zip(&gamma)
-                .map(|(b2, g)| ratio(*b2, (t + g) * (t + g)))
-                .sum()
-        };
-        let dphi = |t: f64| -> f64 {
-            beta2
-                .iter()
-                .zip(&gamma)
-                .map(|(b2, g)| ratio(*b2, (t + g) * (t + g) * (t + g)))
-                .sum()
-        };
-        let dual = |t: f64| -> f64 {
-            lam1 + t
-                + dd
-                + beta2
-                    .iter()
-                    .zip(&gamma)
-                    .map(|(b2, g)| ratio(*b2, t + g))
-                    .sum::<f64>()
-        };
+        let phi = |t: f64| -> f64 { beta2.iter().zip(&gamma).map(|(b2, g)| ratio(*b2, (t + g) * (t + g))).sum() };
+        let dphi =
+            |t: f64| -> f64 { beta2.iter().zip(&gamma).map(|(b2, g)| ratio(*b2, (t + g) * (t + g) * (t + g))).sum() };
+        let dual =
+            |t: f64| -> f64 { lam1 + t + dd + beta2.iter().zip(&gamma).map(|(b2, g)| ratio(*b2, t + g)).sum::<f64>() };
 
         let phi0 = phi(0.0);
         let t = if phi0 <= 1.0 {
@@ -121,11 +96,7 @@ impl Ellipsoid {
                 }
                 let dpsi = dphi(t) / (p * p.sqrt());
                 let next = t - psi / dpsi;
-                t = if next.is_finite() && next > lo && next < hi {
-                    next
-                } else {
-                    0.5 * (lo + hi)
-                };
+                t = if next.is_finite() && next > lo && next < hi { next } else { 0.5 * (lo + hi) };
             }
             t
         };
@@ -134,9 +105,7 @@ impl Ellipsoid {
         // Primal maximiser.
         let mut w = DVector::from_iterator(
             n,
-            beta.iter()
-                .zip(&gamma)
-                .map(|(b, g)| if t + g > 0.0 { b / (t + g) } else { 0.0 }),
+            beta.iter().zip(&gamma).map(|(b, g)| if t + g > 0.0 { b / (t + g) } else { 0.0 }),
         );
         if t == 0.0 {
             let rest = (1.0 - w.norm_squared()).max(0.0);

@@ -7,8 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::CONTAINMENT_TOLERANCE;
 use crate::error::{EllipsoidError, Result};
 use crate::linalg::{
-    check_len, check_matrix_finite, check_vector_finite, cholesky, forward_sub, symmetrize,
-    validate_spd,
+    check_len, check_matrix_finite, check_vector_finite, cholesky, forward_sub, symmetrize, validate_spd,
 };
 
 /// The ellipsoid `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}` with `P` symmetric positive
@@ -39,11 +38,7 @@ impl Ellipsoid {
         crate::linalg::check_square(&shape, "shape matrix P")?;
         check_vector_finite(&center, "centre c")?;
         let (shape, chol) = validate_spd(&shape, n, "shape matrix P")?;
-        Ok(Self {
-            center,
-            shape,
-            chol,
-        })
+        Ok(Self { center, shape, chol })
     }
 
     /// The ball `{x : ‖x − center‖ ≤ radius}` (`radius` finite and positive).
@@ -61,11 +56,7 @@ impl Ellipsoid {
 
     /// The axis-aligned ellipsoid with the given semi-axis lengths: `P = diag(a_i²)`.
     pub fn axis_aligned(center: DVector<f64>, semi_axes: &[f64]) -> Result<Self> {
-        check_len(
-            &DVector::from_column_slice(semi_axes),
-            center.len(),
-            "semi-axes",
-        )?;
+        check_len(&DVector::from_column_slice(semi_axes), center.len(), "semi-axes")?;
         if let Some(index) = semi_axes.iter().position(|a| !(a.is_finite() && *a > 0.0)) {
             return Err(EllipsoidError::InvalidParameter {
                 name: "semi-axis",
@@ -88,26 +79,14 @@ impl Ellipsoid {
         check_vector_finite(&center, center_what)?;
         let shape = symmetrize(shape);
         match cholesky(&shape) {
-            Ok(chol) => Ok(Self {
-                center,
-                shape,
-                chol,
-            }),
+            Ok(chol) => Ok(Self { center, shape, chol }),
             Err(f) => Err(on_fail(f.pivot, f.value)),
         }
     }
 
     /// Builds from already-consistent parts (used where `L` is known exactly).
-    pub(crate) fn from_parts(
-        center: DVector<f64>,
-        shape: DMatrix<f64>,
-        chol: DMatrix<f64>,
-    ) -> Self {
-        Self {
-            center,
-            shape,
-            chol,
-        }
+    pub(crate) fn from_parts(center: DVector<f64>, shape: DMatrix<f64>, chol: DMatrix<f64>) -> Self {
+        Self { center, shape, chol }
     }
 
     /// Dimension `n` of the space.
@@ -157,9 +136,7 @@ impl Ellipsoid {
     /// `A P Aᵀ` is formed as `(A L)(A L)ᵀ`.
     pub fn affine_map(&self, a: &DMatrix<f64>, b: &DVector<f64>) -> Result<Self> {
         if a.nrows() == 0 {
-            return Err(EllipsoidError::Empty {
-                what: "map matrix A",
-            });
+            return Err(EllipsoidError::Empty { what: "map matrix A" });
         }
         if a.ncols() != self.dim() {
             return Err(EllipsoidError::DimensionMismatch {
@@ -175,13 +152,11 @@ impl Ellipsoid {
         let shape = &al * al.transpose();
         let center = a * &self.center + b;
         let (rows, cols) = a.shape();
-        Self::from_computed(center, &shape, "image centre A c + b", |pivot, value| {
-            EllipsoidError::DegenerateImage {
-                rows,
-                cols,
-                pivot,
-                value,
-            }
+        Self::from_computed(center, &shape, "image centre A c + b", |pivot, value| EllipsoidError::DegenerateImage {
+            rows,
+            cols,
+            pivot,
+            value,
         })
     }
 
@@ -190,11 +165,7 @@ impl Ellipsoid {
         self.check_point(b, "translation b")?;
         let center = &self.center + b;
         check_vector_finite(&center, "translated centre c + b")?;
-        Ok(Self::from_parts(
-            center,
-            self.shape.clone(),
-            self.chol.clone(),
-        ))
+        Ok(Self::from_parts(center, self.shape.clone(), self.chol.clone()))
     }
 
     /// `𝓔(c, s² P)`: the copy scaled by `s > 0` about its centre.
@@ -206,25 +177,15 @@ impl Ellipsoid {
                 expected: "a finite positive number",
             });
         }
-        Self::from_computed(
-            self.center.clone(),
-            &(&self.shape * (s * s)),
-            "centre c",
-            |pivot, value| EllipsoidError::DegenerateResult {
-                operation: "scaling",
-                pivot,
-                value,
-            },
-        )
+        Self::from_computed(self.center.clone(), &(&self.shape * (s * s)), "centre c", |pivot, value| {
+            EllipsoidError::DegenerateResult { operation: "scaling", pivot, value }
+        })
     }
 
     /// `[c_i − √P_ii, c_i + √P_ii]`: the exact range of coordinate `i` over `𝓔`.
     pub fn interval(&self, i: usize) -> Result<(f64, f64)> {
         if i >= self.dim() {
-            return Err(EllipsoidError::IndexOutOfRange {
-                index: i,
-                dim: self.dim(),
-            });
+            return Err(EllipsoidError::IndexOutOfRange { index: i, dim: self.dim() });
         }
         let r = self.shape[(i, i)].sqrt();
         Ok((self.center[i] - r, self.center[i] + r))
@@ -233,10 +194,7 @@ impl Ellipsoid {
     /// Lower and upper corners of the smallest axis-aligned box containing `𝓔`
     /// (`c ∓ (√P_11, …, √P_nn)`).
     pub fn bounding_box(&self) -> (DVector<f64>, DVector<f64>) {
-        let r = DVector::from_iterator(
-            self.dim(),
-            (0..self.dim()).map(|i| self.shape[(i, i)].sqrt()),
-        );
+        let r = DVector::from_iterator(self.dim(), (0..self.dim()).map(|i| self.shape[(i, i)].sqrt()));
         (&self.center - &r, &self.center + &r)
     }
 
@@ -281,16 +239,11 @@ impl Ellipsoid {
     /// Indices must be in range and distinct; the order is kept.
     pub fn project(&self, coords: &[usize]) -> Result<Self> {
         if coords.is_empty() {
-            return Err(EllipsoidError::Empty {
-                what: "projection coordinate list",
-            });
+            return Err(EllipsoidError::Empty { what: "projection coordinate list" });
         }
         for (k, &i) in coords.iter().enumerate() {
             if i >= self.dim() {
-                return Err(EllipsoidError::IndexOutOfRange {
-                    index: i,
-                    dim: self.dim(),
-                });
+                return Err(EllipsoidError::IndexOutOfRange { index: i, dim: self.dim() });
             }
             if coords[..k].contains(&i) {
                 return Err(EllipsoidError::RepeatedIndex { index: i });
@@ -299,12 +252,10 @@ impl Ellipsoid {
         let m = coords.len();
         let center = DVector::from_iterator(m, coords.iter().map(|&i| self.center[i]));
         let shape = DMatrix::from_fn(m, m, |r, c| self.shape[(coords[r], coords[c])]);
-        Self::from_computed(center, &shape, "projected centre", |pivot, value| {
-            EllipsoidError::DegenerateResult {
-                operation: "projection",
-                pivot,
-                value,
-            }
+        Self::from_computed(center, &shape, "projected centre", |pivot, value| EllipsoidError::DegenerateResult {
+            operation: "projection",
+            pivot,
+            value,
         })
     }
 
@@ -353,19 +304,9 @@ mod tests {
 
     #[test]
     fn unit_ball_volumes() {
-        let vols = [
-            1.0,
-            2.0,
-            PI,
-            4.0 * PI / 3.0,
-            PI * PI / 2.0,
-            8.0 * PI * PI / 15.0,
-        ];
+        let vols = [1.0, 2.0, PI, 4.0 * PI / 3.0, PI * PI / 2.0, 8.0 * PI * PI / 15.0];
         for (n, vol) in vols.iter().enumerate() {
-            assert!(
-                (log_unit_ball_volume(n) - vol.ln()).abs() < 1e-14,
-                "n = {n}"
-            );
+            assert!((log_unit_ball_volume(n) - vol.ln()).abs() < 1e-14, "n = {n}");
         }
     }
 
@@ -395,9 +336,7 @@ mod tests {
         let d = v(&[1.0, 1.0, 0.0]);
         assert!((e.support(&d).expect("ok") - 13f64.sqrt()).abs() < 1e-14);
         let p = e.support_point(&d).expect("ok");
-        assert!(
-            (p - v(&[1.0 + 9.0 / 13f64.sqrt(), -1.0 + 4.0 / 13f64.sqrt(), 0.5])).amax() < 1e-14
-        );
+        assert!((p - v(&[1.0 + 9.0 / 13f64.sqrt(), -1.0 + 4.0 / 13f64.sqrt(), 0.5])).amax() < 1e-14);
         assert!((e.log_volume() - ((4.0 * PI / 3.0) * 3.0).ln()).abs() < 1e-14);
         assert!((e.log_det() - 9f64.ln()).abs() < 1e-14);
         let proj = e.project(&[2, 0]).expect("ok");

@@ -177,9 +177,7 @@ pub enum EllipsoidError {
         index: usize,
     },
     /// The support point is undefined because `dᵀ P d` is zero (d = 0 or underflow).
-    #[error(
-        "direction d gives dᵀ P d = 0 (d is zero or too small): the support point is undefined"
-    )]
+    #[error("direction d gives dᵀ P d = 0 (d is zero or too small): the support point is undefined")]
     ZeroDirection,
     /// The symmetric eigendecomposition did not converge.
     #[error("symmetric eigendecomposition of {what} did not converge")]
@@ -214,15 +212,9 @@ mod tests {
     #[test]
     fn empty() {
         let e = Ellipsoid::new(DVector::zeros(0), DMatrix::zeros(0, 0)).expect_err("empty");
-        assert_eq!(
-            e.to_string(),
-            "centre c is empty: the dimension must be at least 1"
-        );
+        assert_eq!(e.to_string(), "centre c is empty: the dimension must be at least 1");
         let e = unit_disc().project(&[]).expect_err("empty");
-        assert_eq!(
-            e.to_string(),
-            "projection coordinate list is empty: the dimension must be at least 1"
-        );
+        assert_eq!(e.to_string(), "projection coordinate list is empty: the dimension must be at least 1");
     }
 
     #[test]
@@ -234,109 +226,56 @@ mod tests {
     #[test]
     fn dimension_mismatch() {
         let e = Ellipsoid::new(v(&[0.0, 0.0]), DMatrix::identity(3, 3)).expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: shape matrix P has dimension 3, expected 2"
-        );
-        let e = unit_disc()
-            .normalized_distance(&v(&[1.0]))
-            .expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: point x has dimension 1, expected 2"
-        );
+        assert_eq!(e.to_string(), "dimension mismatch: shape matrix P has dimension 3, expected 2");
+        let e = unit_disc().normalized_distance(&v(&[1.0])).expect_err("mismatch");
+        assert_eq!(e.to_string(), "dimension mismatch: point x has dimension 1, expected 2");
         let ball3 = Ellipsoid::ball(v(&[0.0, 0.0, 0.0]), 1.0).expect("valid");
-        let e = unit_disc()
-            .contains_ellipsoid(&ball3)
-            .expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: inner ellipsoid has dimension 3, expected 2"
-        );
-        let e = unit_disc()
-            .minkowski_sum_outer(&ball3, 1.0)
-            .expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: second Minkowski operand has dimension 3, expected 2"
-        );
-        let e = unit_disc()
-            .affine_map(&DMatrix::identity(2, 3), &v(&[0.0, 0.0]))
-            .expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: map matrix A (columns) has dimension 3, expected 2"
-        );
-        let meas = MeasurementSet::new(m(1, 3, &[1.0, 0.0, 0.0]), v(&[0.0]), m(1, 1, &[1.0]))
-            .expect("valid");
-        let e = unit_disc()
-            .intersect_measurement(&meas, 0.5)
-            .expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: measurement matrix C (columns) has dimension 3, expected 2"
-        );
-        let e = MeasurementSet::new(m(2, 2, &[1.0, 0.0, 0.0, 1.0]), v(&[0.0]), m(1, 1, &[1.0]))
-            .expect_err("mismatch");
-        assert_eq!(
-            e.to_string(),
-            "dimension mismatch: measurement matrix C (rows) has dimension 2, expected 1"
-        );
+        let e = unit_disc().contains_ellipsoid(&ball3).expect_err("mismatch");
+        assert_eq!(e.to_string(), "dimension mismatch: inner ellipsoid has dimension 3, expected 2");
+        let e = unit_disc().minkowski_sum_outer(&ball3, 1.0).expect_err("mismatch");
+        assert_eq!(e.to_string(), "dimension mismatch: second Minkowski operand has dimension 3, expected 2");
+        let e = unit_disc().affine_map(&DMatrix::identity(2, 3), &v(&[0.0, 0.0])).expect_err("mismatch");
+        assert_eq!(e.to_string(), "dimension mismatch: map matrix A (columns) has dimension 3, expected 2");
+        let meas = MeasurementSet::new(m(1, 3, &[1.0, 0.0, 0.0]), v(&[0.0]), m(1, 1, &[1.0])).expect("valid");
+        let e = unit_disc().intersect_measurement(&meas, 0.5).expect_err("mismatch");
+        assert_eq!(e.to_string(), "dimension mismatch: measurement matrix C (columns) has dimension 3, expected 2");
+        let e = MeasurementSet::new(m(2, 2, &[1.0, 0.0, 0.0, 1.0]), v(&[0.0]), m(1, 1, &[1.0])).expect_err("mismatch");
+        assert_eq!(e.to_string(), "dimension mismatch: measurement matrix C (rows) has dimension 2, expected 1");
     }
 
     #[test]
     fn non_finite_entries() {
-        let e = Ellipsoid::new(v(&[0.0, f64::INFINITY]), DMatrix::identity(2, 2))
-            .expect_err("non-finite");
-        assert_eq!(
-            e.to_string(),
-            "centre c has a non-finite entry inf at index 1"
-        );
-        let e = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 0.0, f64::NAN, 1.0]))
-            .expect_err("non-finite");
-        assert_eq!(
-            e.to_string(),
-            "shape matrix P has a non-finite entry NaN at (1, 0)"
-        );
-        let e = unit_disc()
-            .contains(&v(&[f64::NAN, 0.0]))
-            .expect_err("non-finite");
-        assert_eq!(
-            e.to_string(),
-            "point x has a non-finite entry NaN at index 0"
-        );
+        let e = Ellipsoid::new(v(&[0.0, f64::INFINITY]), DMatrix::identity(2, 2)).expect_err("non-finite");
+        assert_eq!(e.to_string(), "centre c has a non-finite entry inf at index 1");
+        let e = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 0.0, f64::NAN, 1.0])).expect_err("non-finite");
+        assert_eq!(e.to_string(), "shape matrix P has a non-finite entry NaN at (1, 0)");
+        let e = unit_disc().contains(&v(&[f64::NAN, 0.0])).expect_err("non-finite");
+        assert_eq!(e.to_string(), "point x has a non-finite entry NaN at index 0");
     }
 
     #[test]
     fn not_symmetric() {
-        let e = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 0.5, 0.25, 1.0]))
-            .expect_err("asymmetric");
+        let e = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 0.5, 0.25, 1.0])).expect_err("asymmetric");
         assert_eq!(
             e.to_string(),
             "shape matrix P is not symmetric: entries (0, 1) = 0.5 and (1, 0) = 0.25 differ by \
              2.5e-1, more than the tolerance 1e-10"
         );
         // Within the tolerance: accepted and symmetrised.
-        let ok = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 0.5, 0.5 + 1e-12, 1.0]))
-            .expect("within tolerance");
+        let ok = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 0.5, 0.5 + 1e-12, 1.0])).expect("within tolerance");
         assert_eq!(ok.shape()[(0, 1)], ok.shape()[(1, 0)]);
     }
 
     #[test]
     fn not_positive_definite() {
-        let e =
-            Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 2.0, 2.0, 1.0])).expect_err("indefinite");
-        assert!(matches!(
-            e,
-            EllipsoidError::NotPositiveDefinite { pivot: 1, .. }
-        ));
+        let e = Ellipsoid::new(v(&[0.0, 0.0]), m(2, 2, &[1.0, 2.0, 2.0, 1.0])).expect_err("indefinite");
+        assert!(matches!(e, EllipsoidError::NotPositiveDefinite { pivot: 1, .. }));
         assert_eq!(
             e.to_string(),
             "shape matrix P is not positive definite: Cholesky pivot 1 is -3e0 (must exceed the \
              relative threshold 1.7763568394002505e-15)"
         );
-        let e =
-            MeasurementSet::new(m(1, 1, &[1.0]), v(&[0.0]), m(1, 1, &[0.0])).expect_err("singular");
+        let e = MeasurementSet::new(m(1, 1, &[1.0]), v(&[0.0]), m(1, 1, &[0.0])).expect_err("singular");
         assert_eq!(
             e.to_string(),
             "noise matrix R is not positive definite: Cholesky pivot 0 is 0e0 (must exceed the \
@@ -347,16 +286,9 @@ mod tests {
     #[test]
     fn degenerate_image() {
         // Rank one with rounding: the pivot is ~4e-16, below the relative threshold.
-        let e = unit_disc()
-            .affine_map(&m(2, 2, &[1.0, 1.0, 1.0, 1.0]), &v(&[0.0, 0.0]))
-            .expect_err("rank 1");
-        assert!(matches!(
-            e,
-            EllipsoidError::DegenerateImage { pivot: 1, .. }
-        ));
-        let e = unit_disc()
-            .affine_map(&m(2, 2, &[1.0, 0.0, 0.0, 0.0]), &v(&[0.0, 0.0]))
-            .expect_err("zero row");
+        let e = unit_disc().affine_map(&m(2, 2, &[1.0, 1.0, 1.0, 1.0]), &v(&[0.0, 0.0])).expect_err("rank 1");
+        assert!(matches!(e, EllipsoidError::DegenerateImage { pivot: 1, .. }));
+        let e = unit_disc().affine_map(&m(2, 2, &[1.0, 0.0, 0.0, 0.0]), &v(&[0.0, 0.0])).expect_err("zero row");
         assert_eq!(
             e.to_string(),
             "degenerate affine image: A P Aᵀ is not positive definite (Cholesky pivot 1 is 0e0); \
@@ -367,11 +299,8 @@ mod tests {
 
     #[test]
     fn unbounded_intersection() {
-        let meas =
-            MeasurementSet::new(m(1, 2, &[0.0, 1.0]), v(&[0.0]), m(1, 1, &[1.0])).expect("valid");
-        let e = unit_disc()
-            .intersect_measurement(&meas, 1.0)
-            .expect_err("unbounded");
+        let meas = MeasurementSet::new(m(1, 2, &[0.0, 1.0]), v(&[0.0]), m(1, 1, &[1.0])).expect("valid");
+        let e = unit_disc().intersect_measurement(&meas, 1.0).expect_err("unbounded");
         assert_eq!(
             e.to_string(),
             "intersection bound for λ = 1 is unbounded: (1 − λ) I + λ Wᵀ W (W = R^(-1/2) C \
@@ -396,9 +325,7 @@ mod tests {
     #[test]
     fn degenerate_result() {
         let big = Ellipsoid::ball(v(&[0.0, 0.0]), 1e10).expect("valid");
-        let e = big
-            .minkowski_sum_outer(&unit_disc(), 1e-300)
-            .expect_err("overflow");
+        let e = big.minkowski_sum_outer(&unit_disc(), 1e-300).expect_err("overflow");
         assert_eq!(
             e.to_string(),
             "Minkowski-sum bound: the computed shape matrix is not numerically positive definite \
@@ -410,55 +337,28 @@ mod tests {
     fn invalid_parameters() {
         let d = unit_disc();
         let e = d.minkowski_sum_outer(&d, -1.0).expect_err("p < 0");
-        assert_eq!(
-            e.to_string(),
-            "parameter p = -1 is invalid: expected a finite positive number"
-        );
+        assert_eq!(e.to_string(), "parameter p = -1 is invalid: expected a finite positive number");
         let e = d.intersect_ellipsoid(&d, 1.5).expect_err("λ > 1");
-        assert_eq!(
-            e.to_string(),
-            "parameter λ = 1.5 is invalid: expected a number in [0, 1]"
-        );
+        assert_eq!(e.to_string(), "parameter λ = 1.5 is invalid: expected a number in [0, 1]");
         let e = d.intersect_ellipsoid(&d, f64::NAN).expect_err("λ NaN");
-        assert_eq!(
-            e.to_string(),
-            "parameter λ = NaN is invalid: expected a number in [0, 1]"
-        );
+        assert_eq!(e.to_string(), "parameter λ = NaN is invalid: expected a number in [0, 1]");
         let e = Ellipsoid::ball(v(&[0.0]), 0.0).expect_err("radius 0");
-        assert_eq!(
-            e.to_string(),
-            "parameter radius = 0 is invalid: expected a finite positive number"
-        );
+        assert_eq!(e.to_string(), "parameter radius = 0 is invalid: expected a finite positive number");
         let e = d.scaled(f64::INFINITY).expect_err("inf scale");
-        assert_eq!(
-            e.to_string(),
-            "parameter scale s = inf is invalid: expected a finite positive number"
-        );
+        assert_eq!(e.to_string(), "parameter scale s = inf is invalid: expected a finite positive number");
         let e = Ellipsoid::axis_aligned(v(&[0.0, 0.0]), &[1.0, -2.0]).expect_err("negative");
-        assert_eq!(
-            e.to_string(),
-            "parameter semi-axis = -2 is invalid: expected finite positive semi-axis lengths"
-        );
+        assert_eq!(e.to_string(), "parameter semi-axis = -2 is invalid: expected finite positive semi-axis lengths");
     }
 
     #[test]
     fn index_errors() {
         let d = unit_disc();
         let e = d.interval(2).expect_err("out of range");
-        assert_eq!(
-            e.to_string(),
-            "coordinate index 2 is out of range for dimension 2"
-        );
+        assert_eq!(e.to_string(), "coordinate index 2 is out of range for dimension 2");
         let e = d.projection_boundary(0, 3, 10).expect_err("out of range");
-        assert_eq!(
-            e.to_string(),
-            "coordinate index 3 is out of range for dimension 2"
-        );
+        assert_eq!(e.to_string(), "coordinate index 3 is out of range for dimension 2");
         let e = d.projection_boundary(1, 1, 10).expect_err("repeated");
-        assert_eq!(
-            e.to_string(),
-            "coordinate index 1 appears more than once in the projection"
-        );
+        assert_eq!(e.to_string(), "coordinate index 1 appears more than once in the projection");
     }
 
     #[test]
@@ -477,9 +377,6 @@ mod tests {
     fn eigen_decomposition_message() {
         // Not reachable with finite validated input in practice; check the message only.
         let e = EllipsoidError::EigenDecomposition { what: "Mᵀ M" };
-        assert_eq!(
-            e.to_string(),
-            "symmetric eigendecomposition of Mᵀ M did not converge"
-        );
+        assert_eq!(e.to_string(), "symmetric eigendecomposition of Mᵀ M did not converge");
     }
 }

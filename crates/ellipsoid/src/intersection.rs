@@ -46,8 +46,8 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 use crate::error::{EllipsoidError, Result};
 use crate::linalg::{
-    back_sub_transpose, check_len, check_matrix_finite, check_vector_finite, cholesky,
-    cholesky_with, forward_sub, forward_sub_mat, symmetrize, validate_spd,
+    back_sub_transpose, check_len, check_matrix_finite, check_vector_finite, cholesky, cholesky_with, forward_sub,
+    forward_sub_mat, symmetrize, validate_spd,
 };
 use crate::{Ellipsoid, RANK_RELATIVE_TOLERANCE};
 
@@ -73,14 +73,10 @@ impl MeasurementSet {
     pub fn new(output: DMatrix<f64>, y: DVector<f64>, noise: DMatrix<f64>) -> Result<Self> {
         let m = y.len();
         if m == 0 {
-            return Err(EllipsoidError::Empty {
-                what: "measurement y",
-            });
+            return Err(EllipsoidError::Empty { what: "measurement y" });
         }
         if output.ncols() == 0 {
-            return Err(EllipsoidError::Empty {
-                what: "measurement matrix C (columns)",
-            });
+            return Err(EllipsoidError::Empty { what: "measurement matrix C (columns)" });
         }
         if output.nrows() != m {
             return Err(EllipsoidError::DimensionMismatch {
@@ -92,12 +88,7 @@ impl MeasurementSet {
         check_vector_finite(&y, "measurement y")?;
         check_matrix_finite(&output, "measurement matrix C")?;
         let (noise, noise_chol) = validate_spd(&noise, m, "noise matrix R")?;
-        Ok(Self {
-            output,
-            y,
-            noise,
-            noise_chol,
-        })
+        Ok(Self { output, y, noise, noise_chol })
     }
 
     /// The ellipsoid `𝓔(c, P)` as a measurement set (`C = I`, `y = c`, `R = P`), so that
@@ -212,26 +203,14 @@ impl<'a> Whitened<'a> {
         let g = w.transpose() * &z;
         check_vector_finite(&z, "whitened innovation R^(-1/2)(y − C c)")?;
         check_matrix_finite(&w, "whitened measurement matrix R^(-1/2) C L")?;
-        Ok(Self {
-            prior,
-            w,
-            z,
-            gram,
-            g,
-            rows: meas.output.nrows(),
-            cols: meas.output.ncols(),
-        })
+        Ok(Self { prior, w, z, gram, g, rows: meas.output.nrows(), cols: meas.output.ncols() })
     }
 
     /// Cholesky factor of `X_u = (1 − λ) I + λ Wᵀ W`.
     fn factor(&self, lambda: f64) -> Result<DMatrix<f64>> {
         let n = self.gram.nrows();
         let xu = DMatrix::<f64>::identity(n, n) * (1.0 - lambda) + &self.gram * lambda;
-        let f = if lambda >= 1.0 {
-            cholesky_with(&xu, RANK_RELATIVE_TOLERANCE)
-        } else {
-            cholesky(&xu)
-        };
+        let f = if lambda >= 1.0 { cholesky_with(&xu, RANK_RELATIVE_TOLERANCE) } else { cholesky(&xu) };
         f.map_err(|f| EllipsoidError::UnboundedIntersection {
             lambda,
             rows: self.rows,
@@ -263,11 +242,7 @@ impl<'a> Whitened<'a> {
         let shape = ft.transpose() * &ft * factor;
         let center = self.prior.center() + l * &u;
         Ellipsoid::from_computed(center, &shape, "intersection centre ĉ", |pivot, value| {
-            EllipsoidError::DegenerateResult {
-                operation: "intersection bound",
-                pivot,
-                value,
-            }
+            EllipsoidError::DegenerateResult { operation: "intersection bound", pivot, value }
         })
         .map(IntersectionBound::Bounded)
     }
@@ -287,11 +262,8 @@ struct Scalar {
 impl Scalar {
     fn new(wh: &Whitened<'_>) -> Result<Self> {
         let n = wh.gram.nrows();
-        let eig = SymmetricEigen::try_new(wh.gram.clone(), f64::EPSILON, 1000 * n.max(1)).ok_or(
-            EllipsoidError::EigenDecomposition {
-                what: "Wᵀ W (whitened Cᵀ R⁻¹ C)",
-            },
-        )?;
+        let eig = SymmetricEigen::try_new(wh.gram.clone(), f64::EPSILON, 1000 * n.max(1))
+            .ok_or(EllipsoidError::EigenDecomposition { what: "Wᵀ W (whitened Cᵀ R⁻¹ C)" })?;
         let gp = eig.eigenvectors.transpose() * &wh.g;
         let lv = wh.prior.cholesky_factor() * &eig.eigenvectors;
         Ok(Self {
@@ -375,11 +347,7 @@ fn check_lambda(lambda: f64) -> Result<()> {
     if (0.0..=1.0).contains(&lambda) {
         Ok(())
     } else {
-        Err(EllipsoidError::InvalidParameter {
-            name: "λ",
-            value: lambda,
-            expected: "a number in [0, 1]",
-        })
+        Err(EllipsoidError::InvalidParameter { name: "λ", value: lambda, expected: "a number in [0, 1]" })
     }
 }
 
@@ -393,11 +361,7 @@ impl Ellipsoid {
     /// bound is numerically unbounded), [`EllipsoidError::DegenerateIntersection`] (`δ = 1`),
     /// [`EllipsoidError::DegenerateResult`] (the bound is too ill-conditioned to factor, e.g.
     /// at `λ = 1` with `C` close to rank-deficient).
-    pub fn intersect_measurement(
-        &self,
-        meas: &MeasurementSet,
-        lambda: f64,
-    ) -> Result<IntersectionBound> {
+    pub fn intersect_measurement(&self, meas: &MeasurementSet, lambda: f64) -> Result<IntersectionBound> {
         check_lambda(lambda)?;
         Whitened::new(self, meas)?.evaluate(lambda)
     }
@@ -421,10 +385,7 @@ impl Ellipsoid {
     /// at the chosen `λ` is then computed with [`Ellipsoid::intersect_measurement`]; should
     /// that fail numerically (a shape too ill-conditioned to factor), the best grid point that
     /// evaluates is used instead (`λ = 0`, the prior, always does).
-    pub fn intersect_measurement_min_trace(
-        &self,
-        meas: &MeasurementSet,
-    ) -> Result<(IntersectionBound, f64)> {
+    pub fn intersect_measurement_min_trace(&self, meas: &MeasurementSet) -> Result<(IntersectionBound, f64)> {
         let wh = Whitened::new(self, meas)?;
         let sc = Scalar::new(&wh)?;
 
@@ -441,9 +402,7 @@ impl Ellipsoid {
             }
         }
 
-        let grid: Vec<f64> = (0..=LAMBDA_GRID)
-            .map(|k| k as f64 / LAMBDA_GRID as f64)
-            .collect();
+        let grid: Vec<f64> = (0..=LAMBDA_GRID).map(|k| k as f64 / LAMBDA_GRID as f64).collect();
         let values: Vec<f64> = grid.iter().map(|&l| sc.trace(l)).collect();
         let mut k_best = 0;
         for (k, v) in values.iter().enumerate() {
@@ -474,10 +433,7 @@ impl Ellipsoid {
 
     /// [`Ellipsoid::intersect_measurement_min_trace`] with the ellipsoid `other` as the second
     /// set.
-    pub fn intersect_ellipsoid_min_trace(
-        &self,
-        other: &Ellipsoid,
-    ) -> Result<(IntersectionBound, f64)> {
+    pub fn intersect_ellipsoid_min_trace(&self, other: &Ellipsoid) -> Result<(IntersectionBound, f64)> {
         self.intersect_measurement_min_trace(&MeasurementSet::from_ellipsoid(other))
     }
 }
@@ -528,12 +484,8 @@ mod tests {
     #[test]
     fn lambda_zero_and_one() {
         let prior = Ellipsoid::ball(v(&[0.0, 0.0]), 2.0).expect("valid");
-        let meas = MeasurementSet::new(
-            DMatrix::identity(2, 2),
-            v(&[1.0, 0.0]),
-            DMatrix::identity(2, 2) * 0.25,
-        )
-        .expect("valid");
+        let meas = MeasurementSet::new(DMatrix::identity(2, 2), v(&[1.0, 0.0]), DMatrix::identity(2, 2) * 0.25)
+            .expect("valid");
         let b0 = prior.intersect_measurement(&meas, 0.0).expect("ok");
         assert_eq!(b0.ellipsoid(), Some(&prior));
         // λ = 1 with C = I: the measurement ellipsoid itself.
@@ -542,24 +494,13 @@ mod tests {
         assert!((e1.center() - v(&[1.0, 0.0])).amax() < 1e-15);
         assert!((e1.shape() - DMatrix::identity(2, 2) * 0.25).amax() < 1e-15);
         // Rank-deficient C at λ = 1: unbounded.
-        let partial = MeasurementSet::new(
-            DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
-            v(&[0.5]),
-            DMatrix::identity(1, 1),
-        )
-        .expect("valid");
-        let err = prior
-            .intersect_measurement(&partial, 1.0)
-            .expect_err("unbounded");
+        let partial =
+            MeasurementSet::new(DMatrix::from_row_slice(1, 2, &[1.0, 0.0]), v(&[0.5]), DMatrix::identity(1, 1))
+                .expect("valid");
+        let err = prior.intersect_measurement(&partial, 1.0).expect_err("unbounded");
         assert!(matches!(err, EllipsoidError::UnboundedIntersection { .. }));
         // …but any λ < 1 works, and the optimiser avoids λ = 1.
-        assert!(
-            prior
-                .intersect_measurement(&partial, 0.9)
-                .expect("ok")
-                .ellipsoid()
-                .is_some()
-        );
+        assert!(prior.intersect_measurement(&partial, 0.9).expect("ok").ellipsoid().is_some());
         let (b, lambda) = prior.intersect_measurement_min_trace(&partial).expect("ok");
         assert!(lambda < 1.0);
         assert!(b.ellipsoid().expect("bounded").trace() < prior.trace());

@@ -25,10 +25,7 @@ fn max_diag(a: &DMatrix<f64>) -> f64 {
 ///
 /// A pivot `s_j` (the square of `L_jj`) is accepted when it is finite and
 /// `s_j > rel_tol · n · max_i a_ii`; every entry of `L` must be finite.
-pub(crate) fn cholesky_with(
-    a: &DMatrix<f64>,
-    rel_tol: f64,
-) -> std::result::Result<DMatrix<f64>, PivotFailure> {
+pub(crate) fn cholesky_with(a: &DMatrix<f64>, rel_tol: f64) -> std::result::Result<DMatrix<f64>, PivotFailure> {
     let n = a.nrows();
     let threshold = rel_tol * n as f64 * max_diag(a);
     let mut l = DMatrix::<f64>::zeros(n, n);
@@ -38,11 +35,7 @@ pub(crate) fn cholesky_with(
             s -= l[(j, k)] * l[(j, k)];
         }
         if s.is_nan() || s.is_infinite() || s <= threshold || s <= 0.0 {
-            return Err(PivotFailure {
-                pivot: j,
-                value: s,
-                threshold,
-            });
+            return Err(PivotFailure { pivot: j, value: s, threshold });
         }
         let ljj = s.sqrt();
         l[(j, j)] = ljj;
@@ -53,11 +46,7 @@ pub(crate) fn cholesky_with(
             }
             let v = t / ljj;
             if !v.is_finite() {
-                return Err(PivotFailure {
-                    pivot: j,
-                    value: s,
-                    threshold,
-                });
+                return Err(PivotFailure { pivot: j, value: s, threshold });
             }
             l[(i, j)] = v;
         }
@@ -122,11 +111,7 @@ pub(crate) fn symmetrize(a: &DMatrix<f64>) -> DMatrix<f64> {
 /// Rejects NaN and infinities in a vector.
 pub(crate) fn check_vector_finite(v: &DVector<f64>, what: &'static str) -> Result<()> {
     match v.iter().position(|x| !x.is_finite()) {
-        Some(index) => Err(EllipsoidError::NonFiniteVectorEntry {
-            what,
-            index,
-            value: v[index],
-        }),
+        Some(index) => Err(EllipsoidError::NonFiniteVectorEntry { what, index, value: v[index] }),
         None => Ok(()),
     }
 }
@@ -137,12 +122,7 @@ pub(crate) fn check_matrix_finite(m: &DMatrix<f64>, what: &'static str) -> Resul
         for col in 0..m.ncols() {
             let value = m[(row, col)];
             if !value.is_finite() {
-                return Err(EllipsoidError::NonFiniteMatrixEntry {
-                    what,
-                    row,
-                    col,
-                    value,
-                });
+                return Err(EllipsoidError::NonFiniteMatrixEntry { what, row, col, value });
             }
         }
     }
@@ -154,11 +134,7 @@ pub(crate) fn check_square(m: &DMatrix<f64>, what: &'static str) -> Result<()> {
     if m.nrows() == m.ncols() {
         Ok(())
     } else {
-        Err(EllipsoidError::NotSquare {
-            what,
-            rows: m.nrows(),
-            cols: m.ncols(),
-        })
+        Err(EllipsoidError::NotSquare { what, rows: m.nrows(), cols: m.ncols() })
     }
 }
 
@@ -191,18 +167,10 @@ pub(crate) fn check_symmetric(m: &DMatrix<f64>, what: &'static str) -> Result<()
 
 /// Validates a user-supplied symmetric positive definite matrix of size `n`; returns the
 /// symmetrised matrix and its lower Cholesky factor.
-pub(crate) fn validate_spd(
-    m: &DMatrix<f64>,
-    n: usize,
-    what: &'static str,
-) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+pub(crate) fn validate_spd(m: &DMatrix<f64>, n: usize, what: &'static str) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     check_square(m, what)?;
     if m.nrows() != n {
-        return Err(EllipsoidError::DimensionMismatch {
-            what,
-            expected: n,
-            found: m.nrows(),
-        });
+        return Err(EllipsoidError::DimensionMismatch { what, expected: n, found: m.nrows() });
     }
     check_matrix_finite(m, what)?;
     check_symmetric(m, what)?;
@@ -218,15 +186,7 @@ pub(crate) fn validate_spd(
 
 /// Requires a vector of length `n`.
 pub(crate) fn check_len(v: &DVector<f64>, n: usize, what: &'static str) -> Result<()> {
-    if v.len() == n {
-        Ok(())
-    } else {
-        Err(EllipsoidError::DimensionMismatch {
-            what,
-            expected: n,
-            found: v.len(),
-        })
-    }
+    if v.len() == n { Ok(()) } else { Err(EllipsoidError::DimensionMismatch { what, expected: n, found: v.len() }) }
 }
 
 #[cfg(test)]

@@ -17,11 +17,7 @@ impl Ellipsoid {
         if self.dim() == other.dim() {
             Ok(())
         } else {
-            Err(EllipsoidError::DimensionMismatch {
-                what,
-                expected: self.dim(),
-                found: other.dim(),
-            })
+            Err(EllipsoidError::DimensionMismatch { what, expected: self.dim(), found: other.dim() })
         }
     }
 
@@ -30,22 +26,14 @@ impl Ellipsoid {
     pub fn minkowski_sum_outer(&self, other: &Self, p: f64) -> Result<Self> {
         self.check_same_dim(other, "second Minkowski operand")?;
         if !(p.is_finite() && p > 0.0) {
-            return Err(EllipsoidError::InvalidParameter {
-                name: "p",
-                value: p,
-                expected: "a finite positive number",
-            });
+            return Err(EllipsoidError::InvalidParameter { name: "p", value: p, expected: "a finite positive number" });
         }
         let shape = self.shape() * (1.0 + 1.0 / p) + other.shape() * (1.0 + p);
         Self::from_computed(
             self.center() + other.center(),
             &shape,
             "Minkowski-sum centre c₁ + c₂",
-            |pivot, value| EllipsoidError::DegenerateResult {
-                operation: "Minkowski-sum bound",
-                pivot,
-                value,
-            },
+            |pivot, value| EllipsoidError::DegenerateResult { operation: "Minkowski-sum bound", pivot, value },
         )
     }
 

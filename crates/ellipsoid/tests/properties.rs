@@ -42,11 +42,7 @@ impl Rng {
     /// Uniform in the unit ball (`boundary`: on the unit sphere).
     fn ball_point(&mut self, n: usize, boundary: bool) -> DVector<f64> {
         let u = self.unit_vector(n);
-        if boundary {
-            u
-        } else {
-            u * self.uniform().powf(1.0 / n as f64)
-        }
+        if boundary { u } else { u * self.uniform().powf(1.0 / n as f64) }
     }
 
     /// Uniform in `e` (or on its boundary): `c + L u`.
@@ -59,11 +55,7 @@ impl Rng {
 /// around `log_scale`.
 fn spd(n: usize, q: &[f64], ex: &[f64], log_scale: f64, log_cond: f64) -> DMatrix<f64> {
     let qm = DMatrix::from_column_slice(n, n, q).qr().q();
-    let d = DVector::from_iterator(
-        n,
-        ex.iter()
-            .map(|e| 10f64.powf(log_scale + log_cond * (e - 0.5))),
-    );
+    let d = DVector::from_iterator(n, ex.iter().map(|e| 10f64.powf(log_scale + log_cond * (e - 0.5))));
     let p = &qm * DMatrix::from_diagonal(&d) * qm.transpose();
     (&p + p.transpose()) * 0.5
 }
@@ -83,24 +75,14 @@ fn ellipsoid(n: usize, max_log_cond: f64) -> impl Strategy<Value = Ellipsoid> {
 }
 
 fn config(cases: u32) -> ProptestConfig {
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
+    ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() }
 }
 
 /// Points in both sets: an interior common point and points pushed to the boundary of the
 /// intersection along random rays from it (bisection), plus prior samples that fit.
-fn common_points(
-    prior: &Ellipsoid,
-    meas: &MeasurementSet,
-    x0: &DVector<f64>,
-    rng: &mut Rng,
-) -> Vec<DVector<f64>> {
+fn common_points(prior: &Ellipsoid, meas: &MeasurementSet, x0: &DVector<f64>, rng: &mut Rng) -> Vec<DVector<f64>> {
     let inside = |x: &DVector<f64>| {
-        prior.normalized_distance(x).expect("dim") <= 1.0
-            && meas.normalized_distance(x).expect("dim") <= 1.0
+        prior.normalized_distance(x).expect("dim") <= 1.0 && meas.normalized_distance(x).expect("dim") <= 1.0
     };
     let mut pts = vec![x0.clone()];
     let reach = 2.0 * prior.trace().sqrt() + 1.0;
@@ -131,12 +113,7 @@ fn intersection_case() -> impl Strategy<Value = (Ellipsoid, MeasurementSet, DVec
     (1usize..=5)
         .prop_flat_map(|n| (Just(n), 1usize..=n + 1))
         .prop_flat_map(|(n, m)| {
-            (
-                ellipsoid(n, 3.0),
-                prop::collection::vec(-2.0..2.0f64, m * n),
-                ellipsoid(m, 2.0),
-                any::<u64>(),
-            )
+            (ellipsoid(n, 3.0), prop::collection::vec(-2.0..2.0f64, m * n), ellipsoid(m, 2.0), any::<u64>())
         })
         .prop_map(|(prior, cvals, noise, seed)| {
             let n = prior.dim();

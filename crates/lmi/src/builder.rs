@@ -114,10 +114,7 @@ impl Affine {
 
     /// `k · self`.
     pub fn scale(&self, k: f64) -> Affine {
-        Affine {
-            constant: k * self.constant,
-            terms: self.terms.iter().map(|&(i, c)| (i, k * c)).collect(),
-        }
+        Affine { constant: k * self.constant, terms: self.terms.iter().map(|&(i, c)| (i, k * c)).collect() }
     }
 
     /// Value at `x`.
@@ -468,12 +465,9 @@ impl LmiBuilder {
                 self.check_indices(b)?;
                 let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + x.abs().max(y.abs()));
                 let (ta, tb) = (a.merged_terms(), b.merged_terms());
-                let same = close(a.constant, b.constant)
-                    && merged_close(&ta, &tb, &close);
+                let same = close(a.constant, b.constant) && merged_close(&ta, &tb, &close);
                 if !same {
-                    return Err(LmiError::InvalidProblem(format!(
-                        "PSD block is not symmetric at ({i}, {j})"
-                    )));
+                    return Err(LmiError::InvalidProblem(format!("PSD block is not symmetric at ({i}, {j})")));
                 }
             }
         }
@@ -689,8 +683,9 @@ mod tests {
         assert!((prod.eval(&x) - &lv * &c).abs().max() < 1e-14);
         let left = lm.mul_left(&a).unwrap();
         assert!((left.eval(&x) - &a * &lv).abs().max() < 1e-14);
-        let blk = AffineMatrix::block(&[&[&AffineMatrix::constant(&a), &lm], &[&lm.transpose(), &AffineMatrix::zeros(3, 3)]])
-            .unwrap();
+        let blk =
+            AffineMatrix::block(&[&[&AffineMatrix::constant(&a), &lm], &[&lm.transpose(), &AffineMatrix::zeros(3, 3)]])
+                .unwrap();
         let v = blk.eval(&x);
         assert_eq!(v.nrows(), 5);
         assert_eq!(v[(0, 3)], lv[(0, 1)]);
@@ -708,10 +703,8 @@ mod tests {
         other.scalar("a").unwrap();
         let a2 = other.scalar("b").unwrap();
         assert!(b.expr(a2).unwrap_err().to_string().contains("not from this builder"));
-        let ns = AffineMatrix::block(&[&[
-            &AffineMatrix::constant(&DMatrix::from_row_slice(1, 2, &[1.0, 2.0])),
-        ]])
-        .unwrap();
+        let ns =
+            AffineMatrix::block(&[&[&AffineMatrix::constant(&DMatrix::from_row_slice(1, 2, &[1.0, 2.0]))]]).unwrap();
         assert!(b.psd(ns).unwrap_err().to_string().contains("square"));
         let te = b.expr(t).unwrap();
         let asym = AffineMatrix::block(&[

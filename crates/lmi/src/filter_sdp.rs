@@ -145,8 +145,7 @@ fn build(d: &FilterSdpData<'_>) -> Result<(SdpProblem, VariableMap, FilterVars),
     let pi = AffineMatrix::block(&[&[&gm, &col_z, &col_w, &col_v]])?;
     // (26): Θ(τ) = diag(1 − τ₁ − τ₂ − τ₃, τ₁ I, τ₂ Q⁻¹, τ₃ R⁻¹)
     let one = DMatrix::from_element(1, 1, 1.0);
-    let theta0 = AffineMatrix::constant(&one)
-        .sub(&AffineMatrix::constant_times(&one, &t[0].add(&t[1]).add(&t[2])))?;
+    let theta0 = AffineMatrix::constant(&one).sub(&AffineMatrix::constant_times(&one, &t[0].add(&t[1]).add(&t[2])))?;
     let theta = AffineMatrix::diag(&[
         &theta0,
         &AffineMatrix::constant_times(&DMatrix::identity(n, n), &t[0]),

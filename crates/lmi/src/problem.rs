@@ -94,10 +94,7 @@ impl SdpProblem {
             }
         }
         if let Some(i) = c.iter().position(|v| !v.is_finite()) {
-            return Err(LmiError::InvalidProblem(format!(
-                "objective coefficient c[{i}] is not finite ({})",
-                c[i]
-            )));
+            return Err(LmiError::InvalidProblem(format!("objective coefficient c[{i}] is not finite ({})", c[i])));
         }
         for e in &entries {
             check_entry(e, num_vars, &blocks)?;
@@ -189,11 +186,7 @@ impl SdpProblem {
                 found: x.len(),
             });
         }
-        let mut out: Vec<_> = self
-            .blocks
-            .iter()
-            .map(|b| nalgebra::DMatrix::zeros(b.size(), b.size()))
-            .collect();
+        let mut out: Vec<_> = self.blocks.iter().map(|b| nalgebra::DMatrix::zeros(b.size(), b.size())).collect();
         for e in &self.entries {
             let coef = if e.mat == 0 { -1.0 } else { x[e.mat - 1] };
             let blk = &mut out[e.block];
@@ -256,11 +249,7 @@ fn check_entry(e: &Entry, num_vars: usize, blocks: &[Block]) -> Result<(), LmiEr
         )));
     };
     if e.row >= blk.size() || e.col >= blk.size() {
-        return Err(LmiError::InvalidProblem(format!(
-            "entry {}: index outside a block of size {}",
-            loc(),
-            blk.size()
-        )));
+        return Err(LmiError::InvalidProblem(format!("entry {}: index outside a block of size {}", loc(), blk.size())));
     }
     if e.row > e.col {
         return Err(LmiError::InvalidProblem(format!(
@@ -318,14 +307,11 @@ mod tests {
             (e(1, 1, 0, 0, f64::NAN), "not finite"),
         ];
         for (entry, msg) in cases {
-            let err = SdpProblem::new(vec![Block::Psd(2), Block::Nonneg(2)], vec![1.0], vec![entry])
-                .unwrap_err()
-                .to_string();
+            let err =
+                SdpProblem::new(vec![Block::Psd(2), Block::Nonneg(2)], vec![1.0], vec![entry]).unwrap_err().to_string();
             assert!(err.contains(msg), "{err}");
         }
-        let err = SdpProblem::new(vec![Block::Nonneg(2)], vec![1.0], vec![e(1, 0, 0, 1, 1.0)])
-            .unwrap_err()
-            .to_string();
+        let err = SdpProblem::new(vec![Block::Nonneg(2)], vec![1.0], vec![e(1, 0, 0, 1, 1.0)]).unwrap_err().to_string();
         assert!(err.contains("off-diagonal entry in a diagonal"), "{err}");
         let err = SdpProblem::new(vec![Block::Psd(2)], vec![1.0], vec![e(1, 0, 0, 1, 1.0), e(1, 0, 0, 1, 2.0)])
             .unwrap_err()

@@ -77,10 +77,7 @@ const PREALLOC_CAP: usize = 1024;
 ///
 /// Errors are [`LmiError::Sdpa`] with the 1-based line number and what was expected.
 pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
-    let mut r = Reader {
-        lines: text.lines(),
-        line_no: 0,
-    };
+    let mut r = Reader { lines: text.lines(), line_no: 0 };
 
     // Number of variables m, after optional comment lines.
     let (ln, tok) = loop {
@@ -113,37 +110,21 @@ pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
     let mut it = tokens(line);
     for k in 1..=nblocks {
         let Some(tok) = it.next() else {
-            return Err(err(
-                ln,
-                format!(
-                    "expected {nblocks} block sizes on this line, found {}",
-                    k - 1
-                ),
-            ));
+            return Err(err(ln, format!("expected {nblocks} block sizes on this line, found {}", k - 1)));
         };
         let Some(v) = parse_int(tok) else {
-            return Err(err(
-                ln,
-                format!("expected block size {k} of {nblocks} (an integer), found `{tok}`"),
-            ));
+            return Err(err(ln, format!("expected block size {k} of {nblocks} (an integer), found `{tok}`")));
         };
         if v == 0 {
             return Err(err(ln, format!("block size {k} is zero")));
         }
         let n = v.unsigned_abs();
         if n > MAX_BLOCK_SIZE as u64 {
-            return Err(err(
-                ln,
-                format!("block size {k} = {v} exceeds the limit {MAX_BLOCK_SIZE}"),
-            ));
+            return Err(err(ln, format!("block size {k} = {v} exceeds the limit {MAX_BLOCK_SIZE}")));
         }
         // n <= MAX_BLOCK_SIZE, so these conversions and products cannot overflow.
         let n = n as usize;
-        let block = if v > 0 {
-            Block::Psd(n)
-        } else {
-            Block::Nonneg(n)
-        };
+        let block = if v > 0 { Block::Psd(n) } else { Block::Nonneg(n) };
         total += block.num_entries() as u64;
         if total > MAX_TOTAL_ENTRIES {
             return Err(err(
@@ -157,10 +138,7 @@ pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
         blocks.push(block);
     }
     if let Some(tok) = it.next().filter(|t| parse_real(t).is_some()) {
-        return Err(err(
-            ln,
-            format!("more than {nblocks} block sizes on this line (found `{tok}`)"),
-        ));
+        return Err(err(ln, format!("more than {nblocks} block sizes on this line (found `{tok}`)")));
     }
 
     // The vector c: m numbers, possibly over several lines.
@@ -176,16 +154,11 @@ pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
             let Some(v) = parse_real(tok) else {
                 return Err(err(
                     ln,
-                    format!(
-                        "expected objective coefficient {k} of m = {m} (a number), found `{tok}`"
-                    ),
+                    format!("expected objective coefficient {k} of m = {m} (a number), found `{tok}`"),
                 ));
             };
             if !v.is_finite() {
-                return Err(err(
-                    ln,
-                    format!("objective coefficient {k} is not finite (`{tok}`)"),
-                ));
+                return Err(err(ln, format!("objective coefficient {k} is not finite (`{tok}`)")));
             }
             c.push(v);
         }
@@ -215,12 +188,7 @@ pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
             count += 1;
         }
         if count != 5 {
-            return Err(err(
-                ln,
-                format!(
-                    "expected an entry `matno blkno i j value` (5 fields), found {count} fields"
-                ),
-            ));
+            return Err(err(ln, format!("expected an entry `matno blkno i j value` (5 fields), found {count} fields")));
         }
         let [f_mat, f_blk, f_i, f_j, f_val] = fields;
         let mat = parse_index(f_mat, ln, "matno")?;
@@ -228,55 +196,36 @@ pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
         let i = parse_index(f_i, ln, "i")?;
         let j = parse_index(f_j, ln, "j")?;
         let Some(value) = parse_real(f_val) else {
-            return Err(err(
-                ln,
-                format!("expected the entry value (a number), found `{f_val}`"),
-            ));
+            return Err(err(ln, format!("expected the entry value (a number), found `{f_val}`")));
         };
         if mat < 0 || mat > m as i64 {
             return Err(err(ln, format!("matno {mat} is out of range 0..={m}")));
         }
         if blk < 1 || blk > nblocks as i64 {
-            return Err(err(
-                ln,
-                format!("blkno {blk} is out of range 1..={nblocks}"),
-            ));
+            return Err(err(ln, format!("blkno {blk} is out of range 1..={nblocks}")));
         }
         let block_index = (blk - 1) as usize;
         let block = blocks[block_index];
         let n = block.size();
         for (name, v) in [("i", i), ("j", j)] {
             if v < 1 || v > n as i64 {
-                return Err(err(
-                    ln,
-                    format!("{name} = {v} is out of range 1..={n} for block {blk} of size {n}"),
-                ));
+                return Err(err(ln, format!("{name} = {v} is out of range 1..={n} for block {blk} of size {n}")));
             }
         }
         if i > j {
             return Err(err(
                 ln,
-                format!(
-                    "lower-triangle entry i = {i} > j = {j} (SDPA files give the upper triangle, i <= j)"
-                ),
+                format!("lower-triangle entry i = {i} > j = {j} (SDPA files give the upper triangle, i <= j)"),
             ));
         }
         if matches!(block, Block::Nonneg(_)) && i != j {
-            return Err(err(
-                ln,
-                format!("off-diagonal entry (i = {i}, j = {j}) in diagonal block {blk}"),
-            ));
+            return Err(err(ln, format!("off-diagonal entry (i = {i}, j = {j}) in diagonal block {blk}")));
         }
         if !value.is_finite() {
             return Err(err(ln, format!("entry value is not finite (`{f_val}`)")));
         }
-        let entry = Entry {
-            mat: mat as usize,
-            block: block_index,
-            row: (i - 1) as usize,
-            col: (j - 1) as usize,
-            value,
-        };
+        let entry =
+            Entry { mat: mat as usize, block: block_index, row: (i - 1) as usize, col: (j - 1) as usize, value };
         match seen.entry((entry.mat, entry.block, entry.row, entry.col)) {
             MapEntry::Occupied(first) => {
                 return Err(err(
@@ -302,13 +251,11 @@ pub fn read_sdpa(text: &str) -> Result<SdpProblem, LmiError> {
 /// An I/O error (missing file, not UTF-8…) is an [`LmiError::Sdpa`] at line 0 naming the path;
 /// format errors name the path in their message.
 pub fn read_sdpa_file(path: &Path) -> Result<SdpProblem, LmiError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| err(0, format!("cannot read {}: {e}", path.display())))?;
+    let text = std::fs::read_to_string(path).map_err(|e| err(0, format!("cannot read {}: {e}", path.display())))?;
     read_sdpa(&text).map_err(|e| match e {
-        LmiError::Sdpa { line, message } => LmiError::Sdpa {
-            line,
-            message: format!("{message} (in {})", path.display()),
-        },
+        LmiError::Sdpa { line, message } => {
+            LmiError::Sdpa { line, message: format!("{message} (in {})", path.display()) }
+        }
         other => other,
     })
 }
@@ -336,30 +283,18 @@ pub fn write_sdpa(problem: &SdpProblem) -> String {
     }
     s.push('\n');
     for e in problem.entries() {
-        let _ = writeln!(
-            s,
-            "{} {} {} {} {:e}",
-            e.mat,
-            e.block + 1,
-            e.row + 1,
-            e.col + 1,
-            e.value
-        );
+        let _ = writeln!(s, "{} {} {} {} {:e}", e.mat, e.block + 1, e.row + 1, e.col + 1, e.value);
     }
     s
 }
 
 fn err(line: usize, message: impl Into<String>) -> LmiError {
-    LmiError::Sdpa {
-        line,
-        message: message.into(),
-    }
+    LmiError::Sdpa { line, message: message.into() }
 }
 
 /// Splits a line into tokens at whitespace and the punctuation `, ( ) { }`.
 fn tokens(line: &str) -> impl Iterator<Item = &str> {
-    line.split(|ch: char| ch.is_whitespace() || matches!(ch, ',' | '(' | ')' | '{' | '}'))
-        .filter(|t| !t.is_empty())
+    line.split(|ch: char| ch.is_whitespace() || matches!(ch, ',' | '(' | ')' | '{' | '}')).filter(|t| !t.is_empty())
 }
 
 /// An integer literal (optional sign, decimal digits); out-of-range literals saturate to
@@ -369,41 +304,21 @@ fn parse_int(tok: &str) -> Option<i64> {
     if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
-    Some(tok.parse().unwrap_or(if tok.starts_with('-') {
-        i64::MIN
-    } else {
-        i64::MAX
-    }))
+    Some(tok.parse().unwrap_or(if tok.starts_with('-') { i64::MIN } else { i64::MAX }))
 }
 
 /// A real number; `D`/`d` is accepted as the exponent marker (Fortran style).
 fn parse_real(tok: &str) -> Option<f64> {
-    if tok.contains(['d', 'D']) {
-        tok.replace(['d', 'D'], "e").parse().ok()
-    } else {
-        tok.parse().ok()
-    }
+    if tok.contains(['d', 'D']) { tok.replace(['d', 'D'], "e").parse().ok() } else { tok.parse().ok() }
 }
 
 /// A header count in `min..=max`.
-fn parse_count(
-    tok: &str,
-    line: usize,
-    what: &str,
-    min: usize,
-    max: usize,
-) -> Result<usize, LmiError> {
+fn parse_count(tok: &str, line: usize, what: &str, min: usize, max: usize) -> Result<usize, LmiError> {
     let Some(v) = parse_int(tok) else {
-        return Err(err(
-            line,
-            format!("expected {what} (an integer), found `{tok}`"),
-        ));
+        return Err(err(line, format!("expected {what} (an integer), found `{tok}`")));
     };
     if v < min as i64 {
-        return Err(err(
-            line,
-            format!("{what} must be at least {min}, found {v}"),
-        ));
+        return Err(err(line, format!("{what} must be at least {min}, found {v}")));
     }
     if v > max as i64 {
         return Err(err(line, format!("{what} = {v} exceeds the limit {max}")));
@@ -442,10 +357,7 @@ impl<'a> Reader<'a> {
 
     /// The error for input that ends where `expected` should come, at the line after the last.
     fn eof(&self, expected: &str) -> LmiError {
-        err(
-            self.line_no + 1,
-            format!("unexpected end of input: expected {expected}"),
-        )
+        err(self.line_no + 1, format!("unexpected end of input: expected {expected}"))
     }
 }
 
@@ -483,10 +395,7 @@ mod tests {
     fn assert_err(text: &str, line: usize, keyword: &str) {
         let (l, msg) = read_err(text);
         assert_eq!(l, line, "line for {text:?}: {msg}");
-        assert!(
-            msg.contains(keyword),
-            "message for {text:?} lacks `{keyword}`: {msg}"
-        );
+        assert!(msg.contains(keyword), "message for {text:?} lacks `{keyword}`: {msg}");
     }
 
     /// A valid header for m = 2 and blocks {2, -2}, followed by `rest`.
@@ -502,23 +411,11 @@ mod tests {
         assert_eq!(p.c(), &[48.0, -8.0, 20.0]);
         assert_eq!(p.entries().len(), 8);
         let last = p.entries().last().unwrap();
-        assert_eq!(
-            (last.mat, last.block, last.row, last.col, last.value),
-            (3, 1, 1, 1, 1.5)
-        );
-        let e = p
-            .entries()
-            .iter()
-            .find(|e| e.mat == 1 && e.row == 0 && e.col == 1)
-            .unwrap();
+        assert_eq!((last.mat, last.block, last.row, last.col, last.value), (3, 1, 1, 1, 1.5));
+        let e = p.entries().iter().find(|e| e.mat == 1 && e.row == 0 && e.col == 1).unwrap();
         assert_eq!((e.block, e.value), (0, 4.0));
         // CRLF line ends and c spread over several lines.
-        let p2 = read_sdpa(
-            &EXAMPLE
-                .replace("{48, -8, 20}", "48\n-8 (20)")
-                .replace('\n', "\r\n"),
-        )
-        .unwrap();
+        let p2 = read_sdpa(&EXAMPLE.replace("{48, -8, 20}", "48\n-8 (20)").replace('\n', "\r\n")).unwrap();
         assert_eq!(p2, p);
     }
 
@@ -535,32 +432,10 @@ mod tests {
         assert_eq!(read_sdpa(&text).unwrap(), p);
 
         // Awkward values survive bit for bit; m = 0 and no entries round trip too.
-        let vals = [
-            0.1,
-            1.0 / 3.0,
-            -1e-300,
-            5e-324,
-            f64::MAX,
-            -f64::MIN_POSITIVE,
-            123456789.0123,
-        ];
-        let entries = vals
-            .iter()
-            .enumerate()
-            .map(|(k, &v)| Entry {
-                mat: k % 3,
-                block: 0,
-                row: 0,
-                col: k,
-                value: v,
-            })
-            .collect();
-        let p = SdpProblem::new(
-            vec![Block::Psd(7), Block::Nonneg(1)],
-            vec![0.1, -2.5e-17],
-            entries,
-        )
-        .unwrap();
+        let vals = [0.1, 1.0 / 3.0, -1e-300, 5e-324, f64::MAX, -f64::MIN_POSITIVE, 123456789.0123];
+        let entries =
+            vals.iter().enumerate().map(|(k, &v)| Entry { mat: k % 3, block: 0, row: 0, col: k, value: v }).collect();
+        let p = SdpProblem::new(vec![Block::Psd(7), Block::Nonneg(1)], vec![0.1, -2.5e-17], entries).unwrap();
         let q = read_sdpa(&write_sdpa(&p)).unwrap();
         assert_eq!(q, p);
         for (a, b) in p.entries().iter().zip(q.entries()) {
@@ -573,56 +448,29 @@ mod tests {
     #[test]
     fn truncated_and_garbled_headers_name_the_line() {
         assert_err("", 1, "end of input");
-        assert_err(
-            "\"only a comment\n* and another\n",
-            3,
-            "number of variables",
-        );
+        assert_err("\"only a comment\n* and another\n", 3, "number of variables");
         assert_err("2\n", 2, "number of blocks");
         assert_err("2\n1\n", 3, "block sizes");
-        assert_err(
-            "2\n2\n3\n1 2\n",
-            3,
-            "expected 2 block sizes on this line, found 1",
-        );
+        assert_err("2\n2\n3\n1 2\n", 3, "expected 2 block sizes on this line, found 1");
         assert_err("2\n1\n3\n", 4, "objective coefficient 1 of m = 2");
         assert_err("2\n1\n3\n1.0\n", 5, "end of input");
         // A missing coefficient makes the first entry line supply it: the surplus is reported.
-        assert_err(
-            "2\n1\n3\n1.0\n0 1 1 1 1.0\n",
-            5,
-            "more numbers than the m = 2",
-        );
+        assert_err("2\n1\n3\n1.0\n0 1 1 1 1.0\n", 5, "more numbers than the m = 2");
         assert_err("2\n1\n3\n1.0 2.0 3.0\n", 4, "more numbers");
         assert_err("2\n1\n3 4\n1.0 2.0\n", 3, "more than 1 block sizes");
-        assert_err(
-            "two\n",
-            1,
-            "expected the number of variables m (an integer), found `two`",
-        );
+        assert_err("two\n", 1, "expected the number of variables m (an integer), found `two`");
         assert_err("2.5\n", 1, "integer");
         assert_err("2\nx\n", 2, "number of blocks (an integer)");
         assert_err("2\n1\nabc\n", 3, "block size 1 of 1");
-        assert_err(
-            "2\n1\n2.0\n",
-            3,
-            "block size 1 of 1 (an integer), found `2.0`",
-        );
-        assert_err(
-            "2\n1\n3\n1.0 x\n",
-            4,
-            "objective coefficient 2 of m = 2 (a number), found `x`",
-        );
+        assert_err("2\n1\n2.0\n", 3, "block size 1 of 1 (an integer), found `2.0`");
+        assert_err("2\n1\n3\n1.0 x\n", 4, "objective coefficient 2 of m = 2 (a number), found `x`");
         assert_err("2\n1\n3\n1.0 nan\n", 4, "not finite");
         assert_err("2\n1\n3\n1.0\ninf\n", 5, "not finite");
         // Comments are only allowed before the header.
         assert_err("2\n\"c\n", 2, "number of blocks");
         // Trailing text on header lines is ignored.
         let p = read_sdpa("2 =mdim 7\n1 =nblocks\n3 =sizes\n1.0 2.0 =c\n").unwrap();
-        assert_eq!(
-            (p.num_vars(), p.blocks(), p.entries().len()),
-            (2, &[Block::Psd(3)][..], 0)
-        );
+        assert_eq!((p.num_vars(), p.blocks(), p.entries().len()), (2, &[Block::Psd(3)][..], 0));
     }
 
     #[test]
@@ -631,18 +479,10 @@ mod tests {
         assert_err("99999999999999999999999999\n", 1, "exceeds the limit");
         assert_err("-3\n1\n1\n", 1, "must be at least 0, found -3");
         assert_err("-99999999999999999999999\n", 1, "must be at least 0");
-        assert_err(
-            "2\n1000000000000000\n",
-            2,
-            "number of blocks = 1000000000000000 exceeds the limit",
-        );
+        assert_err("2\n1000000000000000\n", 2, "number of blocks = 1000000000000000 exceeds the limit");
         assert_err("2\n0\n", 2, "number of blocks must be at least 1, found 0");
         assert_err("2\n-1\n", 2, "must be at least 1");
-        assert_err(
-            "2\n2\n1 1000000000000\n",
-            3,
-            "block size 2 = 1000000000000 exceeds the limit 100000",
-        );
+        assert_err("2\n2\n1 1000000000000\n", 3, "block size 2 = 1000000000000 exceeds the limit 100000");
         assert_err("2\n1\n-1000000000000\n", 3, "exceeds the limit");
         assert_err("2\n2\n4 0\n", 3, "block size 2 is zero");
         // 50 000 is a legal order but a dense block of that order is too much storage.
@@ -650,98 +490,39 @@ mod tests {
         let many = vec!["-100000"; 10_001].join(" ");
         assert_err(&format!("2\n10001\n{many}\n"), 3, "up to block 10001");
         // m at the limit is accepted as a header; the missing c is reported at end of input.
-        assert_err(
-            "10000000\n1\n1\n",
-            4,
-            "objective coefficient 1 of m = 10000000",
-        );
+        assert_err("10000000\n1\n1\n", 4, "objective coefficient 1 of m = 10000000");
     }
 
     #[test]
     fn malformed_entries_name_the_line() {
         assert_err(&with_header("0 1 1 1\n"), 5, "5 fields), found 4 fields");
-        assert_err(
-            &with_header("0 1 1 1 1.0\n0 1 1 2 1.0 7\n"),
-            6,
-            "found 6 fields",
-        );
-        assert_err(
-            &with_header("0 1 1 1 abc\n"),
-            5,
-            "entry value (a number), found `abc`",
-        );
-        assert_err(
-            &with_header("x 1 1 1 1.0\n"),
-            5,
-            "matno (an integer), found `x`",
-        );
+        assert_err(&with_header("0 1 1 1 1.0\n0 1 1 2 1.0 7\n"), 6, "found 6 fields");
+        assert_err(&with_header("0 1 1 1 abc\n"), 5, "entry value (a number), found `abc`");
+        assert_err(&with_header("x 1 1 1 1.0\n"), 5, "matno (an integer), found `x`");
         assert_err(&with_header("1.0 1 1 1 1.0\n"), 5, "matno (an integer)");
         assert_err(&with_header("0 one 1 1 1.0\n"), 5, "blkno (an integer)");
         assert_err(&with_header("0 1 1.5 1 1.0\n"), 5, "i (an integer)");
         assert_err(&with_header("0 1 1 2e0 1.0\n"), 5, "j (an integer)");
-        assert_err(
-            &with_header("3 1 1 1 1.0\n"),
-            5,
-            "matno 3 is out of range 0..=2",
-        );
-        assert_err(
-            &with_header("-1 1 1 1 1.0\n"),
-            5,
-            "matno -1 is out of range",
-        );
-        assert_err(
-            &with_header("0 3 1 1 1.0\n"),
-            5,
-            "blkno 3 is out of range 1..=2",
-        );
+        assert_err(&with_header("3 1 1 1 1.0\n"), 5, "matno 3 is out of range 0..=2");
+        assert_err(&with_header("-1 1 1 1 1.0\n"), 5, "matno -1 is out of range");
+        assert_err(&with_header("0 3 1 1 1.0\n"), 5, "blkno 3 is out of range 1..=2");
         assert_err(&with_header("0 0 1 1 1.0\n"), 5, "blkno 0 is out of range");
-        assert_err(
-            &with_header("0 1 0 1 1.0\n"),
-            5,
-            "i = 0 is out of range 1..=2",
-        );
+        assert_err(&with_header("0 1 0 1 1.0\n"), 5, "i = 0 is out of range 1..=2");
         assert_err(&with_header("0 1 1 0 1.0\n"), 5, "j = 0 is out of range");
-        assert_err(
-            &with_header("0 1 1 3 1.0\n"),
-            5,
-            "j = 3 is out of range 1..=2 for block 1",
-        );
+        assert_err(&with_header("0 1 1 3 1.0\n"), 5, "j = 3 is out of range 1..=2 for block 1");
         assert_err(&with_header("0 2 3 3 1.0\n"), 5, "i = 3 is out of range");
-        assert_err(
-            &with_header("0 1 99999999999999999999 1 1.0\n"),
-            5,
-            "out of range",
-        );
-        assert_err(
-            &with_header("0 1 2 1 1.0\n"),
-            5,
-            "lower-triangle entry i = 2 > j = 1",
-        );
-        assert_err(
-            &with_header("0 2 1 2 1.0\n"),
-            5,
-            "off-diagonal entry (i = 1, j = 2) in diagonal block 2",
-        );
+        assert_err(&with_header("0 1 99999999999999999999 1 1.0\n"), 5, "out of range");
+        assert_err(&with_header("0 1 2 1 1.0\n"), 5, "lower-triangle entry i = 2 > j = 1");
+        assert_err(&with_header("0 2 1 2 1.0\n"), 5, "off-diagonal entry (i = 1, j = 2) in diagonal block 2");
         assert_err(&with_header("0 1 1 1 NaN\n"), 5, "not finite");
         assert_err(&with_header("0 1 1 1 -inf\n"), 5, "not finite");
         assert_err(&with_header("0 1 1 1 1e400\n"), 5, "not finite");
         assert_err(&with_header("\"late comment\n"), 5, "5 fields");
-        assert_err(
-            &with_header("0 1 1 2 1.0\n\n1 1 1 1 1.0\n0 1 1 2 2.0\n"),
-            8,
-            "first given on line 5",
-        );
+        assert_err(&with_header("0 1 1 2 1.0\n\n1 1 1 1 1.0\n0 1 1 2 2.0\n"), 8, "first given on line 5");
         let (_, msg) = read_err(&with_header("1 2 2 2 1.0\n1 2 2 2 1.0\n"));
-        assert!(
-            msg.contains("duplicate entry matno 1, blkno 2, i 2, j 2"),
-            "{msg}"
-        );
+        assert!(msg.contains("duplicate entry matno 1, blkno 2, i 2, j 2"), "{msg}");
         // The first error in file order is the one reported.
-        assert_err(
-            &with_header("0 1 1 1 1.0\n0 1 1 1 1.0\n9 1 1 1 1.0\n"),
-            6,
-            "duplicate",
-        );
+        assert_err(&with_header("0 1 1 1 1.0\n0 1 1 1 1.0\n9 1 1 1 1.0\n"), 6, "duplicate");
     }
 
     #[test]
@@ -750,9 +531,7 @@ mod tests {
         for cut in 0..=base.len() {
             let _ = read_sdpa(&base[..cut]);
         }
-        let junk = [
-            b'0', b'9', b'-', b' ', b'\n', b'e', b'D', b'.', b'{', b'"', b'x', b'+',
-        ];
+        let junk = [b'0', b'9', b'-', b' ', b'\n', b'e', b'D', b'.', b'{', b'"', b'x', b'+'];
         let mut state: u64 = 0x2545_f491_4f6c_dd1d;
         let mut next = || {
             state ^= state << 13;
@@ -779,10 +558,7 @@ mod tests {
         match read_sdpa_file(missing) {
             Err(LmiError::Sdpa { line, message }) => {
                 assert_eq!(line, 0);
-                assert!(
-                    message.contains("cannot read /nonexistent/dir/problem.dat-s"),
-                    "{message}"
-                );
+                assert!(message.contains("cannot read /nonexistent/dir/problem.dat-s"), "{message}");
             }
             other => panic!("expected an I/O error, got {other:?}"),
         }
@@ -797,10 +573,7 @@ mod tests {
         match res {
             Err(LmiError::Sdpa { line, message }) => {
                 assert_eq!(line, 3);
-                assert!(
-                    message.contains("zero") && message.contains("bad.dat-s"),
-                    "{message}"
-                );
+                assert!(message.contains("zero") && message.contains("bad.dat-s"), "{message}");
             }
             other => panic!("expected a format error, got {other:?}"),
         }
@@ -818,10 +591,7 @@ mod tests {
     fn sdplib_files_parse_with_the_documented_sizes_and_round_trip() {
         let dir = sdplib_dir();
         if !dir.is_dir() {
-            eprintln!(
-                "skipping SDPLIB test: {} not found (set SDPLIB_DIR)",
-                dir.display()
-            );
+            eprintln!("skipping SDPLIB test: {} not found (set SDPLIB_DIR)", dir.display());
             return;
         }
         let (p5, h5) = (Block::Psd(5), Block::Psd(6));
@@ -862,11 +632,7 @@ mod tests {
             let text = std::fs::read_to_string(path).unwrap();
             let p = read_sdpa(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             // Every nonblank line after the four header lines is one entry.
-            let entry_lines = text
-                .lines()
-                .skip(4)
-                .filter(|l| !l.trim().is_empty())
-                .count();
+            let entry_lines = text.lines().skip(4).filter(|l| !l.trim().is_empty()).count();
             assert_eq!(p.entries().len(), entry_lines, "{}", path.display());
             assert_eq!(read_sdpa(&write_sdpa(&p)).unwrap(), p, "{}", path.display());
         }

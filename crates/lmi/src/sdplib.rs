@@ -96,7 +96,10 @@ pub fn suite(dir: &Path) -> Result<Vec<SuiteProblem>, LmiError> {
         })?;
         let path = dir.join(format!("{name}.dat-s"));
         if !path.is_file() {
-            return Err(LmiError::Sdpa { line: lineno + 1, message: format!("{} is listed but missing", path.display()) });
+            return Err(LmiError::Sdpa {
+                line: lineno + 1,
+                message: format!("{} is listed but missing", path.display()),
+            });
         }
         out.push(SuiteProblem { name: name.to_owned(), path, expected });
     }
@@ -135,11 +138,8 @@ pub fn check_certificate(problem: &SdpProblem, solution: &SdpSolution, tol: f64)
             if worst > tol {
                 return Err(format!("max |tr(Fi Y)| / tr(F0 Y) = {worst:e}"));
             }
-            let min_eig = solution
-                .dual
-                .iter()
-                .map(|y| y.clone().symmetric_eigenvalues().min())
-                .fold(f64::INFINITY, f64::min);
+            let min_eig =
+                solution.dual.iter().map(|y| y.clone().symmetric_eigenvalues().min()).fold(f64::INFINITY, f64::min);
             let ynorm = solution.dual.iter().map(|y| y.norm()).fold(0.0, f64::max);
             if min_eig < -tol * ynorm {
                 return Err(format!("Y has eigenvalue {min_eig:e}"));
@@ -266,9 +266,7 @@ pub fn verdict(p: &SuiteProblem, backend: &str, problem: &SdpProblem, solution: 
     match check_outcome(&p.expected, problem, solution) {
         Ok(()) => Verdict::Pass,
         Err(e) => {
-            let known = KNOWN_DEVIATIONS
-                .iter()
-                .find(|d| d.problem == p.name && d.backend.is_none_or(|b| b == backend));
+            let known = KNOWN_DEVIATIONS.iter().find(|d| d.problem == p.name && d.backend.is_none_or(|b| b == backend));
             match (known, p.expected) {
                 (Some(d), Expected::Optimal { value, .. })
                     if solution.status.is_optimal()

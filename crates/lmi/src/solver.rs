@@ -94,11 +94,7 @@ impl SdpSolution {
         Self {
             status: SolveStatus::Unsolved,
             x: vec![0.0; problem.num_vars()],
-            dual: problem
-                .blocks()
-                .iter()
-                .map(|b| DMatrix::zeros(b.size(), b.size()))
-                .collect(),
+            dual: problem.blocks().iter().map(|b| DMatrix::zeros(b.size(), b.size())).collect(),
             primal_objective: f64::NAN,
             dual_objective: f64::NAN,
             iterations: 0,

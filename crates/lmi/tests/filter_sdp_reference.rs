@@ -16,7 +16,14 @@ fn reference_data() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, 
         -0.13392137898100265, -0.005464612817309362, -0.03728944211821784, 0.9985252052798118,
     ]);
     let c = DMatrix::from_row_slice(3, 4, &[0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]);
-    (a, c, DMatrix::identity(4, 4) * 0.01, DMatrix::identity(3, 3) * 0.05, DMatrix::identity(4, 4) * 0.5, DVector::zeros(4))
+    (
+        a,
+        c,
+        DMatrix::identity(4, 4) * 0.01,
+        DMatrix::identity(3, 3) * 0.05,
+        DMatrix::identity(4, 4) * 0.5,
+        DVector::zeros(4),
+    )
 }
 
 #[test]

@@ -71,8 +71,9 @@ fn inputs(sc: &Scenario) -> usize {
 
 /// The improved filter with the two-multiplier solver.
 pub fn proposed(sc: &Scenario) -> Result<Box<dyn Filter>, String> {
-    let inner = SetMembershipFilter::two_multiplier(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), inputs(sc))
-        .map_err(|e| e.to_string())?;
+    let inner =
+        SetMembershipFilter::two_multiplier(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), inputs(sc))
+            .map_err(|e| e.to_string())?;
     Ok(Box::new(SetFilter { label: PROPOSED.into(), inner }))
 }
 
@@ -94,16 +95,32 @@ pub fn for_scenario(sc: &Scenario) -> Result<Vec<ScheduledFilter>, String> {
     let mut out: Vec<ScheduledFilter> = vec![(proposed(sc)?, n)];
     for name in lmi::backend_names() {
         let solver = SdpUpdateSolver::by_name(name, SolverSettings::default()).map_err(e)?;
-        let inner = SetMembershipFilter::new(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), inputs(sc), solver)
-            .map_err(e)?;
+        let inner =
+            SetMembershipFilter::new(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), inputs(sc), solver)
+                .map_err(e)?;
         out.push((Box::new(SetFilter { label: format!("{PROPOSED_VIA}{name}"), inner }), sc.sdp_steps.min(n)));
     }
     let (lo, hi) = &sc.input_range;
-    let yl_a = yang_li::without_input(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), lo, hi, TwoMultiplierSolver::new())
-        .map_err(e)?;
+    let yl_a = yang_li::without_input(
+        sc.x_hat0.clone(),
+        sc.p0.clone(),
+        sc.q.clone(),
+        sc.r.clone(),
+        lo,
+        hi,
+        TwoMultiplierSolver::new(),
+    )
+    .map_err(e)?;
     out.push((Box::new(SetFilter { label: YANG_LI_NO_INPUT.into(), inner: yl_a }), n));
-    let yl_b = yang_li::with_input(sc.x_hat0.clone(), sc.p0.clone(), sc.q.clone(), sc.r.clone(), inputs(sc), TwoMultiplierSolver::new())
-        .map_err(e)?;
+    let yl_b = yang_li::with_input(
+        sc.x_hat0.clone(),
+        sc.p0.clone(),
+        sc.q.clone(),
+        sc.r.clone(),
+        inputs(sc),
+        TwoMultiplierSolver::new(),
+    )
+    .map_err(e)?;
     out.push((Box::new(SetFilter { label: YANG_LI_WITH_INPUT.into(), inner: yl_b }), n));
     out.push((kalman(sc)?, n));
     Ok(out)

@@ -11,10 +11,8 @@ use crate::plot::{Chart, PALETTE, Series};
 
 /// A file-name-safe identifier of an estimator label.
 pub fn slug(label: &str) -> String {
-    let mut s: String = label
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' })
-        .collect();
+    let mut s: String =
+        label.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect();
     while s.contains("__") {
         s = s.replace("__", "_");
     }
@@ -31,14 +29,8 @@ pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>]) -> std::io::Res
     let n = truth[0].len();
     let mut out = String::new();
     let cols = |p: &str| (1..=n).map(|i| format!("{p}{i}")).collect::<Vec<_>>().join(",");
-    let _ = writeln!(
-        out,
-        "k,t,{},{},{},{},trace,tau1,tau2,tau3,fallback",
-        cols("x"),
-        cols("xhat"),
-        cols("lo"),
-        cols("hi")
-    );
+    let _ =
+        writeln!(out, "k,t,{},{},{},{},trace,tau1,tau2,tau3,fallback", cols("x"), cols("xhat"), cols("lo"), cols("hi"));
     for (k, s) in run.snapshots.iter().enumerate() {
         let mut line = format!("{k},{}", k as f64 * TS);
         for v in truth[k].iter().chain(s.centre.iter()) {

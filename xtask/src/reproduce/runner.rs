@@ -101,8 +101,10 @@ pub struct Metrics {
     pub mean_trace: f64,
     /// Steps that used the fallback multiplier.
     pub fallback_steps: usize,
-    /// Median wall-clock time of a step, microseconds.
+    /// Median wall-clock time of a step, microseconds (over all timed repeats).
     pub median_step_us: f64,
+    /// Steps timed for the median.
+    pub timed_steps: usize,
 }
 
 /// Median of a sample of nanoseconds, in microseconds.
@@ -165,5 +167,6 @@ pub fn metrics(run: &Run, truth: &[DVector<f64>]) -> Metrics {
         mean_trace: trace / cnt,
         fallback_steps: run.snapshots.iter().filter(|s| s.fallback).count(),
         median_step_us: median_us(&run.step_ns),
+        timed_steps: run.step_ns.len(),
     }
 }

@@ -149,7 +149,12 @@ fn extended(
 ) -> Result<Scenario, String> {
     let s = sensors();
     let (inputs, input_range) = slalom_inputs(steps.len());
-    let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![0.1f64.powi(2), 0.1f64.powi(2), 0.04f64.powi(2), 0.1f64.powi(2)]));
+    let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![
+        0.1f64.powi(2),
+        0.1f64.powi(2),
+        0.04f64.powi(2),
+        0.1f64.powi(2),
+    ]));
     let mut all_notes = vec![
         "C measures γ, φ, φ̇ (no sideslip sensor): bounds ±0.002 rad/s, ±0.005 rad, ±0.002 rad/s; process noise \
          ±(2e-4, 5e-4, 1e-5, 5e-4) per 1 ms step; the filters get the covering ellipsoids Q, R."
@@ -158,8 +163,7 @@ fn extended(
         "Slalom steering: front rows 5° sin(2π·0.2 t), rear rows −2.5° sin(2π·0.2 t); the [17]-style filter without \
          input knows only this range."
             .into(),
-        "x₀ = (0.01, 0, 0.005, 0), x̂₀ = 0, P₀ = diag(0.1², 0.1², 0.04², 0.1²) (x₀ inside the initial set)."
-            .into(),
+        "x₀ = (0.01, 0, 0.005, 0), x̂₀ = 0, P₀ = diag(0.1², 0.1², 0.04², 0.1²) (x₀ inside the initial set).".into(),
     ];
     all_notes.extend(notes);
     Ok(Scenario {
@@ -217,10 +221,8 @@ pub fn speed_schedule(n_steps: usize, sdp_steps: usize, seed: u64) -> Result<Sce
     let mut steps = Vec::with_capacity(n_steps);
     for k in 0..n_steps {
         let v = 2.0 + 6.0 * k as f64 / (n_steps.max(2) - 1) as f64;
-        let d = CarrierModel::new(CarrierParams::paper_preset().with_speed(v))
-            .map_err(err)?
-            .discretize(TS)
-            .map_err(err)?;
+        let d =
+            CarrierModel::new(CarrierParams::paper_preset().with_speed(v)).map_err(err)?.discretize(TS).map_err(err)?;
         let (a, b, _) = d.to_dynamic();
         steps.push(StepMatrices { a, b, c: c.clone() });
     }
