@@ -164,9 +164,14 @@ pub fn claims(scenarios: &[ScenarioSummary], mc: &MonteCarloSummary) -> Vec<Clai
             find(paper, YANG_LI_WITH_INPUT).map_or("n/a".to_owned(), |m| format!("{:.6} vs {:.6}", m.mean_trace, prop.mean_trace))
         ),
     });
-    // 3. error fluctuation
-    let less_yl = prop.error_std.iter().zip(&yl.error_std).filter(|(a, b)| a < b).count();
-    let less_kf = prop.error_std.iter().zip(&kf.error_std).filter(|(a, b)| a < b).count();
+    // 3. error fluctuation (equal within 1e-6 relative counts as equal, not smaller)
+    let compare = |a: &[f64], b: &[f64]| {
+        let smaller = a.iter().zip(b).filter(|(x, y)| **x < **y * (1.0 - 1e-6)).count();
+        let equal = a.iter().zip(b).filter(|(x, y)| (**x - **y).abs() <= 1e-6 * y.abs()).count();
+        (smaller, equal)
+    };
+    let (less_yl, eq_yl) = compare(&prop.error_std, &yl.error_std);
+    let (less_kf, eq_kf) = compare(&prop.error_std, &kf.error_std);
     out.push(Claim {
         claim: "The proposed errors fluctuate less than those of [17] and of the Kalman filter.".into(),
         verdict: match (less_yl, less_kf) {
@@ -176,9 +181,9 @@ pub fn claims(scenarios: &[ScenarioSummary], mc: &MonteCarloSummary) -> Vec<Clai
         },
         evidence: format!(
             "Standard deviation of the error per state (β, γ, φ, φ̇), paper scenario: improved [{}], [17] without \
-             input [{}], Kalman [{}]; the improved filter is smaller in {less_yl}/4 states than [17] and in \
-             {less_kf}/4 than the Kalman filter. (With C = I the improved filter returns x̂ = y, so its error is the \
-             measurement noise.)",
+             input [{}], Kalman [{}]. Against [17]: smaller in {less_yl}/4 states, equal in {eq_yl}/4; against the \
+             Kalman filter: smaller in {less_kf}/4, equal in {eq_kf}/4. With C = I both set-membership filters return \
+             x̂ = y, so their error is the measurement noise.",
             fmt_vec(&prop.error_std),
             fmt_vec(&yl.error_std),
             fmt_vec(&kf.error_std)
@@ -287,12 +292,7 @@ pub fn markdown(s: &Summary) -> String {
         let _ = writeln!(md, "- **{}.** {}", i.name, i.detail);
     }
     for (idx, sc) in s.scenarios.iter().enumerate() {
-        let _ = writeln!(
-            md,
-            "\n## {} — {}\n",
-            if idx == 0 { "The experiment as published" } else { "Extended scenario" },
-            sc.title
-        );
+        let _ = writeln!(md, "\n## {}\n", sc.title);
         for n in &sc.notes {
             let _ = writeln!(md, "- {n}");
         }
@@ -330,7 +330,8 @@ pub fn markdown(s: &Summary) -> String {
         md,
         "\n## Monte Carlo (worst case)\n\n{} seeded runs (seeds {}…{}) of the no-sideslip scenario, {} steps each, \
          both noises on the boundary of their ellipsoids; {} threads, {:.1} s.\n\n- Published sets missing the truth: \
-         **{}** (must be 0); largest normalised distance {:.6}.\n",
+         **{}** (must be 0); largest normalised distance {:.6}.\n- The filter-form shape recursion (27)–(29) does not \
+         depend on the measured data, so the bound widths are the same in every run; only the errors vary.\n",
         mc.runs,
         mc.base_seed,
         mc.base_seed + mc.runs.saturating_sub(1) as u64,

@@ -72,7 +72,7 @@ pub fn paper(seed: u64) -> Result<Scenario, String> {
     let inputs: Vec<DVector<f64>> = (0..n_steps).map(|k| &u_max * (k as f64 / n_steps as f64)).collect();
     Ok(Scenario {
         id: "paper".into(),
-        title: "The paper's experiment as published (Table 1, one container, 6 m/s, C = I, N = 100)".into(),
+        title: "The experiment as published: Table 1 carrier, one container, 6 m/s, C = I, N = 100".into(),
         steps,
         sim: SimulationConfig {
             x0: DVector::from_vec(vec![3.0, -8.0, 2.0, 10.0]),
@@ -192,7 +192,7 @@ pub fn no_sideslip(n_steps: usize, sdp_steps: usize, seed: u64) -> Result<Scenar
     let steps = carrier_steps(CarrierParams::paper_preset(), &sensors().c, n_steps)?;
     extended(
         "no_sideslip",
-        &format!("No sideslip sensor, one container, 6 m/s, {} s at 1 kHz", n_steps as f64 * TS),
+        &format!("Extended: no sideslip sensor, one container, 6 m/s, {} s at 1 kHz", n_steps as f64 * TS),
         steps,
         seed,
         sdp_steps,
@@ -206,7 +206,7 @@ pub fn load(containers: usize, n_steps: usize, sdp_steps: usize, seed: u64) -> R
     let steps = carrier_steps(params, &sensors().c, n_steps)?;
     extended(
         &format!("load{containers}"),
-        &format!("No sideslip sensor, {containers} container(s), 6 m/s, {} s", n_steps as f64 * TS),
+        &format!("Extended: load of {containers} container(s), no sideslip sensor, 6 m/s, {} s", n_steps as f64 * TS),
         steps,
         seed,
         sdp_steps,
@@ -228,7 +228,7 @@ pub fn speed_schedule(n_steps: usize, sdp_steps: usize, seed: u64) -> Result<Sce
     }
     extended(
         "speed_schedule",
-        &format!("No sideslip sensor, speed 2 → 8 m/s over {} s (time-varying A_p, B_p)", n_steps as f64 * TS),
+        &format!("Extended: speed 2 → 8 m/s over {} s (time-varying A_p, B_p), no sideslip sensor", n_steps as f64 * TS),
         steps,
         seed,
         sdp_steps,
