@@ -8,42 +8,37 @@ use nalgebra::{DMatrix, DVector};
 
 /// `out = alpha · a · b + beta · out`.
 pub(crate) fn mul_nn(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
-    let (r, k) = a.shape();
-    let c = b.ncols();
-    debug_assert_eq!(b.nrows(), k);
-    debug_assert_eq!(out.shape(), (r, c));
-    let a = a.as_slice();
-    let b = b.as_slice();
-    let o = out.as_mut_slice();
-    for j in 0..c {
-        let oc = &mut o[j * r..(j + 1) * r];
-        scale_col(oc, beta);
-        for l in 0..k {
-            let s = alpha * b[j * k + l];
-            if s != 0.0 {
-                let ac = &a[l * r..(l + 1) * r];
-                for i in 0..r {
-                    oc[i] += s * ac[i];
-                }
-            }
-        }
-    }
+    debug_assert_eq!(b.nrows(), a.ncols());
+    // b[l, j] is at j·k + l (column-major b, k × c).
+    mul_strided(alpha, a, b.as_slice(), b.ncols(), (a.ncols(), 1), beta, out);
 }
 
 /// `out = alpha · a · bᵀ + beta · out`.
 pub(crate) fn mul_nt(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
+    debug_assert_eq!(b.ncols(), a.ncols());
+    // bᵀ[l, j] = b[j, l] is at l·c + j (column-major b, c × k).
+    mul_strided(alpha, a, b.as_slice(), b.nrows(), (1, b.nrows()), beta, out);
+}
+
+/// `out = alpha · a · B + beta · out` where `B[l, j] = b[j·stride.0 + l·stride.1]` has `c` columns.
+fn mul_strided(
+    alpha: f64,
+    a: &DMatrix<f64>,
+    b: &[f64],
+    c: usize,
+    stride: (usize, usize),
+    beta: f64,
+    out: &mut DMatrix<f64>,
+) {
     let (r, k) = a.shape();
-    let c = b.nrows();
-    debug_assert_eq!(b.ncols(), k);
     debug_assert_eq!(out.shape(), (r, c));
     let a = a.as_slice();
-    let b = b.as_slice();
     let o = out.as_mut_slice();
     for j in 0..c {
         let oc = &mut o[j * r..(j + 1) * r];
         scale_col(oc, beta);
         for l in 0..k {
-            let s = alpha * b[l * c + j];
+            let s = alpha * b[j * stride.0 + l * stride.1];
             if s != 0.0 {
                 let ac = &a[l * r..(l + 1) * r];
                 for i in 0..r {

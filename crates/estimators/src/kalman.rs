@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::dense;
 use crate::error::EstimatorError;
-use crate::model::{StepModel, check_finite, check_model, check_spd, check_vec};
+use crate::model::{InitialData, StepModel, check_initial, check_model, check_spd, check_vec};
 
 /// The Kalman estimate after a step: mean, covariance and per-state standard deviations.
 #[derive(Debug, Clone, PartialEq)]
@@ -61,18 +61,7 @@ impl KalmanFilter {
         r: DMatrix<f64>,
         inputs: usize,
     ) -> Result<Self, EstimatorError> {
-        let n = x0.len();
-        let m = r.nrows();
-        if n == 0 {
-            return Err(EstimatorError::EmptySystem("no states"));
-        }
-        if m == 0 {
-            return Err(EstimatorError::EmptySystem("no outputs"));
-        }
-        check_finite("x0", x0.as_slice())?;
-        let p0 = check_spd("P0", &p0, n)?;
-        let q = check_spd("Q", &q, n)?;
-        let r = check_spd("R", &r, m)?;
+        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
         let std_dev = p0.diagonal().map(f64::sqrt);
         Ok(Self {
             n,

@@ -94,3 +94,35 @@ pub(crate) fn check_spd(what: &'static str, m: &DMatrix<f64>, n: usize) -> Resul
     }
     Ok(s)
 }
+
+/// The validated initial data shared by the filters' constructors.
+pub(crate) struct InitialData {
+    /// States `n`.
+    pub n: usize,
+    /// Outputs `m`.
+    pub m: usize,
+    /// Symmetrised `P₀`, `Q`, `R`.
+    pub p0: DMatrix<f64>,
+    pub q: DMatrix<f64>,
+    pub r: DMatrix<f64>,
+}
+
+/// Checks `x₀` (finite, at least one state), `P₀`, `Q` (`n × n`) and `R` (`m × m`, at least one
+/// output) symmetric positive definite; returns them symmetrised.
+pub(crate) fn check_initial(
+    x0: &DVector<f64>,
+    p0: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+) -> Result<InitialData, EstimatorError> {
+    let n = x0.len();
+    let m = r.nrows();
+    if n == 0 {
+        return Err(EstimatorError::EmptySystem("no states"));
+    }
+    if m == 0 {
+        return Err(EstimatorError::EmptySystem("no outputs"));
+    }
+    check_finite("x0", x0.as_slice())?;
+    Ok(InitialData { n, m, p0: check_spd("P0", p0, n)?, q: check_spd("Q", q, n)?, r: check_spd("R", r, m)? })
+}

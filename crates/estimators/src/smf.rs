@@ -70,7 +70,7 @@ use lmi::SolveStatus;
 
 use crate::dense;
 use crate::error::EstimatorError;
-use crate::model::{StepModel, check_finite, check_model, check_spd, check_vec};
+use crate::model::{InitialData, StepModel, check_initial, check_model, check_spd, check_vec};
 use crate::two_multiplier::{GainWork, TAU_FLOOR, TwoMultiplierSolver};
 
 /// The data of one update problem (29), borrowed from the filter.
@@ -289,18 +289,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         inputs: usize,
         mut solver: S,
     ) -> Result<Self, EstimatorError> {
-        let n = x0.len();
-        let m = r.nrows();
-        if n == 0 {
-            return Err(EstimatorError::EmptySystem("no states"));
-        }
-        if m == 0 {
-            return Err(EstimatorError::EmptySystem("no outputs"));
-        }
-        check_finite("x0", x0.as_slice())?;
-        let p0 = check_spd("P0", &p0, n)?;
-        let q = check_spd("Q", &q, n)?;
-        let r = check_spd("R", &r, m)?;
+        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
         solver.prepare(n, m)?;
         let mut est = SetEstimate {
             center: x0,
