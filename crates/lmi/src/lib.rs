@@ -14,6 +14,7 @@ pub mod filter_sdp;
 pub mod problem;
 pub mod registry;
 pub mod sdpa;
+pub mod sdplib;
 pub mod solver;
 pub mod svec;
 
@@ -25,6 +26,6 @@ pub use clarabel_backend::ClarabelBackend;
 pub use error::LmiError;
 pub use ipm::FaerIpm;
 pub use problem::{Block, Entry, SdpProblem};
-pub use registry::{backend_by_name, backend_names};
+pub use registry::{DEFAULT_BACKEND, backend_by_name, backend_names};
 pub use sdpa::{read_sdpa, read_sdpa_file, write_sdpa};
 pub use solver::{SdpBackend, SdpSolution, SolveStatus, SolverSettings, SolverSettingsBuilder};

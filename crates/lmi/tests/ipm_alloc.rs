@@ -1,0 +1,97 @@
+//! `FaerIpm::solve` performs no heap allocation once set up (after one warm-up solve).
+#![allow(unsafe_code)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+mod ipm_common;
+
+use lmi::{Block, Entry, FaerIpm, SdpBackend, SdpProblem, SdpSolution, SolverSettings};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// A problem with a dense block large enough for faer's blocked kernels, a small one and a
+/// diagonal block, with both sparse and dense `Fᵢ` (both Schur strategies). The identity is
+/// strictly feasible for the dual and a large `x₁` for the primal.
+fn problem() -> SdpProblem {
+    let n = 40;
+    let mut entries = vec![];
+    let e = |mat, block, row, col, value| Entry { mat, block, row, col, value };
+    // x₁ (t): a dense positive definite F₁ in block 0, 1 in the corner of block 1, t ≥ 1 in block 2.
+    for j in 0..n {
+        for i in 0..=j {
+            entries.push(e(1, 0, i, j, if i == j { 2.0 } else { 0.1 / (1.0 + (j - i) as f64) }));
+            entries.push(e(0, 0, i, j, ((i + 2 * j) as f64).sin()));
+        }
+    }
+    let mut c = vec![2.0 * n as f64 + 2.0];
+    // x₂…x_{n+1}: E_kk + 0.3 (E_k,k+1 + E_k+1,k) in block 0.
+    for k in 0..n {
+        c.push(1.0);
+        entries.push(e(k + 2, 0, k, k, 1.0));
+        if k + 1 < n {
+            entries.push(e(k + 2, 0, k, k + 1, 0.3));
+        }
+    }
+    // Block 1: [[t, 1], [1, x₂]]; block 2: t ≥ 1, x₃ ≥ 0.
+    entries.push(e(1, 1, 0, 0, 1.0));
+    entries.push(e(2, 1, 1, 1, 1.0));
+    entries.push(e(0, 1, 0, 1, -1.0));
+    c[1] += 1.0;
+    entries.push(e(1, 2, 0, 0, 1.0));
+    entries.push(e(0, 2, 0, 0, 1.0));
+    entries.push(e(3, 2, 1, 1, 1.0));
+    c[2] += 1.0;
+    SdpProblem::new(vec![Block::Psd(n), Block::Psd(2), Block::Nonneg(2)], c, entries).unwrap()
+}
+
+#[test]
+fn solves_after_setup_do_not_allocate() {
+    // The second problem (the filter LMI) ends in the QR-based precision mode.
+    for p in [problem(), ipm_common::filter_lmi()] {
+        let mut ipm =
+            FaerIpm::new(SolverSettings::builder().verbose(std::env::var_os("IPM_VERBOSE").is_some()).build().unwrap())
+                .unwrap();
+        ipm.setup(&p).unwrap();
+        let mut sol = SdpSolution::new(&p);
+        ipm.solve(&p, &mut sol).unwrap();
+        assert!(sol.status.is_optimal(), "{}", sol.status);
+        let first = sol.primal_objective;
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        for _ in 0..10 {
+            ipm.solve(&p, &mut sol).unwrap();
+        }
+        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        assert_eq!(after - before, 0, "solve allocated {} times in 10 solves", after - before);
+        assert!(sol.status.is_optimal(), "{}", sol.status);
+        assert_eq!(sol.primal_objective, first);
+    }
+}
