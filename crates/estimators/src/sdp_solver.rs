@@ -82,9 +82,7 @@ impl UpdateSolver for SdpUpdateSolver {
         out.status = sol.status;
         out.iterations = sol.iterations;
         if sol.status.is_optimal() {
-            let read = sdp.read(&sol.x, &data)?;
-            out.l.copy_from(&read.l);
-            out.tau = read.tau;
+            out.tau = sdp.read_gain(&sol.x, &mut out.l)?;
         }
         Ok(())
     }

@@ -8,7 +8,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use estimators::{KalmanFilter, SetMembershipFilter, StepModel, TwoMultiplierSolver, yang_li};
+use estimators::{KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, yang_li};
 use nalgebra::{DMatrix, DVector};
 
 struct Counting;
@@ -120,4 +120,34 @@ fn steps_do_not_allocate_after_warm_up() {
         let (_, n) = count(|| smf.step(&model, &DVector::zeros(0), &ys[0]).is_err());
         assert_eq!(n, 0);
     }
+}
+
+#[test]
+fn sdp_step_with_the_default_backend_does_not_allocate_after_setup() {
+    // The first step builds (28) and sets the backend up; later steps rewrite the numbers in
+    // place (`FilterSdp::update`), solve without allocating and read only (L, τ).
+    let a = common::reference_a();
+    let b = DMatrix::from_fn(4, 2, |i, j| 0.01 * (i + 2 * j) as f64);
+    let c = common::reference_c();
+    let model = StepModel::new(&a, &b, &c);
+    let u = DVector::from_vec(vec![0.2, -0.1]);
+    let ys: Vec<DVector<f64>> = (0..20).map(|k| DVector::from_fn(3, |i, _| ((k * 7 + i) as f64).sin() * 0.1)).collect();
+    let solver = SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, lmi::SolverSettings::default()).unwrap();
+    let mut smf = SetMembershipFilter::new(
+        DVector::zeros(4),
+        DMatrix::identity(4, 4) * 0.5,
+        DMatrix::identity(4, 4) * 0.01,
+        DMatrix::identity(3, 3) * 0.05,
+        2,
+        solver,
+    )
+    .unwrap();
+    smf.step(&model, &u, &ys[0]).unwrap();
+    let (_, n) = count(|| {
+        for y in &ys {
+            let e = smf.step(&model, &u, y).unwrap();
+            assert!(e.report.fallback.is_none());
+        }
+    });
+    assert_eq!(n, 0, "SDP-backed step allocated");
 }

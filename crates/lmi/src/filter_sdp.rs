@@ -71,6 +71,100 @@ pub struct FilterSdp {
     problem: SdpProblem,
     map: VariableMap,
     vars: FilterVars,
+    ws: Workspace,
+}
+
+/// Buffers of [`FilterSdp::update`], allocated once so that an update does not allocate.
+#[derive(Debug, Clone)]
+struct Workspace {
+    /// Cholesky factor `E` of `P_k` (lower).
+    e: DMatrix<f64>,
+    /// `A E`.
+    ae: DMatrix<f64>,
+    /// `C A E`.
+    cae: DMatrix<f64>,
+    /// `Q⁻¹`, `R⁻¹` and a factor buffer for each.
+    q_inv: DMatrix<f64>,
+    r_inv: DMatrix<f64>,
+    q_fac: DMatrix<f64>,
+    r_fac: DMatrix<f64>,
+    /// The new entry values and objective.
+    values: Vec<f64>,
+    c: Vec<f64>,
+}
+
+impl Workspace {
+    fn new(n: usize, m: usize, entries: usize, vars: usize) -> Self {
+        Self {
+            e: DMatrix::zeros(n, n),
+            ae: DMatrix::zeros(n, n),
+            cae: DMatrix::zeros(m, n),
+            q_inv: DMatrix::zeros(n, n),
+            r_inv: DMatrix::zeros(m, m),
+            q_fac: DMatrix::zeros(n, n),
+            r_fac: DMatrix::zeros(m, m),
+            values: vec![0.0; entries],
+            c: vec![0.0; vars],
+        }
+    }
+}
+
+/// Symmetry within `1e-10` relative, then a Cholesky factor `L` (lower, upper part zeroed) of
+/// `src` written into `l`. No allocation.
+fn factor_spd(src: &DMatrix<f64>, l: &mut DMatrix<f64>, name: &'static str) -> Result<(), LmiError> {
+    let n = src.nrows();
+    let scale = src.amax().max(f64::MIN_POSITIVE);
+    for j in 0..n {
+        for i in 0..j {
+            if (src[(i, j)] - src[(j, i)]).abs() > 1e-10 * scale {
+                return Err(LmiError::NotPositiveDefinite(name));
+            }
+        }
+    }
+    for j in 0..n {
+        let mut d = 0.5 * (src[(j, j)] + src[(j, j)]);
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(LmiError::NotPositiveDefinite(name));
+        }
+        let d = d.sqrt();
+        l[(j, j)] = d;
+        for i in j + 1..n {
+            let mut v = 0.5 * (src[(i, j)] + src[(j, i)]);
+            for k in 0..j {
+                v -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = v / d;
+        }
+        for i in 0..j {
+            l[(i, j)] = 0.0;
+        }
+    }
+    Ok(())
+}
+
+/// `inv = (L Lᵀ)⁻¹` from the lower factor `L`, column by column. No allocation.
+fn spd_inverse(l: &DMatrix<f64>, inv: &mut DMatrix<f64>) {
+    let n = l.nrows();
+    for col in 0..n {
+        // Solve L z = e_col, then Lᵀ x = z, in place in column `col` of `inv`.
+        for i in 0..n {
+            let mut v = if i == col { 1.0 } else { 0.0 };
+            for k in 0..i {
+                v -= l[(i, k)] * inv[(k, col)];
+            }
+            inv[(i, col)] = v / l[(i, i)];
+        }
+        for i in (0..n).rev() {
+            let mut v = inv[(i, col)];
+            for k in i + 1..n {
+                v -= l[(k, i)] * inv[(k, col)];
+            }
+            inv[(i, col)] = v / l[(i, i)];
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -164,7 +258,20 @@ impl FilterSdp {
     /// a `Q`, `R`, `P` that is not symmetric positive definite.
     pub fn new(data: &FilterSdpData<'_>) -> Result<Self, LmiError> {
         let (problem, map, vars) = build(data)?;
-        Ok(Self { n: data.a.nrows(), m: data.c.nrows(), problem, map, vars })
+        let (n, m) = (data.a.nrows(), data.c.nrows());
+        let ws = Workspace::new(n, m, problem.entries().len(), problem.num_vars());
+        let mut sdp = Self { n, m, problem, map, vars, ws };
+        // The closed-form writer must reproduce the builder's numbers (checked here once).
+        let built = sdp.problem.clone();
+        sdp.update(data)?;
+        debug_assert!(
+            built
+                .entries()
+                .iter()
+                .zip(sdp.problem.entries())
+                .all(|(a, b)| { (a.value - b.value).abs() <= 1e-12 * (1.0 + a.value.abs()) })
+        );
+        Ok(sdp)
     }
 
     /// Number of states `n`.
@@ -194,13 +301,53 @@ impl FilterSdp {
                 data.c.nrows()
             )));
         }
-        let (problem, _, _) = build(data)?;
-        debug_assert!(problem.same_structure(&self.problem));
-        let values: Vec<f64> = problem.entries().iter().map(|e| e.value).collect();
-        self.problem.set_values(problem.c(), &values)
+        check_dims(data)?;
+        let ws = &mut self.ws;
+        factor_spd(data.p, &mut ws.e, "P")?;
+        factor_spd(data.q, &mut ws.q_fac, "Q")?;
+        factor_spd(data.r, &mut ws.r_fac, "R")?;
+        spd_inverse(&ws.q_fac, &mut ws.q_inv);
+        spd_inverse(&ws.r_fac, &mut ws.r_inv);
+        ws.ae.gemm(1.0, data.a, &ws.e, 0.0);
+        ws.cae.gemm(1.0, data.c, &ws.ae, 0.0);
+        let layout = Layout { n: self.n, m: self.m };
+        let src = Sources { ae: &ws.ae, cae: &ws.cae, c: data.c, q_inv: &ws.q_inv, r_inv: &ws.r_inv };
+        for (v, e) in ws.values.iter_mut().zip(self.problem.entries()) {
+            *v = layout.value(e.mat, e.row, e.col, &src);
+        }
+        // Objective tr P: coefficient 1 on the diagonal entries of P.
+        for (k, c) in ws.c.iter_mut().enumerate() {
+            *c = match layout.var(k) {
+                Var28::P(i, j) if i == j => 1.0,
+                _ => 0.0,
+            };
+        }
+        self.problem.set_values(&ws.c, &ws.values)
     }
 
-    /// Reads `P_{k+1}`, `L`, `g`, `G x̂` and `τ` from a decision vector `x`.
+    /// Reads only the gain `L` (into `l`, `n × m`) and `τ` from a decision vector `x`, without
+    /// allocating: what a filter needs to certify its own `P_{k+1}`.
+    pub fn read_gain(&self, x: &[f64], l: &mut DMatrix<f64>) -> Result<[f64; 3], LmiError> {
+        if x.len() != self.problem.num_vars() {
+            return Err(LmiError::DimensionMismatch {
+                what: "decision vector x",
+                expected: self.problem.num_vars(),
+                found: x.len(),
+            });
+        }
+        if l.shape() != (self.n, self.m) {
+            return Err(LmiError::DimensionMismatch { what: "rows of the gain L", expected: self.n, found: l.nrows() });
+        }
+        for j in 0..self.m {
+            for i in 0..self.n {
+                l[(i, j)] = x[self.vars.l.scalar_index(i, j).expect("inside L")];
+            }
+        }
+        let t = |k: usize| x[self.vars.tau[k].scalar_index(0, 0).expect("scalar")];
+        Ok([t(0), t(1), t(2)])
+    }
+
+    /// Reads `P_{k+1}`, `L`, `g`, `G x̂` and `τ` from a decision vector `x` (allocates).
     pub fn read(&self, x: &[f64], data: &FilterSdpData<'_>) -> Result<FilterSdpSolution, LmiError> {
         check_dims(data)?;
         let p_next = self.map.matrix(x, self.vars.p)?;
@@ -214,6 +361,114 @@ impl FilterSdp {
         let k = DMatrix::identity(self.n, self.n) - &l * data.c;
         let g_x_hat = &k * (data.a * data.x_hat) - &g;
         Ok(FilterSdpSolution { p_next, l, g, g_x_hat, tau })
+    }
+}
+
+/// The scalar unknowns of (28) in the builder's order: `P` (packed upper triangle, column by
+/// column), `L` (column-major), `g`, `τ₁, τ₂, τ₃`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Var28 {
+    P(usize, usize),
+    L(usize, usize),
+    G(usize),
+    Tau(usize),
+}
+
+/// The data matrices the entries of (28) are made of.
+struct Sources<'a> {
+    ae: &'a DMatrix<f64>,
+    cae: &'a DMatrix<f64>,
+    c: &'a DMatrix<f64>,
+    q_inv: &'a DMatrix<f64>,
+    r_inv: &'a DMatrix<f64>,
+}
+
+/// Where things sit in the block `[[P, Π], [Πᵀ, Θ]]` of order `n + 1 + 2n + m`.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    n: usize,
+    m: usize,
+}
+
+impl Layout {
+    fn var(&self, k: usize) -> Var28 {
+        let np = self.n * (self.n + 1) / 2;
+        let nl = self.n * self.m;
+        if k < np {
+            let mut c = 0;
+            while (c + 1) * (c + 2) / 2 <= k {
+                c += 1;
+            }
+            Var28::P(k - c * (c + 1) / 2, c)
+        } else if k < np + nl {
+            let j = k - np;
+            Var28::L(j % self.n, j / self.n)
+        } else if k < np + nl + self.n {
+            Var28::G(k - np - nl)
+        } else {
+            Var28::Tau(k - np - nl - self.n)
+        }
+    }
+
+    /// The SDPA value of entry `(row, col)` (`row ≤ col`) of matrix `mat`: `−(constant)` for
+    /// `F₀`, the coefficient of the unknown `mat − 1` otherwise. Mirrors `build` term by term.
+    fn value(&self, mat: usize, row: usize, col: usize, ws: &Sources<'_>) -> f64 {
+        let n = self.n;
+        // Π's column blocks, relative to column n: g (0), z (1..=n), w (n+1..=2n), v (2n+1..).
+        if mat == 0 {
+            return -if col < n {
+                0.0 // P block has no constant
+            } else if row < n {
+                match col - n {
+                    0 => 0.0,
+                    j if j <= n => ws.ae[(row, j - 1)],
+                    j if j <= 2 * n => f64::from(u8::from(row == j - 1 - n)),
+                    _ => 0.0,
+                }
+            } else if row == n && col == n {
+                1.0
+            } else {
+                0.0
+            };
+        }
+        let (i, j) = (row, col);
+        match self.var(mat - 1) {
+            Var28::P(a, b) => f64::from(u8::from(a == i && b == j)),
+            Var28::G(a) => f64::from(u8::from(i == a && j == n)),
+            Var28::L(a, b) => {
+                if i != a || j < n + 1 {
+                    return 0.0;
+                }
+                match j - n {
+                    z if z <= n => -ws.cae[(b, z - 1)],
+                    w if w <= 2 * n => -ws.c[(b, w - 1 - n)],
+                    v => f64::from(u8::from(v - 1 - 2 * n == b)) * -1.0,
+                }
+            }
+            Var28::Tau(t) => {
+                if i < n {
+                    return 0.0;
+                }
+                let (bi, bj) = (i - n, j - n);
+                if bi == 0 && bj == 0 {
+                    return -1.0; // 1 − τ₁ − τ₂ − τ₃
+                }
+                let region = |k: usize| match k {
+                    0 => 0,
+                    k if k <= n => 1,
+                    k if k <= 2 * n => 2,
+                    _ => 3,
+                };
+                if region(bi) != t + 1 || region(bj) != t + 1 {
+                    return 0.0;
+                }
+                match t {
+                    0 => f64::from(u8::from(bi == bj)),
+                    1 => ws.q_inv[(bi - 1 - n, bj - 1 - n)],
+                    _ => ws.r_inv[(bi - 1 - 2 * n, bj - 1 - 2 * n)],
+                }
+            }
+        }
     }
 }
 
@@ -265,6 +520,38 @@ mod tests {
         assert_eq!(sol.tau, tau);
         assert_eq!(sol.l, l);
         assert!((sol.g_x_hat - &k * &a * &x).norm() < 1e-15);
+    }
+
+    #[test]
+    fn closed_form_update_reproduces_the_builder() {
+        // Pseudo-random data of several sizes: the values written by `update` equal those of a
+        // fresh build with the builder, entry for entry.
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        for (n, m) in [(1, 1), (2, 1), (3, 2), (4, 3), (4, 4), (6, 2)] {
+            let spd = |k: usize, rnd: &mut dyn FnMut() -> f64| {
+                let b = DMatrix::from_fn(k, k, |_, _| rnd());
+                &b * b.transpose() + DMatrix::identity(k, k) * 0.5
+            };
+            let a = DMatrix::from_fn(n, n, |_, _| rnd());
+            let c = DMatrix::from_fn(m, n, |_, _| rnd());
+            let (q, r, p) = (spd(n, &mut rnd), spd(m, &mut rnd), spd(n, &mut rnd));
+            let x = DVector::from_fn(n, |_, _| rnd());
+            let d = FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x };
+            let (reference, _, _) = build(&d).unwrap();
+            // Build for other data first, then update to `d`.
+            let a0 = DMatrix::identity(n, n);
+            let mut sdp = FilterSdp::new(&FilterSdpData { a: &a0, ..d }).unwrap();
+            sdp.update(&d).unwrap();
+            assert!(sdp.problem().same_structure(&reference));
+            assert_eq!(sdp.problem().c(), reference.c());
+            for (x, y) in sdp.problem().entries().iter().zip(reference.entries()) {
+                assert!((x.value - y.value).abs() <= 1e-12 * (1.0 + y.value.abs()), "n {n} m {m}: {x:?} vs {y:?}");
+            }
+        }
     }
 
     #[test]
