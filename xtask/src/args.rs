@@ -15,7 +15,7 @@ impl Args {
             if switches.contains(&name) {
                 pairs.push((name.to_owned(), None));
             } else if valued.contains(&name) {
-                let v = it.next().ok_or_else(|| format!("--{name} needs a value"))?;
+                let v = it.next().filter(|v| !v.starts_with("--")).ok_or_else(|| format!("--{name} needs a value"))?;
                 pairs.push((name.to_owned(), Some(v.clone())));
             } else {
                 return Err(format!("unknown option --{name}"));
@@ -30,8 +30,25 @@ impl Args {
     }
 
     /// Whether the switch `--name` was given.
-    #[allow(dead_code)]
     pub fn flag(&self, name: &str) -> bool {
         self.pairs.iter().any(|(n, v)| n == name && v.is_none())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_and_switches() {
+        let a = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let p = Args::parse(&a(&["--out", "x", "--quick"]), &["out"], &["quick"]).unwrap();
+        assert_eq!(p.value("out"), Some("x"));
+        assert!(p.flag("quick"));
+        assert!(
+            Args::parse(&a(&["--out", "--quick"]), &["out"], &["quick"]).err().unwrap().contains("--out needs a value")
+        );
+        assert!(Args::parse(&a(&["--nope"]), &["out"], &[]).err().unwrap().contains("unknown option --nope"));
+        assert!(Args::parse(&a(&["stray"]), &["out"], &[]).err().unwrap().contains("unexpected argument"));
     }
 }

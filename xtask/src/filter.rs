@@ -65,9 +65,13 @@ pub struct Model {
 
 /// 1-based line and column of a byte offset.
 fn line_col(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
     let line = before.matches('\n').count() + 1;
-    let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    let col = before[before.rfind('\n').map_or(0, |i| i + 1)..].chars().count() + 1;
     (line, col)
 }
 
@@ -99,7 +103,7 @@ fn matrix(
             return Err(at(format!("entry ({}, {}) is not finite", i + 1, j + 1)));
         }
     }
-    if width == 0 {
+    if width == 0 && name != "b" {
         return Err(at("rows are empty".into()));
     }
     Ok(DMatrix::from_fn(m.len(), width, |i, j| m[i][j]))
@@ -144,7 +148,10 @@ pub fn read_model(path: &Path, text: &str) -> Result<Model, String> {
     let input_range = match (&f.u_lower, &f.u_upper) {
         (Some(lo), Some(hi)) => Some((vector(text, path, "u_lower", lo, p)?, vector(text, path, "u_upper", hi, p)?)),
         (None, None) => None,
-        _ => return Err(format!("{}: give both `u_lower` and `u_upper`, or neither", path.display())),
+        (Some(v), None) | (None, Some(v)) => {
+            let (l, c) = line_col(text, v.span().start);
+            return Err(format!("{}:{l}:{c}: give both `u_lower` and `u_upper`, or neither", path.display()));
+        }
     };
     Ok(Model { a, b, c, q, r, p0, x0, input_range })
 }
@@ -152,6 +159,8 @@ pub fn read_model(path: &Path, text: &str) -> Result<Model, String> {
 /// One row of `DATA.csv`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DataRow {
+    /// 1-based line of the row in the file.
+    pub line: usize,
     /// The row's `k`.
     pub k: u64,
     /// `u_k`.
@@ -162,6 +171,7 @@ pub struct DataRow {
 
 /// Reads `DATA.csv` for `p` inputs and `m` outputs (errors give `file:line:column`).
 pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<DataRow>, String> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text); // a UTF-8 byte-order mark (spreadsheet exports)
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
     let Some((hl, header)) = lines.next() else {
         return Err(format!("{}:1:1: empty file, expected the header `k,u1,…,y1,…`", path.display()));
@@ -170,14 +180,17 @@ pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<Data
         .chain((1..=p).map(|i| format!("u{i}")))
         .chain((1..=m).map(|i| format!("y{i}")))
         .collect();
-    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    let raw: Vec<&str> = header.split(',').collect();
+    let cols: Vec<&str> = raw.iter().map(|c| c.trim()).collect();
     let mut col_pos = 1;
     for (j, want) in expected.iter().enumerate() {
+        // Point at the cell's first non-blank character.
+        let here = col_pos + raw.get(j).map_or(0, |c| c.chars().take_while(|ch| ch.is_whitespace()).count());
         match cols.get(j) {
             Some(got) if got == want => {}
             got => {
                 return Err(format!(
-                    "{}:{}:{col_pos}: header column {} is {:?}, expected {want:?} (model has p = {p} inputs, m = {m} outputs)",
+                    "{}:{}:{here}: header column {} is {:?}, expected {want:?} (model has p = {p} inputs, m = {m} outputs)",
                     path.display(),
                     hl + 1,
                     j + 1,
@@ -185,7 +198,7 @@ pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<Data
                 ));
             }
         }
-        col_pos += cols[j].len() + 1;
+        col_pos += raw[j].chars().count() + 1;
     }
     if cols.len() > expected.len() {
         return Err(format!(
@@ -200,8 +213,9 @@ pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<Data
         let mut fields = Vec::with_capacity(expected.len());
         let mut col = 1;
         for f in line.split(',') {
-            fields.push((col, f.trim()));
-            col += f.len() + 1;
+            let lead = f.chars().take_while(|ch| ch.is_whitespace()).count();
+            fields.push((col + lead, f.trim()));
+            col += f.chars().count() + 1;
         }
         if fields.len() != expected.len() {
             return Err(format!(
@@ -226,10 +240,15 @@ pub fn read_data(path: &Path, text: &str, p: usize, m: usize) -> Result<Vec<Data
             }
             vals.push(v);
         }
-        rows.push(DataRow { k, u: DVector::from_column_slice(&vals[..p]), y: DVector::from_column_slice(&vals[p..]) });
+        rows.push(DataRow {
+            line: li + 1,
+            k,
+            u: DVector::from_column_slice(&vals[..p]),
+            y: DVector::from_column_slice(&vals[p..]),
+        });
     }
     if rows.is_empty() {
-        return Err(format!("{}: no data rows after the header", path.display()));
+        return Err(format!("{}:{}:1: no data rows after the header", path.display(), hl + 2));
     }
     Ok(rows)
 }
@@ -247,8 +266,9 @@ pub fn run_filter(model: &Model, data: &[DataRow], estimator: &str, solver: &str
             let mut kf = KalmanFilter::new(model.x0.clone(), model.p0.clone(), model.q.clone(), model.r.clone(), p)
                 .map_err(e)?;
             for row in data {
-                let est = kf.step(&sm, &row.u, &row.y).map_err(|err| format!("row k = {}: {err}", row.k))?;
-                let _ = write!(out, "{}", row.k + 1);
+                let est =
+                    kf.step(&sm, &row.u, &row.y).map_err(|err| format!("line {} (k = {}): {err}", row.line, row.k))?;
+                let _ = write!(out, "{}", next_k(row)?);
                 for v in est.mean.iter() {
                     let _ = write!(out, ",{v:e}");
                 }
@@ -275,6 +295,16 @@ pub fn run_filter(model: &Model, data: &[DataRow], estimator: &str, solver: &str
     }
 }
 
+/// An estimator's complaint about the model, in the model file's terms.
+fn model_err(e: estimators::EstimatorError) -> String {
+    format!("model: {e} (Q, R, P0, x0 are the model file's `q`, `r`, `p0`, `x0`)")
+}
+
+/// The output label `k + 1` of a row.
+fn next_k(row: &DataRow) -> Result<u64, String> {
+    row.k.checked_add(1).ok_or_else(|| format!("line {}: k = {} is too large", row.line, row.k))
+}
+
 fn run_set<S: UpdateSolver>(
     model: &Model,
     data: &[DataRow],
@@ -282,21 +312,20 @@ fn run_set<S: UpdateSolver>(
     solver: S,
     out: &mut String,
 ) -> Result<(), String> {
-    let e = |e: estimators::EstimatorError| e.to_string();
     let (x0, p0, q, r) = (model.x0.clone(), model.p0.clone(), model.q.clone(), model.r.clone());
     let mut f = if estimator == "yang-li" {
         let (lo, hi) = model
             .input_range
             .as_ref()
             .ok_or("--estimator yang-li needs the input range `u_lower`, `u_upper` in the model file")?;
-        yang_li::without_input(x0, p0, q, r, lo, hi, solver).map_err(e)?
+        yang_li::without_input(x0, p0, q, r, lo, hi, solver).map_err(model_err)?
     } else {
-        SetMembershipFilter::new(x0, p0, q, r, model.b.ncols(), solver).map_err(e)?
+        SetMembershipFilter::new(x0, p0, q, r, model.b.ncols(), solver).map_err(model_err)?
     };
     let sm = StepModel::new(&model.a, &model.b, &model.c);
     for row in data {
-        let est = f.step(&sm, &row.u, &row.y).map_err(|err| format!("row k = {}: {err}", row.k))?;
-        let _ = write!(out, "{}", row.k + 1);
+        let est = f.step(&sm, &row.u, &row.y).map_err(|err| format!("line {} (k = {}): {err}", row.line, row.k))?;
+        let _ = write!(out, "{}", next_k(row)?);
         for v in est.center.iter().chain(est.lower.iter()).chain(est.upper.iter()) {
             let _ = write!(out, ",{v:e}");
         }
@@ -347,7 +376,7 @@ mod tests {
         let err = read_model(p, &bad).unwrap_err();
         assert!(err.starts_with("m.toml:4:"), "{err}");
         let bad = format!("{MODEL}u_lower = [0.0]\n");
-        assert!(read_model(p, &bad).unwrap_err().contains("both `u_lower` and `u_upper`"));
+        assert!(read_model(p, &bad).unwrap_err().starts_with("m.toml:8:11: give both `u_lower` and `u_upper`"));
     }
 
     #[test]
@@ -366,14 +395,23 @@ mod tests {
         let err = read_data(p, "k,u1,y1\n0,NaN,2\n", 1, 1).unwrap_err();
         assert!(err.contains("d.csv:2:3: u1 = NaN is not finite"), "{err}");
         assert!(read_data(p, "", 1, 1).unwrap_err().contains("empty file"));
-        assert!(read_data(p, "k,u1,y1\n", 1, 1).unwrap_err().contains("no data rows"));
+        assert!(read_data(p, "k,u1,y1\n", 1, 1).unwrap_err().starts_with("d.csv:2:1: no data rows"));
+        // Columns point at the cell's text even with padding; a byte-order mark is skipped.
+        let err = read_data(p, " k , u1 , z1 \n", 1, 1).unwrap_err();
+        assert!(err.starts_with("d.csv:1:11: header column 3 is \"z1\""), "{err}");
+        assert_eq!(read_data(p, "\u{feff}k,u1,y1\n0,1,2\n", 1, 1).unwrap()[0].line, 2);
     }
 
     #[test]
     fn every_estimator_runs_and_the_set_contains_what_the_centre_implies() {
         let model = read_model(Path::new("m.toml"), MODEL).unwrap();
         let data: Vec<DataRow> = (0..50)
-            .map(|k| DataRow { k, u: DVector::from_element(1, 1.0), y: DVector::from_element(1, 0.01 * k as f64) })
+            .map(|k| DataRow {
+                line: k as usize + 2,
+                k,
+                u: DVector::from_element(1, 1.0),
+                y: DVector::from_element(1, 0.01 * k as f64),
+            })
             .collect();
         for (est, solver) in [("smf", "two-multiplier"), ("smf", "faer-ipm"), ("kf", "")] {
             let csv = run_filter(&model, &data, est, solver).unwrap();
@@ -386,5 +424,16 @@ mod tests {
         }
         assert!(run_filter(&model, &data, "yang-li", "two-multiplier").unwrap_err().contains("u_lower"));
         assert!(run_filter(&model, &data, "ukf", "").unwrap_err().contains("unknown estimator"));
+        // k + 1 overflowing is an error naming the line, not a panic.
+        let big =
+            [DataRow { line: 2, k: u64::MAX, u: DVector::from_element(1, 1.0), y: DVector::from_element(1, 0.0) }];
+        for est in ["smf", "kf"] {
+            let err = run_filter(&model, &big, est, "two-multiplier").unwrap_err();
+            assert!(err.contains("line 2: k = 18446744073709551615 is too large"), "{err}");
+        }
+        // A model the estimator rejects names the file's keys.
+        let mut bad = model.clone();
+        bad.q[(0, 0)] = -1.0;
+        assert!(run_filter(&bad, &data, "smf", "two-multiplier").unwrap_err().contains("the model file's `q`"));
     }
 }

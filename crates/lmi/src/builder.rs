@@ -117,9 +117,14 @@ impl Affine {
         Affine { constant: k * self.constant, terms: self.terms.iter().map(|&(i, c)| (i, k * c)).collect() }
     }
 
-    /// Value at `x`.
-    pub fn eval(&self, x: &[f64]) -> f64 {
-        self.constant + self.terms.iter().map(|&(i, c)| c * x[i]).sum::<f64>()
+    /// Value at `x`; an index beyond `x` is an error.
+    pub fn eval(&self, x: &[f64]) -> Result<f64, LmiError> {
+        let mut v = self.constant;
+        for &(i, c) in &self.terms {
+            let xi = x.get(i).ok_or_else(|| LmiError::UnknownVariable(format!("x[{i}] of {} unknowns", x.len())))?;
+            v += c * xi;
+        }
+        Ok(v)
     }
 
     /// Terms sorted by index with repeated indices summed (coefficients that cancel to zero are
@@ -266,7 +271,7 @@ impl AffineMatrix {
     /// Assembles a block matrix from rows of blocks; blocks in a row share their row count and
     /// blocks in a column share their column count.
     pub fn block(rows: &[&[&AffineMatrix]]) -> Result<AffineMatrix, LmiError> {
-        let Some(first_row) = rows.first() else {
+        let Some(first_row) = rows.first().filter(|r| !r.is_empty()) else {
             return Err(LmiError::InvalidProblem("empty block matrix".into()));
         };
         let col_widths: Vec<usize> = first_row.iter().map(|b| b.cols).collect();
@@ -335,9 +340,15 @@ impl AffineMatrix {
         acc
     }
 
-    /// Value at `x`.
-    pub fn eval(&self, x: &[f64]) -> DMatrix<f64> {
-        DMatrix::from_fn(self.rows, self.cols, |i, j| self.at(i, j).eval(x))
+    /// Value at `x`; an index beyond `x` is an error.
+    pub fn eval(&self, x: &[f64]) -> Result<DMatrix<f64>, LmiError> {
+        let mut out = DMatrix::zeros(self.rows, self.cols);
+        for j in 0..self.cols {
+            for i in 0..self.rows {
+                out[(i, j)] = self.at(i, j).eval(x)?;
+            }
+        }
+        Ok(out)
     }
 }
 
@@ -666,7 +677,8 @@ mod tests {
         assert_eq!(map.var("L").unwrap(), l);
         // The SDPA slack X(x) equals the affine matrix evaluated at x.
         let xs = prob.slack(&x).unwrap();
-        assert_eq!(xs[0], pm.eval(&x));
+        assert_eq!(xs[0], pm.eval(&x).unwrap());
+        assert!(pm.eval(&x[..3]).unwrap_err().to_string().contains("of 3 unknowns"));
     }
 
     #[test]
@@ -678,19 +690,21 @@ mod tests {
         let a = DMatrix::from_row_slice(2, 2, &[0.5, 1.0, -2.0, 4.0]);
         let x: Vec<f64> = (0..6).map(|i| 0.3 * i as f64 - 0.7).collect();
         let lv = DMatrix::from_column_slice(2, 3, &x);
-        assert_eq!(lm.eval(&x), lv);
+        assert_eq!(lm.eval(&x).unwrap(), lv);
         let prod = lm.mul_right(&c).unwrap();
-        assert!((prod.eval(&x) - &lv * &c).abs().max() < 1e-14);
+        assert!((prod.eval(&x).unwrap() - &lv * &c).abs().max() < 1e-14);
         let left = lm.mul_left(&a).unwrap();
-        assert!((left.eval(&x) - &a * &lv).abs().max() < 1e-14);
+        assert!((left.eval(&x).unwrap() - &a * &lv).abs().max() < 1e-14);
         let blk =
             AffineMatrix::block(&[&[&AffineMatrix::constant(&a), &lm], &[&lm.transpose(), &AffineMatrix::zeros(3, 3)]])
                 .unwrap();
-        let v = blk.eval(&x);
+        let v = blk.eval(&x).unwrap();
         assert_eq!(v.nrows(), 5);
         assert_eq!(v[(0, 3)], lv[(0, 1)]);
         assert_eq!(v[(3, 0)], lv[(0, 1)]);
         assert!(AffineMatrix::block(&[&[&lm], &[&AffineMatrix::zeros(2, 2)]]).is_err());
+        assert!(AffineMatrix::block(&[&[]]).unwrap_err().to_string().contains("empty block matrix"));
+        assert!(AffineMatrix::block(&[]).is_err());
     }
 
     #[test]

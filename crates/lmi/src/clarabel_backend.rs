@@ -189,7 +189,7 @@ impl SdpBackend for ClarabelBackend {
             let z = &sol.z[st.row_offsets[b]..st.row_offsets[b + 1]];
             let y = &mut solution.dual[b];
             match blk {
-                Block::Psd(_) => smat_into(z, y),
+                Block::Psd(_) => smat_into(z, y)?,
                 Block::Nonneg(n) => {
                     y.fill(0.0);
                     for i in 0..*n {

@@ -335,8 +335,15 @@ impl FilterSdp {
                 found: x.len(),
             });
         }
-        if l.shape() != (self.n, self.m) {
+        if l.nrows() != self.n {
             return Err(LmiError::DimensionMismatch { what: "rows of the gain L", expected: self.n, found: l.nrows() });
+        }
+        if l.ncols() != self.m {
+            return Err(LmiError::DimensionMismatch {
+                what: "columns of the gain L",
+                expected: self.m,
+                found: l.ncols(),
+            });
         }
         for j in 0..self.m {
             for i in 0..self.n {

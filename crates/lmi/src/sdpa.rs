@@ -43,8 +43,8 @@
 //! * 1 ≤ number of blocks ≤ [`MAX_BLOCKS`];
 //! * 1 ≤ order of each block ≤ [`MAX_BLOCK_SIZE`];
 //! * the dense storage the block structure implies, `Σ n(n+1)/2` over PSD blocks plus `Σ n`
-//!   over diagonal blocks, is at most [`MAX_TOTAL_ENTRIES`]. A single PSD block is therefore
-//!   of order at most 44 720.
+//!   over diagonal blocks, is at most [`MAX_TOTAL_ENTRIES`] (10⁷, i.e. 80 MB per dense copy; a
+//!   solver holds several). A single PSD block is therefore of order at most 4 471.
 //!
 //! # Errors
 //!
@@ -68,7 +68,7 @@ pub const MAX_BLOCKS: usize = 1_000_000;
 pub const MAX_BLOCK_SIZE: usize = 100_000;
 /// Largest total number of independent entries of one block-diagonal matrix
 /// (`Σ n(n+1)/2` over PSD blocks plus `Σ n` over diagonal blocks) the reader accepts.
-pub const MAX_TOTAL_ENTRIES: u64 = 1_000_000_000;
+pub const MAX_TOTAL_ENTRIES: u64 = 10_000_000;
 
 /// Largest capacity preallocated from a header count; beyond it vectors grow as data arrive.
 const PREALLOC_CAP: usize = 1024;
@@ -485,10 +485,12 @@ mod tests {
         assert_err("2\n2\n1 1000000000000\n", 3, "block size 2 = 1000000000000 exceeds the limit 100000");
         assert_err("2\n1\n-1000000000000\n", 3, "exceeds the limit");
         assert_err("2\n2\n4 0\n", 3, "block size 2 is zero");
-        // 50 000 is a legal order but a dense block of that order is too much storage.
-        assert_err("2\n1\n50000\n", 3, "exceeds the limit 1000000000");
-        let many = vec!["-100000"; 10_001].join(" ");
-        assert_err(&format!("2\n10001\n{many}\n"), 3, "up to block 10001");
+        // 5 000 is a legal order but a dense block of that order is too much storage.
+        assert_err("2\n1\n5000\n", 3, "exceeds the limit 10000000");
+        // The largest PSD block within the limit is accepted (here: a problem with no entries).
+        assert!(!matches!(read_sdpa("1\n1\n4471\n1\n"), Err(e) if e.to_string().contains("exceeds the limit")));
+        let many = vec!["-100000"; 101].join(" ");
+        assert_err(&format!("2\n101\n{many}\n"), 3, "up to block 101");
         // m at the limit is accepted as a header; the missing c is reported at end of input.
         assert_err("10000000\n1\n1\n", 4, "objective coefficient 1 of m = 10000000");
     }

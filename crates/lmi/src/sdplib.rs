@@ -127,6 +127,10 @@ fn parse_outcome(cell: &str) -> Option<Expected> {
 /// `tr(FᵢY) ≈ 0`, `tr(F₀Y) > 0`; for [`SolveStatus::DualInfeasible`]: `Σ xᵢFᵢ ⪰ 0`, `cᵀx < 0`
 /// (both up to relative tolerance `tol`).
 pub fn check_certificate(problem: &SdpProblem, solution: &SdpSolution, tol: f64) -> Result<(), String> {
+    // Every comparison below is false for NaN: reject non-finite certificates first.
+    if solution.x.iter().chain(solution.dual.iter().flat_map(|y| y.iter())).any(|v| !v.is_finite()) {
+        return Err("the certificate has non-finite entries".into());
+    }
     match solution.status {
         SolveStatus::PrimalInfeasible | SolveStatus::AlmostPrimalInfeasible => {
             let t = problem.traces(&solution.dual).map_err(|e| e.to_string())?;
@@ -283,6 +287,24 @@ pub fn verdict(p: &SuiteProblem, backend: &str, problem: &SdpProblem, solution: 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nan_certificates_are_rejected() {
+        use crate::problem::{Block, Entry};
+        let p = SdpProblem::new(
+            vec![Block::Psd(1)],
+            vec![1.0],
+            vec![Entry { mat: 1, block: 0, row: 0, col: 0, value: 1.0 }],
+        )
+        .unwrap();
+        for status in [SolveStatus::PrimalInfeasible, SolveStatus::DualInfeasible] {
+            let mut sol = SdpSolution::new(&p);
+            sol.status = status;
+            sol.x[0] = f64::NAN;
+            sol.dual[0][(0, 0)] = f64::NAN;
+            assert!(check_certificate(&p, &sol, 1e-6).unwrap_err().contains("non-finite"), "{status}");
+        }
+    }
 
     #[test]
     fn outcomes_and_tolerances() {

@@ -6,6 +6,16 @@
 
 use nalgebra::DMatrix;
 
+use crate::error::LmiError;
+
+fn check(n: usize, len: usize, what: &'static str) -> Result<(), LmiError> {
+    if len == svec_len(n) {
+        Ok(())
+    } else {
+        Err(LmiError::DimensionMismatch { what, expected: svec_len(n), found: len })
+    }
+}
+
 /// Length of `svec` of an `n × n` matrix: `n(n+1)/2`.
 pub fn svec_len(n: usize) -> usize {
     n * (n + 1) / 2
@@ -22,21 +32,32 @@ pub fn svec_scale(i: usize, j: usize) -> f64 {
     if i == j { 1.0 } else { std::f64::consts::SQRT_2 }
 }
 
-/// `svec(x)` written into `out` (length `n(n+1)/2`); reads the upper triangle of `x`.
-pub fn svec_into(x: &DMatrix<f64>, out: &mut [f64]) {
+/// `svec(x)` written into `out` (length `n(n+1)/2`); reads the upper triangle of the square `x`.
+pub fn svec_into(x: &DMatrix<f64>, out: &mut [f64]) -> Result<(), LmiError> {
     let n = x.nrows();
-    debug_assert_eq!(out.len(), svec_len(n));
+    if x.ncols() != n {
+        return Err(LmiError::DimensionMismatch { what: "columns of a square matrix", expected: n, found: x.ncols() });
+    }
+    check(n, out.len(), "length of svec")?;
     for j in 0..n {
         for i in 0..=j {
             out[svec_index(i, j)] = svec_scale(i, j) * x[(i, j)];
         }
     }
+    Ok(())
 }
 
-/// The symmetric matrix whose `svec` is `v`, written into `out` (both triangles).
-pub fn smat_into(v: &[f64], out: &mut DMatrix<f64>) {
+/// The symmetric matrix whose `svec` is `v`, written into the square `out` (both triangles).
+pub fn smat_into(v: &[f64], out: &mut DMatrix<f64>) -> Result<(), LmiError> {
     let n = out.nrows();
-    debug_assert_eq!(v.len(), svec_len(n));
+    if out.ncols() != n {
+        return Err(LmiError::DimensionMismatch {
+            what: "columns of a square matrix",
+            expected: n,
+            found: out.ncols(),
+        });
+    }
+    check(n, v.len(), "length of svec")?;
     for j in 0..n {
         for i in 0..=j {
             let x = v[svec_index(i, j)] / svec_scale(i, j);
@@ -44,6 +65,7 @@ pub fn smat_into(v: &[f64], out: &mut DMatrix<f64>) {
             out[(j, i)] = x;
         }
     }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -58,12 +80,14 @@ mod tests {
         let b = DMatrix::from_fn(n, n, |i, j| (i as f64 - j as f64).powi(2) - 1.0);
         let mut va = vec![0.0; svec_len(n)];
         let mut vb = vec![0.0; svec_len(n)];
-        svec_into(&a, &mut va);
-        svec_into(&b, &mut vb);
+        svec_into(&a, &mut va).unwrap();
+        svec_into(&b, &mut vb).unwrap();
         let dot: f64 = va.iter().zip(&vb).map(|(x, y)| x * y).sum();
         assert!((dot - (&a * &b).trace()).abs() < 1e-12 * dot.abs().max(1.0));
         let mut back = DMatrix::zeros(n, n);
-        smat_into(&va, &mut back);
+        smat_into(&va, &mut back).unwrap();
+        assert!(smat_into(&va[1..], &mut back).unwrap_err().to_string().contains("length of svec"));
+        assert!(svec_into(&a, &mut vec![0.0; 3]).is_err());
         assert!((back - &a).abs().max() < 1e-13);
         // Layout: (0,0), (0,1), (1,1), (0,2), …
         assert_eq!(svec_index(0, 1), 1);

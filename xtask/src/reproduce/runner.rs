@@ -128,6 +128,7 @@ pub fn metrics(run: &Run, truth: &[DVector<f64>]) -> Metrics {
     let steps = run.snapshots.len() - 1;
     let mut sq = vec![0.0; n];
     let mut sum = vec![0.0; n];
+    let errors: Vec<DVector<f64>> = (1..=steps).map(|k| &run.snapshots[k].centre - &truth[k]).collect();
     let mut max_abs = vec![0.0f64; n];
     let mut width = vec![0.0; n];
     let mut outside = 0;
@@ -145,7 +146,8 @@ pub fn metrics(run: &Run, truth: &[DVector<f64>]) -> Metrics {
         trace += s.shape.trace();
         if run.is_set {
             let d = normalized_distance(&truth[k], &s.centre, &s.shape);
-            max_d = max_d.max(d);
+            // NaN propagates (f64::max would drop it).
+            max_d = if d.is_nan() || max_d.is_nan() { f64::NAN } else { max_d.max(d) };
             // NaN counts as outside.
             if d.is_nan() || d > 1.0 + OUTSIDE_TOL {
                 outside += 1;
@@ -162,7 +164,13 @@ pub fn metrics(run: &Run, truth: &[DVector<f64>]) -> Metrics {
         initial_normalized_distance: normalized_distance(&truth[0], &s0.centre, &s0.shape),
         rmse: sq.iter().map(|s| (s / cnt).sqrt()).collect(),
         max_abs_error: max_abs,
-        error_std: sq.iter().zip(&sum).map(|(s, m)| (s / cnt - (m / cnt).powi(2)).max(0.0).sqrt()).collect(),
+        // Two passes (mean, then spread): no cancellation when the bias dominates.
+        error_std: (0..n)
+            .map(|i| {
+                let mean = sum[i] / cnt;
+                (errors.iter().map(|e| (e[i] - mean).powi(2)).sum::<f64>() / cnt).sqrt()
+            })
+            .collect(),
         mean_bound_width: run.is_set.then(|| width.iter().map(|w| w / cnt).collect()),
         mean_trace: trace / cnt,
         fallback_steps: run.snapshots.iter().filter(|s| s.fallback).count(),

@@ -159,7 +159,7 @@ fn extended(
         "C measures γ, φ, φ̇ (no sideslip sensor): bounds ±0.002 rad/s, ±0.005 rad, ±0.002 rad/s; process noise \
          ±(2e-4, 5e-4, 1e-5, 5e-4) per 1 ms step; the filters get the covering ellipsoids Q, R."
             .into(),
-        "Worst case: both noises drawn on the boundary of those ellipsoids (seeded).".into(),
+        "Both noises drawn on the boundary of those ellipsoids, in random directions (seeded).".into(),
         "Slalom steering: front rows 5° sin(2π·0.2 t), rear rows −2.5° sin(2π·0.2 t); the [17]-style filter without \
          input knows only this range."
             .into(),
@@ -228,7 +228,10 @@ pub fn speed_schedule(n_steps: usize, sdp_steps: usize, seed: u64) -> Result<Sce
     }
     extended(
         "speed_schedule",
-        &format!("Extended: speed 2 → 8 m/s over {} s (time-varying A_p, B_p), no sideslip sensor", n_steps as f64 * TS),
+        &format!(
+            "Extended: speed 2 → 8 m/s over {} s (time-varying A_p, B_p), no sideslip sensor",
+            n_steps as f64 * TS
+        ),
         steps,
         seed,
         sdp_steps,
