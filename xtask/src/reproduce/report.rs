@@ -320,7 +320,9 @@ pub fn markdown(s: &Summary) -> String {
         if !sc.solver_agreement.is_empty() {
             let _ = writeln!(
                 md,
-                "Agreement of the SDP backends with the two-multiplier solver (largest relative difference of tr P over the steps they ran): {}.\n",
+                "SDP-backed filters against the two-multiplier filter, each along its own run (largest relative difference of \
+                 tr P over the steps the backend ran; the runs' P_k histories are independent, so this is trajectory \
+                 divergence — per-step agreement on the same data is tested in `estimators`): {}.\n",
                 sc.solver_agreement.iter().map(|(l, v)| format!("{l}: {v:.1e}")).collect::<Vec<_>>().join(", ")
             );
         }
