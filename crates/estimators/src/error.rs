@@ -46,6 +46,21 @@ pub enum EstimatorError {
         /// Upper bound given.
         upper: f64,
     },
+    /// An input given to a filter that treats the input as a bounded disturbance
+    /// ([`InputModel::BoundedDisturbance`](crate::InputModel::BoundedDisturbance), the Yang–Li
+    /// reconstruction (a)) lies outside the declared box: the guarantee covers only inputs in
+    /// the box, so the step is refused.
+    #[error("input u[{index}] = {value} is outside the declared input box [{lower}, {upper}]")]
+    InputOutsideBounds {
+        /// Input component.
+        index: usize,
+        /// The value given.
+        value: f64,
+        /// Lower bound of the box.
+        lower: f64,
+        /// Upper bound of the box.
+        upper: f64,
+    },
     /// The filter needs at least one state and one output.
     #[error("empty system: {0}")]
     EmptySystem(&'static str),

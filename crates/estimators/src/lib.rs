@@ -23,10 +23,12 @@
 //!   is certified (module [`smf`]: the inflation rule and the fallback).
 //! * [`yang_li`]: the reconstruction of the paper's reference \[17\].
 //!
-//! Every step validates its input (dimensions, NaN/∞) and returns a typed [`EstimatorError`]
-//! leaving the filter unchanged; nothing panics on input. After construction, a Kalman step and
-//! a two-multiplier set-membership step perform no heap allocation, and return borrowed
-//! views of the filter's estimate.
+//! Every step validates its input (dimensions, NaN/∞, and for the Yang–Li reconstruction (a)
+//! that the input lies in its declared box) and returns a typed [`EstimatorError`] leaving the
+//! filter unchanged; nothing panics on input. After construction, a Kalman step and a
+//! two-multiplier set-membership step (including its fallbacks) perform no heap allocation, nor
+//! does an SDP-backed step after the first (which builds the SDP) with the default backend; all
+//! return borrowed views of the filter's estimate.
 
 mod dense;
 pub mod error;

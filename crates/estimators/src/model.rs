@@ -28,17 +28,19 @@ impl<'a> StepModel<'a> {
 /// Relative symmetry tolerance for `Q`, `R`, `P`: `|M_ij − M_ji| ≤ 1e-10 · max |M_kl|`.
 pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
 
+/// Checks that `m` is `rows × cols`; the error names the wrong dimension: `what.0` (for
+/// example "rows of A") or `what.1` ("columns of A").
 pub(crate) fn check_shape(
-    what: &'static str,
+    what: (&'static str, &'static str),
     m: &DMatrix<f64>,
     rows: usize,
     cols: usize,
 ) -> Result<(), EstimatorError> {
     if m.nrows() != rows {
-        return Err(EstimatorError::DimensionMismatch { what, expected: rows, found: m.nrows() });
+        return Err(EstimatorError::DimensionMismatch { what: what.0, expected: rows, found: m.nrows() });
     }
     if m.ncols() != cols {
-        return Err(EstimatorError::DimensionMismatch { what, expected: cols, found: m.ncols() });
+        return Err(EstimatorError::DimensionMismatch { what: what.1, expected: cols, found: m.ncols() });
     }
     Ok(())
 }
@@ -59,9 +61,9 @@ pub(crate) fn check_vec(what: &'static str, v: &DVector<f64>, len: usize) -> Res
 
 /// Checks the step matrices against `(n, p, m)`; allocation-free.
 pub(crate) fn check_model(model: &StepModel<'_>, n: usize, p: usize, m: usize) -> Result<(), EstimatorError> {
-    check_shape("A (rows × columns)", model.a, n, n)?;
-    check_shape("B (rows × columns)", model.b, n, p)?;
-    check_shape("C (rows × columns)", model.c, m, n)?;
+    check_shape(("rows of A", "columns of A"), model.a, n, n)?;
+    check_shape(("rows of B", "columns of B"), model.b, n, p)?;
+    check_shape(("rows of C", "columns of C"), model.c, m, n)?;
     check_finite("A", model.a.as_slice())?;
     check_finite("B", model.b.as_slice())?;
     check_finite("C", model.c.as_slice())
@@ -70,7 +72,8 @@ pub(crate) fn check_model(model: &StepModel<'_>, n: usize, p: usize, m: usize) -
 /// Validates a square symmetric positive definite matrix of order `n` and returns its
 /// symmetrised copy. Allocates (used at construction and in setters only).
 pub(crate) fn check_spd(what: &'static str, m: &DMatrix<f64>, n: usize) -> Result<DMatrix<f64>, EstimatorError> {
-    check_shape(what, m, n, n)?;
+    // Square: the order is the size that matters, so both dimensions are reported as `what`.
+    check_shape((what, what), m, n, n)?;
     check_finite(what, m.as_slice())?;
     let scale = m.amax();
     for j in 0..n {

@@ -1,8 +1,14 @@
 //! Solving (29) with any [`lmi::SdpBackend`]: the filter SDP (28) of
 //! [`lmi::filter_sdp::FilterSdp`] is built on the first step, its numbers rewritten at each
-//! later step, the backend set up once and called every step. Only `(L, τ)` are read back;
-//! the filter recomputes and certifies `P_{k+1}` itself. This path allocates (building the
-//! problem's values); the two-multiplier solver is the allocation-free one.
+//! later step, the backend set up once and called every step. Only `τ` is used (and `L`
+//! read back with [`FilterSdp::read_gain`] for diagnostics): the SDP's `L` is not the exact
+//! closed-form gain for its `τ` ([`UpdateSolver::gain_is_closed_form`] is `false`), so the filter
+//! replaces it by that gain, then recomputes and certifies `P_{k+1}` itself.
+//!
+//! The first step allocates (building (28), setting the backend up, the solution buffer); later
+//! steps rewrite the problem's numbers in place ([`FilterSdp::update`]) and, with a backend
+//! whose solve does not allocate (the default [`lmi::DEFAULT_BACKEND`]), perform no heap
+//! allocation (checked by `tests/alloc.rs`).
 
 use lmi::filter_sdp::{FilterSdp, FilterSdpData};
 use lmi::{SdpBackend, SdpSolution, SolverSettings};

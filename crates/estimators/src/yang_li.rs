@@ -12,7 +12,8 @@
 //!   Minkowski sum `Q_eff = (1 + 1/s) Q + (1 + s) B W Bᵀ`, `s = √(tr Q / tr BWBᵀ)` (a direct sum
 //!   of shapes, valid even when `B W Bᵀ` is singular, because `Q` is positive definite; `Q_eff` is
 //!   inflated by a bound on its rounding error). The filter then runs the same update
-//!   (28)/(29) with `Q_eff`.
+//!   (28)/(29) with `Q_eff`. The guarantee covers only inputs in the box: a step with `u_k`
+//!   outside it is refused with [`EstimatorError::InputOutsideBounds`], the filter unchanged.
 //! * **(b) With the input added to its predictor** ([`with_input`]): the predictor
 //!   `A x̂ + B u_k` followed by the filter-form update coincides with (13), so this variant
 //!   *is* the improved filter's update ([`SetMembershipFilter`] with [`InputModel::Predictor`](crate::smf::InputModel::Predictor)).

@@ -1,5 +1,5 @@
-//! No heap allocation in a Kalman step or a two-multiplier set-membership step after a warm-up
-//! step (a counting global allocator, counting only on this test's thread).
+//! No heap allocation in a Kalman step or a set-membership step (two-multiplier, fallback,
+//! re-certification with the fallback, Yang–Li (a), SDP-backed) after a warm-up step (a counting global allocator, counting only on this test's thread).
 #![allow(unsafe_code)]
 
 mod common;
@@ -8,7 +8,10 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use estimators::{KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, yang_li};
+use estimators::{
+    KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateProblem, UpdateSolution,
+    UpdateSolver, yang_li,
+};
 use nalgebra::{DMatrix, DVector};
 
 struct Counting;
@@ -57,6 +60,36 @@ fn count<R>(f: impl FnOnce() -> R) -> (R, usize) {
     let r = f();
     COUNTING.with(|c| c.set(false));
     (r, ALLOCATIONS.load(Ordering::Relaxed) - before)
+}
+
+fn r_mat(m: usize) -> DMatrix<f64> {
+    DMatrix::identity(m, m) * 0.05
+}
+
+/// Reports "solved" with a finite gain whose certified shape overflows.
+struct Overflowing;
+
+impl UpdateSolver for Overflowing {
+    fn name(&self) -> &str {
+        "overflowing"
+    }
+    fn prepare(&mut self, _: usize, _: usize) -> Result<(), estimators::EstimatorError> {
+        Ok(())
+    }
+    fn solve(
+        &mut self,
+        _: &UpdateProblem<'_>,
+        _: [f64; 3],
+        out: &mut UpdateSolution,
+    ) -> Result<(), estimators::EstimatorError> {
+        out.l.fill(1e200);
+        out.tau = [0.25, 0.25, 0.5];
+        out.status = lmi::SolveStatus::Solved;
+        Ok(())
+    }
+    fn gain_is_closed_form(&self) -> bool {
+        true
+    }
 }
 
 #[test]
@@ -116,6 +149,21 @@ fn steps_do_not_allocate_after_warm_up() {
             }
         });
         assert_eq!(n, 0, "Yang-Li step allocated (m = {m})");
+        // An input outside the box is refused without allocating.
+        let outside = DVector::from_vec(vec![2.0, 0.0]);
+        let (r, n) = count(|| yl.step(&model, &outside, &ys[0]).is_err());
+        assert!(r);
+        assert_eq!(n, 0, "refusing an input outside the box allocated (m = {m})");
+        // A "solved" result whose certification overflows: redone with the fallback.
+        let mut bad = SetMembershipFilter::new(x0.clone(), p0.clone(), q.clone(), r_mat(m), 2, Overflowing).unwrap();
+        bad.step(&model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                let e = bad.step(&model, &u, y).unwrap();
+                assert_eq!(e.report.fallback, Some(estimators::FallbackReason::InvalidSolution));
+            }
+        });
+        assert_eq!(n, 0, "re-certification with the fallback allocated (m = {m})");
         // Errors allocate nothing either (their messages are static).
         let (_, n) = count(|| smf.step(&model, &DVector::zeros(0), &ys[0]).is_err());
         assert_eq!(n, 0);

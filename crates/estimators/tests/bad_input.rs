@@ -58,9 +58,39 @@ fn bad_calls() -> Vec<BadCall> {
         ),
         ("dimension mismatch for u", a.clone(), b.clone(), c.clone(), DVector::zeros(3), y.clone()),
         ("dimension mismatch for y", a.clone(), b.clone(), c.clone(), u.clone(), DVector::zeros(4)),
-        ("dimension mismatch for A", DMatrix::zeros(3, 4), b.clone(), c.clone(), u.clone(), y.clone()),
-        ("dimension mismatch for B", a.clone(), DMatrix::zeros(4, 3), c.clone(), u.clone(), y.clone()),
-        ("dimension mismatch for C", a.clone(), b.clone(), DMatrix::zeros(2, 4), u.clone(), y.clone()),
+        ("dimension mismatch for rows of A", DMatrix::zeros(3, 4), b.clone(), c.clone(), u.clone(), y.clone()),
+        (
+            "dimension mismatch for columns of B: expected 2, found 3",
+            a.clone(),
+            DMatrix::zeros(4, 3),
+            c.clone(),
+            u.clone(),
+            y.clone(),
+        ),
+        (
+            "dimension mismatch for rows of C: expected 3, found 2",
+            a.clone(),
+            b.clone(),
+            DMatrix::zeros(2, 4),
+            u.clone(),
+            y.clone(),
+        ),
+        (
+            "dimension mismatch for columns of A: expected 4, found 3",
+            DMatrix::zeros(4, 3),
+            b.clone(),
+            c.clone(),
+            u.clone(),
+            y.clone(),
+        ),
+        (
+            "dimension mismatch for columns of C: expected 4, found 5",
+            a.clone(),
+            b.clone(),
+            DMatrix::zeros(3, 5),
+            u.clone(),
+            y.clone(),
+        ),
         ("A has a non-finite", a_nan, b.clone(), c.clone(), u.clone(), y.clone()),
         ("B has a non-finite", a.clone(), b_nan, c.clone(), u.clone(), y.clone()),
         ("C has a non-finite", a.clone(), b.clone(), c_inf, u.clone(), y.clone()),
@@ -170,4 +200,57 @@ fn extreme_values_give_errors_or_results_never_panics() {
     // finite numbers if it did.
     assert!(f.estimate().center.iter().all(|v| v.is_finite()));
     assert!(f.estimate().shape.iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn yang_li_refuses_an_input_outside_its_box_and_stays_unchanged() {
+    // Variant (a) covers B u only for u in the declared box; outside it the guarantee would
+    // silently break (a normalised distance ~7e5 was observed), so the step is refused.
+    let (a, b, c) = system();
+    let model = StepModel::new(&a, &b, &c);
+    let (lo, hi) = (DVector::from_vec(vec![-1.0, 0.0]), DVector::from_vec(vec![1.0, 0.5]));
+    let make = || {
+        estimators::yang_li::without_input(
+            DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
+            DMatrix::identity(4, 4) * 0.5,
+            DMatrix::identity(4, 4) * 0.01,
+            DMatrix::identity(3, 3) * 0.05,
+            &lo,
+            &hi,
+            estimators::TwoMultiplierSolver::new(),
+        )
+        .unwrap()
+    };
+    let y = DVector::from_vec(vec![0.1, 0.0, 0.2]);
+    let mut reference = make();
+    let mut tested = make();
+    for k in 0..3 {
+        let u = DVector::from_vec(vec![0.3 * k as f64 - 0.5, 0.25]);
+        reference.step(&model, &u, &y).unwrap();
+        tested.step(&model, &u, &y).unwrap();
+        let before = tested.estimate().clone();
+        for (bad, index, value) in [
+            (vec![1.5, 0.25], 0, 1.5),
+            (vec![0.0, -1e-12], 1, -1e-12),
+            (vec![-1.0 - 1e-15, 0.5], 0, -1.0 - 1e-15),
+            (vec![0.0, f64::MAX], 1, f64::MAX),
+        ] {
+            let err = tested.step(&model, &DVector::from_vec(bad), &y).unwrap_err();
+            let (l, h) = (lo[index], hi[index]);
+            assert_eq!(err, EstimatorError::InputOutsideBounds { index, value, lower: l, upper: h });
+            let text = err.to_string();
+            assert!(text.contains(&format!("u[{index}]")) && text.contains(&format!("[{l}, {h}]")), "{text}");
+            assert_eq!(&before, tested.estimate(), "step {k}");
+        }
+        // NaN is still reported as non-finite.
+        let err = tested.step(&model, &DVector::from_vec(vec![f64::NAN, 0.0]), &y).unwrap_err();
+        assert_eq!(err, EstimatorError::NonFinite { what: "u", index: 0 });
+        // The corners of the box are inside.
+        let corner = DVector::from_vec(vec![1.0, 0.0]);
+        let r = reference.step(&model, &corner, &y).unwrap().clone();
+        let t = tested.step(&model, &corner, &y).unwrap().clone();
+        assert_eq!(r.center.as_slice(), t.center.as_slice(), "step {k}");
+        assert_eq!(r.shape.as_slice(), t.shape.as_slice(), "step {k}");
+        assert_eq!(r.report.tau, t.report.tau);
+    }
 }

@@ -449,7 +449,7 @@ impl Layout {
                 match j - n {
                     z if z <= n => -ws.cae[(b, z - 1)],
                     w if w <= 2 * n => -ws.c[(b, w - 1 - n)],
-                    v => f64::from(u8::from(v - 1 - 2 * n == b)) * -1.0,
+                    v => -f64::from(u8::from(v - 1 - 2 * n == b)),
                 }
             }
             Var28::Tau(t) => {
@@ -483,7 +483,9 @@ impl Layout {
 mod tests {
     use super::*;
 
-    fn data_case() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
+    type Case = (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DVector<f64>);
+
+    fn data_case() -> Case {
         let a = DMatrix::from_row_slice(2, 2, &[0.9, 0.1, -0.2, 0.8]);
         let c = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
         let q = DMatrix::identity(2, 2) * 0.1;

@@ -9,8 +9,8 @@
 
 pub mod builder;
 pub mod error;
-pub mod ipm;
 pub mod filter_sdp;
+pub mod ipm;
 pub mod problem;
 pub mod registry;
 pub mod sdpa;

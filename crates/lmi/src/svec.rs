@@ -87,7 +87,7 @@ mod tests {
         let mut back = DMatrix::zeros(n, n);
         smat_into(&va, &mut back).unwrap();
         assert!(smat_into(&va[1..], &mut back).unwrap_err().to_string().contains("length of svec"));
-        assert!(svec_into(&a, &mut vec![0.0; 3]).is_err());
+        assert!(svec_into(&a, &mut [0.0; 3]).is_err());
         assert!((back - &a).abs().max() < 1e-13);
         // Layout: (0,0), (0,1), (1,1), (0,2), …
         assert_eq!(svec_index(0, 1), 1);

@@ -70,11 +70,7 @@ fn filter_lmi_timing() {
             times.push(t.elapsed().as_secs_f64() * 1e6);
         }
         times.sort_by(f64::total_cmp);
-        let names = ["residuals", "scaling", "schur", "factor", "step(all)", "maxstep-pred", "maxstep-corr", "other"];
-        for (k, nm) in names.iter().enumerate() {
-            let v = lmi::ipm::engine::PH[k].swap(0, std::sync::atomic::Ordering::Relaxed);
-            println!("  {nm:14} {:.1} us/solve", v as f64 / 1e3 / reps as f64);
-        }
+
         let read = sdp.read(&sol.x, &data).unwrap();
         println!(
             "(n, m) = ({n}, {m}): {} in {} it, median {:.1} us (p10 {:.1}, p90 {:.1}), tr P {:.10}, tau {:.6?}, gap {:.1e}, pres {:.1e}, dres {:.1e}",

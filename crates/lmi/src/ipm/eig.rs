@@ -267,15 +267,44 @@ pub(crate) fn max_step(a: &mut [f64], w: &mut [f64], n: usize, cap: f64, d: &mut
     if lo >= hi {
         lo = hi - hi.abs().max(1e-300);
     }
+    // Multisection: four Sturm counts per pass (independent recurrences, so their divisions
+    // overlap), shrinking the bracket five-fold. Invariant: no eigenvalue below `lo`, one below `hi`.
     while hi - lo > 1e-4 * lo.abs() {
-        let mid = 0.5 * (lo + hi);
-        if sturm_below(d, e, n, mid) > 0 {
-            hi = mid;
-        } else {
-            lo = mid;
+        let h = 0.2 * (hi - lo);
+        let x = [lo + h, lo + 2.0 * h, lo + 3.0 * h, lo + 4.0 * h];
+        let below = sturm_below4(d, e, n, x);
+        match below.iter().position(|&b| b) {
+            Some(0) => hi = x[0],
+            Some(k) => {
+                lo = x[k - 1];
+                hi = x[k];
+            }
+            None => lo = x[3],
         }
     }
     Some((-1.0 / lo).min(cap))
+}
+
+/// Whether the symmetric tridiagonal matrix (`d`, `e`) has an eigenvalue below each of `x`
+/// (four Sturm sequences evaluated side by side).
+#[inline(always)]
+fn sturm_below4(d: &[f64], e: &[f64], n: usize, x: [f64; 4]) -> [bool; 4] {
+    let mut q = [0.0; 4];
+    let mut neg = [false; 4];
+    for l in 0..4 {
+        q[l] = d[0] - x[l];
+        neg[l] = q[l] < 0.0;
+    }
+    for i in 1..n {
+        let e2 = e[i] * e[i];
+        let tiny = f64::EPSILON * (e[i].abs() + 1e-300);
+        for l in 0..4 {
+            let qq = if q[l] == 0.0 { tiny } else { q[l] };
+            q[l] = d[i] - x[l] - e2 / qq;
+            neg[l] |= q[l] < 0.0;
+        }
+    }
+    neg
 }
 
 /// Like [`max_step`] but coarse and cheaper: the largest `α ∈ {cap} ∪ {k·cap/2^halvings}` with
@@ -332,26 +361,31 @@ pub(crate) fn cholesky_lower_ok(w: &mut [f64], n: usize) -> bool {
     for j in 0..n {
         let (left, right) = w.split_at_mut(j * n);
         let colj = &mut right[..n];
-        // colj[j..] -= Σ_{k<j} L[j,k] L[j..,k], four columns k at a time (fewer short loops).
-        let mut k = 0;
-        while k + 4 <= j {
-            let c0 = &left[k * n + j..k * n + n];
-            let c1 = &left[(k + 1) * n + j..(k + 1) * n + n];
-            let c2 = &left[(k + 2) * n + j..(k + 2) * n + n];
-            let c3 = &left[(k + 3) * n + j..(k + 3) * n + n];
-            let (l0, l1, l2, l3) = (c0[0], c1[0], c2[0], c3[0]);
-            for ((((x, a), b), c), d) in colj[j..].iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
-                *x -= (l0 * a + l1 * b) + (l2 * c + l3 * d);
+        // colj[j..] -= Σ_{k<j} L[j,k] L[j..,k]; for larger orders four columns k at a time
+        // (fewer short loops).
+        let mut k0 = 0;
+        if n > 20 {
+            while k0 + 4 <= j {
+                let k = k0;
+                let c0 = &left[k * n + j..k * n + n];
+                let c1 = &left[(k + 1) * n + j..(k + 1) * n + n];
+                let c2 = &left[(k + 2) * n + j..(k + 2) * n + n];
+                let c3 = &left[(k + 3) * n + j..(k + 3) * n + n];
+                let (l0, l1, l2, l3) = (c0[0], c1[0], c2[0], c3[0]);
+                for ((((x, a), b), c), d) in colj[j..].iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+                    *x -= (l0 * a + l1 * b) + (l2 * c + l3 * d);
+                }
+                k0 += 4;
             }
-            k += 4;
         }
-        while k < j {
-            let colk = &left[k * n + j..k * n + n];
-            let ljk = colk[0];
-            for (x, y) in colj[j..].iter_mut().zip(colk) {
-                *x -= ljk * y;
+        for k in k0..j {
+            let colk = &left[k * n..k * n + n];
+            let ljk = colk[j];
+            if ljk != 0.0 {
+                for (x, y) in colj[j..].iter_mut().zip(&colk[j..]) {
+                    *x -= ljk * y;
+                }
             }
-            k += 1;
         }
         let piv = colj[j];
         if piv.is_nan() || piv <= 0.0 {

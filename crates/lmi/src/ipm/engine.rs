@@ -2,8 +2,6 @@
 //! predictor–corrector). See the module documentation of [`crate::ipm`] for the equations.
 
 use std::time::Instant;
-pub static PH: [std::sync::atomic::AtomicU64; 8] = [const { std::sync::atomic::AtomicU64::new(0) }; 8];
-fn ph(k: usize, t: &mut Instant) { let now = Instant::now(); PH[k].fetch_add((now - *t).as_nanos() as u64, std::sync::atomic::Ordering::Relaxed); *t = now; }
 
 use faer::dyn_stack::MemStack;
 
@@ -13,24 +11,22 @@ use super::dense::{self, view};
 use super::eig::{max_step, max_step_coarse, sym_eig};
 use super::workspace::{BlockWs, Ent, SchurKind, Workspace};
 
-/// `out ← Σᵢ coefᵢ Fᵢ` in one block (dense symmetric, or the diagonal of a nonnegative block).
+/// `out ← Σᵢ coefᵢ Fᵢ` in one block (dense symmetric, or the diagonal of a nonnegative block),
+/// over the nonzero entries.
 #[inline(always)]
-fn combine(blk_ents: &[Ent], val: &[f64], start: &[usize], coef: &[f64], n: usize, psd: bool, out: &mut [f64]) {
+fn combine(nz: (&[usize], &[usize], &[f64], &[usize]), coef: &[f64], out: &mut [f64]) {
+    let (p1s, p2s, vs, start) = nz;
     out.fill(0.0);
     for (i, &ci) in coef.iter().enumerate() {
         if ci == 0.0 {
             continue;
         }
-        for k in start[i]..start[i + 1] {
-            let Ent { row, col } = blk_ents[k];
-            let v = ci * val[k];
-            if psd {
-                out[row + col * n] += v;
-                if row != col {
-                    out[col + row * n] += v;
-                }
-            } else {
-                out[row] += v;
+        let r = start[i]..start[i + 1];
+        for ((&p1, &p2), &v) in p1s[r.clone()].iter().zip(&p2s[r.clone()]).zip(&vs[r]) {
+            let cv = ci * v;
+            out[p1] += cv;
+            if p2 != p1 {
+                out[p2] += cv;
             }
         }
     }
@@ -39,19 +35,11 @@ fn combine(blk_ents: &[Ent], val: &[f64], start: &[usize], coef: &[f64], n: usiz
 /// `tr[i] += tr(Fᵢ G)` for `i = 0..=m` in one block (`G` dense symmetric, or a diagonal).
 #[inline(always)]
 fn traces(blk: &BlockWs, g: &[f64], tr: &mut [f64]) {
-    let n = blk.n;
     for (i, t) in tr.iter_mut().enumerate() {
+        let r = blk.nz_start[i]..blk.nz_start[i + 1];
         let mut s = 0.0;
-        for k in blk.range(i) {
-            let Ent { row, col } = blk.ents[k];
-            let v = blk.val[k];
-            s += if !blk.psd {
-                v * g[row]
-            } else if row == col {
-                v * g[row + row * n]
-            } else {
-                v * (g[row + col * n] + g[col + row * n])
-            };
+        for ((&p1, &p2), &v) in blk.nz_p1[r.clone()].iter().zip(&blk.nz_p2[r.clone()]).zip(&blk.nz_v[r]) {
+            s += v * if p1 == p2 { g[p1] } else { g[p1] + g[p2] };
         }
         *t += s;
     }
@@ -59,54 +47,56 @@ fn traces(blk: &BlockWs, g: &[f64], tr: &mut [f64]) {
 
 /// Schur contributions of one dense block from all pairs of groups at once: every `Fᵢ` is a sum
 /// over its groups `e_c wᵀ + w e_cᵀ`, and with `y_h = D w_h`, `Z = Wᵀ D W`,
-/// `tr(Fᵢ D Fⱼ D) = 2 Σ_{g ∈ i} Σ_{h ∈ j} (y_g[c_h] y_h[c_g] + Z_gh D_{c_g c_h})`.
+/// `tr(Fᵢ D Fⱼ D) = 2 Σ_{g ∈ i} Σ_{h ∈ j} (y_g[c_h] y_h[c_g] + Z_gh D_{c_g c_h})`. Only the groups
+/// with a nonzero entry take part (`ag_*`).
 #[inline(always)]
 fn assemble_grouped(blk: &mut BlockWs, mhat: &mut [f64], mp: usize) {
     let n = blk.n;
-    let ng = blk.grp_row.len();
+    let na = blk.ag_row.len();
     let d = &blk.d;
-    // y_h = D w_h (columns of gy), then Yᵀ (rows of yt).
-    for h in 0..ng {
-        let y = &mut blk.gy[h * n..h * n + n];
+    // y_a = D w_a (columns of gy), then Yᵀ (rows of yt, length na).
+    for a in 0..na {
+        let y = &mut blk.gy[a * n..a * n + n];
         y.fill(0.0);
-        for e in blk.grp_ent_start[h]..blk.grp_ent_start[h + 1] {
-            let (o, v) = (blk.gw_idx[e], blk.gw_val[e]);
+        for e in blk.ag_ent[a]..blk.ag_ent[a + 1] {
+            let (o, v) = (blk.ag_idx[e], blk.ag_val[e]);
             for (yy, dd) in y.iter_mut().zip(&d[o * n..o * n + n]) {
                 *yy += v * dd;
             }
         }
         for o in 0..n {
-            blk.yt[o * ng + h] = y[o];
+            blk.yt[o * na + a] = y[o];
         }
     }
-    let mut t0 = Instant::now();
-    // Row g of Z: Σ_{e ∈ g} v_e Yᵀ[o_e, :] (only h ≤ the last group of g's matrix is used).
-    for g in 0..ng {
-        let hend = blk.grp_start[blk.gmat[g] + 1];
-        let z = &mut blk.zg[g * ng..g * ng + hend];
+    // Row a of Z: Σ_{e ∈ a} v_e Yᵀ[o_e, :] (only the groups of matrices up to a's are used).
+    for a in 0..na {
+        let hend = blk.ag_start[blk.ag_mat[a] + 1];
+        let z = &mut blk.zg[a * na..a * na + hend];
         z.fill(0.0);
-        for e in blk.grp_ent_start[g]..blk.grp_ent_start[g + 1] {
-            let (o, v) = (blk.gw_idx[e], blk.gw_val[e]);
-            for (zz, yy) in z.iter_mut().zip(&blk.yt[o * ng..o * ng + hend]) {
+        for e in blk.ag_ent[a]..blk.ag_ent[a + 1] {
+            let (o, v) = (blk.ag_idx[e], blk.ag_val[e]);
+            for (zz, yy) in z.iter_mut().zip(&blk.yt[o * na..o * na + hend]) {
                 *zz += v * yy;
             }
         }
     }
-    ph(7, &mut t0);
-    for g in 0..ng {
-        let i = blk.gmat[g];
-        let c = blk.grp_row[g];
-        let yg = &blk.gy[g * n..g * n + n];
+    for a in 0..na {
+        let i = blk.ag_mat[a];
+        let c = blk.ag_row[a];
+        let ya = &blk.gy[a * n..a * n + n];
         let dc = &d[c * n..c * n + n];
-        let ytc = &blk.yt[c * ng..c * ng + ng];
-        let z = &blk.zg[g * ng..g * ng + ng];
-        for j in 0..=i {
+        let ytc = &blk.yt[c * na..c * na + na];
+        let z = &blk.zg[a * na..a * na + na];
+        let mut h0 = 0;
+        while h0 < blk.ag_start[i + 1] {
+            let j = blk.ag_mat[h0];
+            let h1 = blk.ag_start[j + 1];
             let mut s = 0.0;
-            for h in blk.grp_start[j]..blk.grp_start[j + 1] {
-                let ch = blk.grp_row[h];
-                s += yg[ch] * ytc[h] + z[h] * dc[ch];
+            for ((&ch, &y), &zz) in blk.ag_row[h0..h1].iter().zip(&ytc[h0..h1]).zip(&z[h0..h1]) {
+                s += ya[ch] * y + zz * dc[ch];
             }
             mhat[i + j * mp] += 2.0 * s;
+            h0 = h1;
         }
     }
 }
@@ -209,11 +199,8 @@ impl Workspace {
         let relaxed = Tols::new(settings, settings.reduced_tol_factor);
         let mut best_merit = f64::INFINITY;
         let mut best_iter = 0u32;
-        let mut tt = Instant::now();
         let stop = loop {
-            ph(7, &mut tt);
             self.residuals(st);
-            ph(0, &mut tt);
             if settings.verbose {
                 eprintln!(
                     "faer-ipm {:3}  pobj {:+.9e}  dobj {:+.9e}  pres {:.2e}  dres {:.2e}  gap {:.2e}  tau {:.2e}  kappa {:.2e}  mu {:.2e}",
@@ -243,19 +230,14 @@ impl Workspace {
             if settings.time_limit.is_some_and(|t| start.elapsed() > t) {
                 break Stop::TimeLimit;
             }
-            ph(7, &mut tt);
-            let ok = self.scaling(stack);
-            ph(1, &mut tt);
-            if !ok {
+            if !self.scaling(stack) {
                 if settings.verbose {
                     eprintln!("faer-ipm: an iterate is not numerically positive definite");
                 }
                 break Stop::Trouble;
             }
             self.assemble_schur();
-            ph(2, &mut tt);
             let factored = if self.precise { self.factor_qr(stack) } else { self.factor_schur(stack) };
-            ph(3, &mut tt);
             if !factored {
                 if settings.verbose {
                     eprintln!("faer-ipm: the Schur matrix could not be factorised");
@@ -263,7 +245,6 @@ impl Workspace {
                 break Stop::Trouble;
             }
             let mut result = self.step(st);
-            ph(4, &mut tt);
             if result == Some(NEED_PRECISION) {
                 // The normal equations lost too much accuracy: switch to the QR-based factor for
                 // the rest of this solve and redo the step.
@@ -374,7 +355,7 @@ impl Workspace {
         let mut xy = 0.0;
         let (mut xx, mut yy) = (0.0, 0.0);
         for blk in &mut self.blocks {
-            combine(&blk.ents, &blk.val, &blk.start, &self.coef, blk.n, blk.psd, &mut blk.rz);
+            combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.rz);
             for (r, x) in blk.rz.iter_mut().zip(&blk.x) {
                 *r -= x;
             }
@@ -412,7 +393,7 @@ impl Workspace {
             self.coef[0] = 0.0;
             let mut dinf_num = 0.0;
             for blk in &mut self.blocks {
-                combine(&blk.ents, &blk.val, &blk.start, &self.coef, blk.n, blk.psd, &mut blk.tmp);
+                combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.tmp);
                 for (t, x) in blk.tmp.iter_mut().zip(&blk.x) {
                     *t -= x;
                 }
@@ -528,9 +509,7 @@ impl Workspace {
                     }
                 }
             }
-            let mut t0 = Instant::now();
             for j in 0..mp {
-                if j == 1 { ph(7, &mut t0); }
                 match blk.kind[j] {
                     SchurKind::Empty => {}
                     SchurKind::LowRank => {
@@ -745,7 +724,7 @@ impl Workspace {
         st.den0 = 0.0;
         for blk in &mut self.blocks {
             let n = blk.n;
-            combine(&blk.ents, &blk.val, &blk.start, &self.coef, n, blk.psd, &mut blk.tmp2);
+            combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.tmp2);
             if blk.psd {
                 dense::congruence(&mut blk.g, &mut blk.tmp, &blk.t, &blk.tmp2, n, true);
                 st.den0 += dense::norm2(&blk.g);
@@ -953,7 +932,7 @@ impl Workspace {
         self.coef[1..].copy_from_slice(&self.dx);
         for blk in &mut self.blocks {
             let n = blk.n;
-            combine(&blk.ents, &blk.val, &blk.start, &self.coef, n, blk.psd, &mut blk.e);
+            combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.e);
             if eta != 0.0 {
                 for (e, r) in blk.e.iter_mut().zip(&blk.rz) {
                     *e += eta * r;
@@ -992,13 +971,6 @@ impl Workspace {
     /// With `coarse`, dense blocks use a few Cholesky tests instead of an eigenvalue bracket.
     #[inline(always)]
     fn max_step(&mut self, st: &State, cap: f64, coarse: bool) -> Option<f64> {
-        let mut t0 = Instant::now();
-        let r = self.max_step_inner(st, cap, coarse);
-        ph(if coarse { 5 } else { 6 }, &mut t0);
-        r
-    }
-    #[inline(always)]
-    fn max_step_inner(&mut self, st: &State, cap: f64, coarse: bool) -> Option<f64> {
         let mut alpha = cap;
         if st.dtau < 0.0 {
             alpha = alpha.min(-st.tau / st.dtau);
@@ -1038,26 +1010,28 @@ impl Workspace {
         sol.status = status;
         sol.iterations = iterations;
         let (xscale, yscale) = match status {
-            SolveStatus::PrimalInfeasible | SolveStatus::AlmostPrimalInfeasible => (f64::NAN, 1.0 / self.tr[0]),
+            SolveStatus::PrimalInfeasible | SolveStatus::AlmostPrimalInfeasible => (0.0, 1.0 / self.tr[0]),
             SolveStatus::DualInfeasible | SolveStatus::AlmostDualInfeasible => {
                 let cx = dense::dot(&self.c, &self.x);
-                (-1.0 / cx, f64::NAN)
+                (-1.0 / cx, 0.0)
             }
             _ => (1.0 / st.tau, 1.0 / st.tau),
         };
+        // A zero scale marks the part that is not the certificate: exactly zero.
+        let scaled = |v: f64, scale: f64| if scale == 0.0 { 0.0 } else { v * scale };
         for (s, x) in sol.x.iter_mut().zip(&self.x) {
-            *s = x * xscale;
+            *s = scaled(*x, xscale);
         }
         for (dst, blk) in sol.dual.iter_mut().zip(&self.blocks) {
             let out = dst.as_mut_slice();
             if blk.psd {
                 for (o, y) in out.iter_mut().zip(&blk.y) {
-                    *o = y * yscale;
+                    *o = scaled(*y, yscale);
                 }
             } else {
                 out.fill(0.0);
                 for i in 0..blk.n {
-                    out[i + i * blk.n] = blk.y[i] * yscale;
+                    out[i + i * blk.n] = scaled(blk.y[i], yscale);
                 }
             }
         }
@@ -1195,6 +1169,12 @@ mod tests {
         blk.gmat = (0..=m).flat_map(|j| std::iter::repeat_n(j, blk.grp_start[j + 1] - blk.grp_start[j])).collect();
         blk.yt = vec![0.0; ng * n];
         blk.zg = vec![0.0; ng * ng];
+        blk.ag_row = Vec::with_capacity(ng);
+        blk.ag_mat = Vec::with_capacity(ng);
+        blk.ag_ent = Vec::with_capacity(ng + 1);
+        blk.ag_idx = Vec::with_capacity(blk.grp_ents.len());
+        blk.ag_val = Vec::with_capacity(blk.grp_ents.len());
+        ws.load_values(&p);
         ws.assemble_schur();
         results.push(ws.mhat.clone());
         for r in &results[1..] {

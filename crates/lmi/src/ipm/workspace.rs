@@ -62,6 +62,14 @@ pub(crate) struct BlockWs {
     /// Entry values, and values scaled by `√2` (off-diagonal) or `1/√2` (diagonal).
     pub val: Vec<f64>,
     pub sval: Vec<f64>,
+    /// The entries with a nonzero value (found by `load_values`, per solve): positions `p1`,
+    /// `p2` in the dense block (`row + col·n` and `col + row·n`; the index on the diagonal of a
+    /// nonnegative block; `p1 = p2` on the diagonal) and the value. Those of `Fᵢ` are
+    /// `nz_start[i]..nz_start[i + 1]`. Capacity for all entries is reserved at setup.
+    pub nz_p1: Vec<usize>,
+    pub nz_p2: Vec<usize>,
+    pub nz_v: Vec<f64>,
+    pub nz_start: Vec<usize>,
     /// Schur strategy per matrix index `j = 0..=m`.
     pub kind: Vec<SchurKind>,
     /// Rank-update groups: the entries of `Fⱼ` sharing one index `c` (so that their sum is
@@ -87,6 +95,16 @@ pub(crate) struct BlockWs {
     pub grouped: bool,
     /// Matrix index of each group.
     pub gmat: Vec<usize>,
+    /// Groups with a nonzero entry (found by `load_values`, per solve; capacity reserved at
+    /// setup): `ag_row` their shared index, `ag_mat` their matrix, `ag_start[j]..ag_start[j + 1]`
+    /// those of `Fⱼ`, and their nonzero entries `ag_idx`/`ag_val` (other index, coefficient in
+    /// `w`) in `ag_ent[a]..ag_ent[a + 1]`.
+    pub ag_row: Vec<usize>,
+    pub ag_mat: Vec<usize>,
+    pub ag_start: Vec<usize>,
+    pub ag_ent: Vec<usize>,
+    pub ag_idx: Vec<usize>,
+    pub ag_val: Vec<f64>,
     /// `Yᵀ` (`n × G`, row `o` holds `y_h[o]` for every group `h`) and `Z = Wᵀ D W` (`G × G`).
     pub yt: Vec<f64>,
     pub zg: Vec<f64>,
@@ -146,6 +164,10 @@ impl BlockWs {
             val: Vec::new(),
             sval: Vec::new(),
             kind: vec![SchurKind::Empty; m + 1],
+            nz_p1: Vec::new(),
+            nz_p2: Vec::new(),
+            nz_v: Vec::new(),
+            nz_start: vec![0; m + 2],
             grp_start: vec![0; m + 2],
             grp_row: Vec::new(),
             grp_ent_start: vec![0],
@@ -157,6 +179,12 @@ impl BlockWs {
             lr_first: m + 1,
             grouped: false,
             gmat: Vec::new(),
+            ag_row: Vec::new(),
+            ag_mat: Vec::new(),
+            ag_start: vec![0; m + 2],
+            ag_ent: Vec::new(),
+            ag_idx: Vec::new(),
+            ag_val: Vec::new(),
             yt: Vec::new(),
             zg: Vec::new(),
             x: z(),
@@ -241,6 +269,9 @@ pub(crate) struct Workspace {
     pub fbuf: Vec<f64>,
 }
 
+/// Blocks below this order keep the classic Schur strategies (pairwise, rank update, dense).
+const SMALL_BLOCK: usize = 8;
+
 /// Estimated cost of a Schur column with the given strategy (`costs`: pairwise, rank update,
 /// dense, low rank).
 fn column_cost(kind: SchurKind, costs: &[f64; 4]) -> f64 {
@@ -292,6 +323,9 @@ impl Workspace {
             }
             blk.val = vec![0.0; blk.ents.len()];
             blk.sval = vec![0.0; blk.ents.len()];
+            blk.nz_p1 = Vec::with_capacity(blk.ents.len());
+            blk.nz_p2 = Vec::with_capacity(blk.ents.len());
+            blk.nz_v = Vec::with_capacity(blk.ents.len());
             if blk.psd {
                 let n = blk.n as f64;
                 let nnz: Vec<f64> = (0..=m).map(|i| blk.range(i).len() as f64).collect();
@@ -311,7 +345,11 @@ impl Workspace {
                     let dense = n * n * n + n * n + 4.0 * tail;
                     // Per pair of groups: a sparse dot product of w_g with y_h and four loads;
                     // plus y_h = D w_h for this column's groups.
-                    let low_rank = 1.0 * groups * (tail + 4.0 * gtail) + nnz[j] * n;
+                    // (Only for blocks of order 8 and more: below, every strategy is cheap, and
+                    // the nearly ill-posed SDPLIB `hinf` problems, whose blocks have order 4–6,
+                    // are sensitive to the rounding of the Schur matrix.)
+                    let low_rank =
+                        if blk.n >= SMALL_BLOCK { groups * (tail + 4.0 * gtail) + nnz[j] * n } else { f64::INFINITY };
                     costs[j] = [pairwise, rank, dense, low_rank];
                     blk.kind[j] = if nnz[j] == 0.0 {
                         SchurKind::Empty
@@ -330,7 +368,7 @@ impl Workspace {
                 let total: f64 = ngroups.iter().sum();
                 let per_column: f64 = (0..=m).map(|j| column_cost(blk.kind[j], &costs[j])).sum();
                 let grouped = 2.0 * total * total + tail * (total + n) / 4.0 + n * total;
-                blk.grouped = grouped < per_column;
+                blk.grouped = blk.n >= SMALL_BLOCK && grouped < per_column;
             }
         }
         for blk in &mut blocks {
@@ -353,8 +391,14 @@ impl Workspace {
             blk.gy = vec![0.0; blk.grp_row.len() * blk.n];
             if blk.grouped {
                 let g = blk.grp_row.len();
-                blk.gmat = (0..=m).flat_map(|j| std::iter::repeat_n(j, blk.grp_start[j + 1] - blk.grp_start[j])).collect();
+                blk.gmat =
+                    (0..=m).flat_map(|j| std::iter::repeat_n(j, blk.grp_start[j + 1] - blk.grp_start[j])).collect();
                 blk.yt = vec![0.0; g * blk.n];
+                blk.ag_row = Vec::with_capacity(g);
+                blk.ag_mat = Vec::with_capacity(g);
+                blk.ag_ent = Vec::with_capacity(g + 1);
+                blk.ag_idx = Vec::with_capacity(blk.grp_ents.len());
+                blk.ag_val = Vec::with_capacity(blk.grp_ents.len());
                 blk.zg = vec![0.0; g * g];
             }
         }
@@ -403,9 +447,56 @@ impl Workspace {
                 blk.sval[k] =
                     if ent.row == ent.col { v * std::f64::consts::FRAC_1_SQRT_2 } else { v * std::f64::consts::SQRT_2 };
             }
+            // Nonzero entries (within the capacity reserved at setup: no allocation).
+            blk.nz_p1.clear();
+            blk.nz_p2.clear();
+            blk.nz_v.clear();
+            let n = blk.n;
+            for i in 0..blk.start.len() - 1 {
+                blk.nz_start[i] = blk.nz_v.len();
+                for k in blk.start[i]..blk.start[i + 1] {
+                    let v = blk.val[k];
+                    if v == 0.0 {
+                        continue;
+                    }
+                    let Ent { row, col } = blk.ents[k];
+                    let (p1, p2) = if !blk.psd { (row, row) } else { (row + col * n, col + row * n) };
+                    blk.nz_p1.push(p1);
+                    blk.nz_p2.push(p2);
+                    blk.nz_v.push(v);
+                }
+            }
+            let last = blk.start.len() - 1;
+            blk.nz_start[last] = blk.nz_v.len();
             for (e, &k) in blk.grp_ents.iter().enumerate() {
                 let ent = blk.ents[k];
                 blk.gw_val[e] = if ent.row == ent.col { 0.5 * blk.val[k] } else { blk.val[k] };
+            }
+            if blk.grouped {
+                blk.ag_row.clear();
+                blk.ag_mat.clear();
+                blk.ag_ent.clear();
+                blk.ag_idx.clear();
+                blk.ag_val.clear();
+                blk.ag_ent.push(0);
+                for j in 0..blk.grp_start.len() - 1 {
+                    blk.ag_start[j] = blk.ag_row.len();
+                    for g in blk.grp_start[j]..blk.grp_start[j + 1] {
+                        for e in blk.grp_ent_start[g]..blk.grp_ent_start[g + 1] {
+                            if blk.gw_val[e] != 0.0 {
+                                blk.ag_idx.push(blk.gw_idx[e]);
+                                blk.ag_val.push(blk.gw_val[e]);
+                            }
+                        }
+                        if blk.ag_idx.len() > *blk.ag_ent.last().unwrap_or(&0) {
+                            blk.ag_row.push(blk.grp_row[g]);
+                            blk.ag_mat.push(j);
+                            blk.ag_ent.push(blk.ag_idx.len());
+                        }
+                    }
+                }
+                let last = blk.grp_start.len() - 1;
+                blk.ag_start[last] = blk.ag_row.len();
             }
         }
         self.c.copy_from_slice(problem.c());
