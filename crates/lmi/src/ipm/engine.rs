@@ -227,7 +227,7 @@ impl Workspace {
             if *iterations >= settings.max_iterations {
                 break Stop::IterLimit;
             }
-            if settings.time_limit.is_some_and(|t| start.elapsed() > t) {
+            if settings.time_limit.is_some_and(|limit| limit < start.elapsed()) {
                 break Stop::TimeLimit;
             }
             if !self.scaling(stack) {
