@@ -8,10 +8,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use estimators::{
-    KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateProblem, UpdateSolution,
-    UpdateSolver, yang_li,
-};
+use estimators::{KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, yang_li};
 use nalgebra::{DMatrix, DVector};
 
 struct Counting;
@@ -67,28 +64,13 @@ fn r_mat(m: usize) -> DMatrix<f64> {
 }
 
 /// Reports "solved" with a finite gain whose certified shape overflows.
-struct Overflowing;
-
-impl UpdateSolver for Overflowing {
-    fn name(&self) -> &str {
-        "overflowing"
-    }
-    fn prepare(&mut self, _: usize, _: usize) -> Result<(), estimators::EstimatorError> {
-        Ok(())
-    }
-    fn solve(
-        &mut self,
-        _: &UpdateProblem<'_>,
-        _: [f64; 3],
-        out: &mut UpdateSolution,
-    ) -> Result<(), estimators::EstimatorError> {
-        out.l.fill(1e200);
-        out.tau = [0.25, 0.25, 0.5];
-        out.status = lmi::SolveStatus::Solved;
-        Ok(())
-    }
-    fn gain_is_closed_form(&self) -> bool {
-        true
+fn overflowing() -> common::FixedSolver {
+    common::FixedSolver {
+        l: 1e200,
+        tau: [0.25, 0.25, 0.5],
+        status: lmi::SolveStatus::Solved,
+        iterations: 0,
+        closed_form: true,
     }
 }
 
@@ -155,7 +137,7 @@ fn steps_do_not_allocate_after_warm_up() {
         assert!(r);
         assert_eq!(n, 0, "refusing an input outside the box allocated (m = {m})");
         // A "solved" result whose certification overflows: redone with the fallback.
-        let mut bad = SetMembershipFilter::new(x0.clone(), p0.clone(), q.clone(), r_mat(m), 2, Overflowing).unwrap();
+        let mut bad = SetMembershipFilter::new(x0.clone(), p0.clone(), q.clone(), r_mat(m), 2, overflowing()).unwrap();
         bad.step(&model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {

@@ -14,12 +14,13 @@
 
 mod common;
 
+use common::FixedSolver;
+
 use std::time::Duration;
 
 use carrier_dynamics::{BoundedNoise, Xoshiro256StarStar};
 use estimators::{
-    FallbackReason, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateProblem,
-    UpdateSolution, UpdateSolver, yang_li,
+    FallbackReason, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver, yang_li,
 };
 use nalgebra::{DMatrix, DVector};
 
@@ -176,26 +177,13 @@ fn sdp_path_contains_the_true_state() {
 }
 
 /// A solver that never converges.
-struct Stub;
-
-impl UpdateSolver for Stub {
-    fn name(&self) -> &str {
-        "stub"
-    }
-    fn prepare(&mut self, _: usize, _: usize) -> Result<(), estimators::EstimatorError> {
-        Ok(())
-    }
-    fn solve(
-        &mut self,
-        _: &UpdateProblem<'_>,
-        _: [f64; 3],
-        out: &mut UpdateSolution,
-    ) -> Result<(), estimators::EstimatorError> {
-        out.l.fill(f64::NAN);
-        out.tau = [0.9, 0.9, 0.9];
-        out.status = lmi::SolveStatus::IterationLimit;
-        out.iterations = 100;
-        Ok(())
+fn never_converges() -> FixedSolver {
+    FixedSolver {
+        l: f64::NAN,
+        tau: [0.9, 0.9, 0.9],
+        status: lmi::SolveStatus::IterationLimit,
+        iterations: 100,
+        closed_form: false,
     }
 }
 
@@ -205,8 +193,15 @@ fn fallback_path_contains_the_true_state() {
     let (mut total, mut worst) = (0, 0.0f64);
     for i in 0..10 {
         let sys = random_system(&mut rng, i);
-        let mut f = SetMembershipFilter::new(sys.x_hat0.clone(), sys.p0.clone(), sys.q.clone(), sys.r.clone(), 2, Stub)
-            .unwrap();
+        let mut f = SetMembershipFilter::new(
+            sys.x_hat0.clone(),
+            sys.p0.clone(),
+            sys.q.clone(),
+            sys.r.clone(),
+            2,
+            never_converges(),
+        )
+        .unwrap();
         let (w, fb) = run(&sys, &mut f, &mut rng, 100, gauss_u);
         assert_eq!(fb, 100);
         assert_eq!(f.estimate().report.fallback, Some(FallbackReason::Status(lmi::SolveStatus::IterationLimit)));
@@ -226,37 +221,6 @@ fn fallback_path_contains_the_true_state() {
     println!("fallback: {total} steps, worst normalised distance 1 {:+.2e}", worst - 1.0);
 }
 
-/// A solver that reports `Solved` with a fixed, finite but unusable `(L, τ)`, and claims its `L`
-/// is the closed-form gain (so the filter certifies it as it is).
-struct BadSolved {
-    tau: [f64; 3],
-    l: f64,
-}
-
-impl UpdateSolver for BadSolved {
-    fn name(&self) -> &str {
-        "bad-solved"
-    }
-    fn prepare(&mut self, _: usize, _: usize) -> Result<(), estimators::EstimatorError> {
-        Ok(())
-    }
-    fn solve(
-        &mut self,
-        _: &UpdateProblem<'_>,
-        _: [f64; 3],
-        out: &mut UpdateSolution,
-    ) -> Result<(), estimators::EstimatorError> {
-        out.l.fill(self.l);
-        out.tau = self.tau;
-        out.status = lmi::SolveStatus::Solved;
-        out.iterations = 1;
-        Ok(())
-    }
-    fn gain_is_closed_form(&self) -> bool {
-        true
-    }
-}
-
 #[test]
 fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
     // Each of these used to make every step fail with "the set estimate is not finite" (a
@@ -274,7 +238,9 @@ fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
         let mut worst = 0.0f64;
         for i in 0..10 {
             let sys = random_system(&mut rng, i);
-            let solver = BadSolved { tau, l };
+            // `Solved` with a finite but unusable (L, τ), claiming L is the closed-form gain (so the
+            // filter certifies it as it is).
+            let solver = FixedSolver { l, tau, status: lmi::SolveStatus::Solved, iterations: 1, closed_form: true };
             let mut f =
                 SetMembershipFilter::new(sys.x_hat0.clone(), sys.p0.clone(), sys.q.clone(), sys.r.clone(), 2, solver)
                     .unwrap();

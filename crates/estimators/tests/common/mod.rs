@@ -91,3 +91,38 @@ pub fn backends(settings: lmi::SolverSettings) -> Vec<(String, Box<dyn lmi::SdpB
     }
     names.into_iter().map(|name| (name.to_string(), lmi::backend_by_name(name, settings.clone()).unwrap())).collect()
 }
+
+/// A stub solver of (29) that returns the same `(L, τ)` (every entry of `L` equal to `l`), status
+/// and iteration count at every step; `closed_form` is what it claims about its gain (if true the
+/// filter certifies `L` as it is, otherwise it recomputes the closed-form gain for `τ`).
+pub struct FixedSolver {
+    pub l: f64,
+    pub tau: [f64; 3],
+    pub status: lmi::SolveStatus,
+    pub iterations: u32,
+    pub closed_form: bool,
+}
+
+impl estimators::UpdateSolver for FixedSolver {
+    fn name(&self) -> &str {
+        "fixed"
+    }
+    fn prepare(&mut self, _: usize, _: usize) -> Result<(), estimators::EstimatorError> {
+        Ok(())
+    }
+    fn solve(
+        &mut self,
+        _: &estimators::UpdateProblem<'_>,
+        _: [f64; 3],
+        out: &mut estimators::UpdateSolution,
+    ) -> Result<(), estimators::EstimatorError> {
+        out.l.fill(self.l);
+        out.tau = self.tau;
+        out.status = self.status;
+        out.iterations = self.iterations;
+        Ok(())
+    }
+    fn gain_is_closed_form(&self) -> bool {
+        self.closed_form
+    }
+}
