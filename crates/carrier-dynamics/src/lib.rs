@@ -1,6 +1,7 @@
 //! Straddle-carrier lateral/yaw/roll dynamics after Lin, Zhang, Ding & Niu, *Control and
-//! Decision* 39(1):129–136, 2024 (paper §1, eqs (1)–(11)), its exact zero-order-hold
-//! discretisation, and a seeded simulator with unknown-but-bounded noise.
+//! Decision* 39(1):129–136, 2024 (paper §1, eqs (1)–(11); `docs/carrier-smf.md`), and its exact
+//! zero-order-hold discretisation. Generic tools (matrix exponential, simulator, noise, PRNG)
+//! live in the vehicle-free `models` crate; this crate holds only the carrier.
 //!
 //! # Model
 //!
@@ -28,10 +29,11 @@
 //! * Loads of 0, 1, 2 containers follow documented assumptions ([`load`]); one container
 //!   reproduces Table 1 exactly.
 //! * Discretisation is exact ZOH: `A_p = e^{A T_s}`, `B_p = ∫₀^{T_s} e^{Aτ} dτ B`
-//!   ([`zoh_discretize`], block exponential, own Padé scaling-and-squaring [`expm`]).
-//! * Simulation ([`simulate()`]): `x_{k+1} = A_k x_k + B_k u_k + w_k`, `y_k = C_k x_k + v_k`; an
-//!   estimator's step `k` consumes `u_k` and `y_{k+1}`. Noise is drawn by the crate's own
-//!   [`Xoshiro256StarStar`] so that a seed reproduces a run regardless of dependency versions.
+//!   ([`models::zoh_discretize`], block exponential, own Padé scaling-and-squaring
+//!   [`models::expm`]).
+//! * [`DiscreteCarrier`] is a [`models::LinearTimeVarying`] model, so `models::simulate_ltv`
+//!   simulates it (`x_{k+1} = A_k x_k + B_k u_k + w_k`, `y_k = C_k x_k + v_k`; an estimator's
+//!   step `k` consumes `u_k` and `y_{k+1}`).
 //!
 //! # Example
 //!
@@ -51,22 +53,14 @@
 //! # Ok::<(), carrier_dynamics::DynamicsError>(())
 //! ```
 
-pub mod discretize;
 pub mod error;
 pub mod load;
 pub mod model;
-pub mod noise;
 pub mod params;
-pub mod rng;
-pub mod simulate;
 
-pub use discretize::{ZohDiscretization, expm, zoh_discretize, zoh_discretize_fixed};
 pub use error::DynamicsError;
 pub use load::RigidBody;
 pub use model::{
     CarrierModel, DiscreteCarrier, INPUT_DIM, InputMatrix, InputVector, OUTPUT_DIM, STATE_DIM, StateMatrix, StateVector,
 };
-pub use noise::{BoundedNoise, NoiseDistribution};
 pub use params::{CarrierParams, RollInertia};
-pub use rng::Xoshiro256StarStar;
-pub use simulate::{ConstantModel, FnModel, LinearTimeVarying, SimulationConfig, StepMatrices, Trajectory, simulate};

@@ -3,7 +3,7 @@
 
 use nalgebra::{Complex, DMatrix, Matrix4, SMatrix, SVector, Schur};
 
-use crate::discretize::zoh_discretize_fixed;
+use models::{Dims, LinearTimeVarying, ModelError, StepMatrices, zoh_discretize_fixed};
 use crate::error::{DynamicsError, check_finite};
 use crate::params::CarrierParams;
 
@@ -148,7 +148,7 @@ impl CarrierModel {
     ///
     /// # Errors
     /// [`DynamicsError::InvalidSamplingPeriod`] unless `ts` is positive and finite, or an
-    /// exponential failure (see [`crate::expm`]).
+    /// exponential failure (see [`models::expm`]).
     pub fn discretize(&self, ts: f64) -> Result<DiscreteCarrier, DynamicsError> {
         let (a_p, b_p) = zoh_discretize_fixed(&self.a, &self.b, ts)?;
         Ok(DiscreteCarrier { a_p, b_p, c_p: self.c(), ts })
@@ -181,10 +181,20 @@ impl DiscreteCarrier {
     }
 }
 
+impl LinearTimeVarying for DiscreteCarrier {
+    fn dims(&self) -> Dims {
+        Dims::new(STATE_DIM, INPUT_DIM, OUTPUT_DIM)
+    }
+    fn matrices(&self, _k: usize) -> Result<StepMatrices, ModelError> {
+        let (a, b, c) = self.to_dynamic();
+        Ok(StepMatrices { a, b, c })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Xoshiro256StarStar;
+    use models::Xoshiro256StarStar;
 
     /// `[β̇, γ̇, φ̇, φ̈]` straight from eqs (4)–(6): wheel slips and forces, the yaw moment, and
     /// a 2 × 2 solve of (4) and (6) for `β̇` and `φ̈` by Cramer's rule.

@@ -81,12 +81,13 @@ pub use crate::ellipsoid::Ellipsoid;
 pub use crate::error::{EllipsoidError, Result};
 pub use crate::intersection::{IntersectionBound, MeasurementSet};
 
-/// Relative symmetry tolerance: `|P_ij − P_ji| ≤ SYMMETRY_TOLERANCE · max_kl |P_kl|`.
-pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
+/// Relative symmetry tolerance: `|P_ij − P_ji| ≤ SYMMETRY_TOLERANCE · max_kl |P_kl|` (the
+/// workspace's, from `dense-kernels`).
+pub use dense_kernels::SYMMETRY_TOLERANCE;
 
 /// Relative positive-definiteness tolerance: every Cholesky pivot must exceed
-/// `PD_RELATIVE_TOLERANCE · n · max_i P_ii`.
-pub const PD_RELATIVE_TOLERANCE: f64 = 4.0 * f64::EPSILON;
+/// `PD_RELATIVE_TOLERANCE · n · max_i P_ii` (the workspace's, from `dense-kernels`).
+pub use dense_kernels::PD_RELATIVE_TOLERANCE;
 
 /// Relative rank tolerance for `Cᵀ R⁻¹ C` (in whitened form) at `λ = 1` in the intersection
 /// bound: pivots must exceed `RANK_RELATIVE_TOLERANCE · n · max diag`.

@@ -8,50 +8,12 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::{EllipsoidError, Result};
 use crate::{PD_RELATIVE_TOLERANCE, SYMMETRY_TOLERANCE};
 
-/// Failure of [`cholesky`]: index and value of the rejected pivot.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct PivotFailure {
-    pub(crate) pivot: usize,
-    pub(crate) value: f64,
-    pub(crate) threshold: f64,
-}
+pub(crate) use dense_kernels::PivotFailure;
 
-/// Largest diagonal entry (0 for an empty matrix).
-fn max_diag(a: &DMatrix<f64>) -> f64 {
-    (0..a.nrows()).map(|i| a[(i, i)]).fold(0.0, f64::max)
-}
-
-/// Lower Cholesky factor `L` with `a = L Lᵀ`, reading the lower triangle of `a`.
-///
-/// A pivot `s_j` (the square of `L_jj`) is accepted when it is finite and
-/// `s_j > rel_tol · n · max_i a_ii`; every entry of `L` must be finite.
+/// Lower Cholesky factor `L` with `a = L Lᵀ` at relative pivot tolerance `rel_tol`
+/// ([`dense_kernels::cholesky_checked`]).
 pub(crate) fn cholesky_with(a: &DMatrix<f64>, rel_tol: f64) -> std::result::Result<DMatrix<f64>, PivotFailure> {
-    let n = a.nrows();
-    let threshold = rel_tol * n as f64 * max_diag(a);
-    let mut l = DMatrix::<f64>::zeros(n, n);
-    for j in 0..n {
-        let mut s = a[(j, j)];
-        for k in 0..j {
-            s -= l[(j, k)] * l[(j, k)];
-        }
-        if s.is_nan() || s.is_infinite() || s <= threshold || s <= 0.0 {
-            return Err(PivotFailure { pivot: j, value: s, threshold });
-        }
-        let ljj = s.sqrt();
-        l[(j, j)] = ljj;
-        for i in (j + 1)..n {
-            let mut t = a[(i, j)];
-            for k in 0..j {
-                t -= l[(i, k)] * l[(j, k)];
-            }
-            let v = t / ljj;
-            if !v.is_finite() {
-                return Err(PivotFailure { pivot: j, value: s, threshold });
-            }
-            l[(i, j)] = v;
-        }
-    }
-    Ok(l)
+    dense_kernels::cholesky_checked(a, rel_tol)
 }
 
 /// [`cholesky_with`] at the crate's positive-definiteness tolerance.
@@ -140,19 +102,8 @@ pub(crate) fn check_square(m: &DMatrix<f64>, what: &'static str) -> Result<()> {
 
 /// Requires `|m_ij − m_ji| ≤ SYMMETRY_TOLERANCE · max_kl |m_kl|`; reports the worst pair.
 pub(crate) fn check_symmetric(m: &DMatrix<f64>, what: &'static str) -> Result<()> {
-    let tolerance = SYMMETRY_TOLERANCE * m.amax();
-    let n = m.nrows();
-    let mut worst: Option<(usize, usize, f64)> = None;
-    for row in 0..n {
-        for col in (row + 1)..n {
-            let difference = (m[(row, col)] - m[(col, row)]).abs();
-            if difference > tolerance && worst.is_none_or(|(_, _, d)| difference > d) {
-                worst = Some((row, col, difference));
-            }
-        }
-    }
-    match worst {
-        Some((row, col, difference)) => Err(EllipsoidError::NotSymmetric {
+    match dense_kernels::max_asymmetry(m, SYMMETRY_TOLERANCE) {
+        Some((row, col, difference, tolerance)) => Err(EllipsoidError::NotSymmetric {
             what,
             row,
             col,

@@ -1,12 +1,14 @@
-//! Unknown-but-bounded noise models (paper eqs (8)–(9)) and their seeded samplers.
+//! Noise models and their seeded samplers: unknown-but-bounded noise (boxes, ellipsoids, the
+//! ellipsoid's boundary — the carrier paper's eqs (8)–(9)) and Gaussian noise.
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{DynamicsError, check_dims, check_finite};
+use crate::error::{ModelError, check_dims, check_finite};
 use crate::rng::Xoshiro256StarStar;
 
-/// Which distribution a [`BoundedNoise`] draws from.
+/// Which distribution a [`Noise`] draws from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum NoiseDistribution {
     /// Always zero.
     None,
@@ -17,13 +19,16 @@ pub enum NoiseDistribution {
     /// On the ellipsoid's boundary `wᵀ Q⁻¹ w = 1` (direction uniform on the unit sphere mapped
     /// by the Cholesky factor): the worst case for set-membership filters.
     EllipsoidBoundary,
+    /// Zero-mean Gaussian with covariance `Q` (`L g`, `g` standard normal, `Q = L Lᵀ`).
+    Gaussian,
 }
 
-/// A validated bounded-noise model of fixed dimension. Construct with [`BoundedNoise::none`],
-/// [`BoundedNoise::uniform_box`], [`BoundedNoise::uniform_cube`],
-/// [`BoundedNoise::uniform_ellipsoid`] or [`BoundedNoise::ellipsoid_boundary`].
+/// A validated noise model of fixed dimension. Construct with [`Noise::none`],
+/// [`Noise::gaussian`],
+/// [`Noise::uniform_box`], [`Noise::uniform_cube`],
+/// [`Noise::uniform_ellipsoid`] or [`Noise::ellipsoid_boundary`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct BoundedNoise {
+pub struct Noise {
     distribution: NoiseDistribution,
     /// Box half-widths (box), or the shape matrix `Q` (ellipsoids); empty for none.
     half_widths: Option<DVector<f64>>,
@@ -34,9 +39,9 @@ pub struct BoundedNoise {
 }
 
 /// Relative symmetry tolerance for `Q`: `max |Q_ij − Q_ji| ≤ 1e-10 · max |Q_ij|`.
-const SYMMETRY_TOL: f64 = 1e-10;
+const SYMMETRY_TOL: f64 = dense_kernels::SYMMETRY_TOLERANCE;
 
-impl BoundedNoise {
+impl Noise {
     /// No noise, of dimension `dim`.
     #[must_use]
     pub fn none(dim: usize) -> Self {
@@ -46,11 +51,11 @@ impl BoundedNoise {
     /// Components independently uniform in `[−a_i, a_i)` (the paper's `|w_k| ≤ 0.3`).
     ///
     /// # Errors
-    /// [`DynamicsError::InvalidHalfWidth`] for a negative or non-finite half-width.
-    pub fn uniform_box(half_widths: DVector<f64>) -> Result<Self, DynamicsError> {
+    /// [`ModelError::InvalidHalfWidth`] for a negative or non-finite half-width.
+    pub fn uniform_box(half_widths: DVector<f64>) -> Result<Self, ModelError> {
         for (index, &value) in half_widths.iter().enumerate() {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(DynamicsError::InvalidHalfWidth { index, value });
+                return Err(ModelError::InvalidHalfWidth { index, value });
             }
         }
         Ok(Self {
@@ -62,11 +67,11 @@ impl BoundedNoise {
         })
     }
 
-    /// [`BoundedNoise::uniform_box`] with the same half-width for all `dim` components.
+    /// [`Noise::uniform_box`] with the same half-width for all `dim` components.
     ///
     /// # Errors
-    /// As [`BoundedNoise::uniform_box`].
-    pub fn uniform_cube(dim: usize, half_width: f64) -> Result<Self, DynamicsError> {
+    /// As [`Noise::uniform_box`].
+    pub fn uniform_cube(dim: usize, half_width: f64) -> Result<Self, ModelError> {
         Self::uniform_box(DVector::from_element(dim, half_width))
     }
 
@@ -74,37 +79,46 @@ impl BoundedNoise {
     /// `U^{1/n}`, mapped through the Cholesky factor `L` of `Q`.
     ///
     /// # Errors
-    /// See [`BoundedNoise::ellipsoid_boundary`].
-    pub fn uniform_ellipsoid(shape: DMatrix<f64>) -> Result<Self, DynamicsError> {
+    /// See [`Noise::ellipsoid_boundary`].
+    pub fn uniform_ellipsoid(shape: DMatrix<f64>) -> Result<Self, ModelError> {
         Self::ellipsoid(shape, NoiseDistribution::UniformEllipsoid)
     }
 
-    /// On the boundary `wᵀ Q⁻¹ w = 1`: as [`BoundedNoise::uniform_ellipsoid`] with radius 1.
+    /// On the boundary `wᵀ Q⁻¹ w = 1`: as [`Noise::uniform_ellipsoid`] with radius 1.
     ///
     /// # Errors
-    /// [`DynamicsError::DimensionMismatch`] if `Q` is not square,
-    /// [`DynamicsError::NonFiniteEntry`], [`DynamicsError::NotSymmetric`] (beyond
-    /// `1e-10 · max |Q_ij|`; within it `Q` is symmetrised), [`DynamicsError::NotPositiveDefinite`].
-    pub fn ellipsoid_boundary(shape: DMatrix<f64>) -> Result<Self, DynamicsError> {
+    /// [`ModelError::DimensionMismatch`] if `Q` is not square,
+    /// [`ModelError::NonFiniteEntry`], [`ModelError::NotSymmetric`] (beyond
+    /// `1e-10 · max |Q_ij|`; within it `Q` is symmetrised), [`ModelError::NotPositiveDefinite`].
+    pub fn ellipsoid_boundary(shape: DMatrix<f64>) -> Result<Self, ModelError> {
         Self::ellipsoid(shape, NoiseDistribution::EllipsoidBoundary)
     }
 
-    fn ellipsoid(shape: DMatrix<f64>, distribution: NoiseDistribution) -> Result<Self, DynamicsError> {
+    /// Zero-mean Gaussian noise with covariance `Q` (symmetric positive definite).
+    ///
+    /// # Errors
+    /// As [`Noise::ellipsoid_boundary`], naming the covariance.
+    pub fn gaussian(covariance: DMatrix<f64>) -> Result<Self, ModelError> {
+        Self::factored(covariance, NoiseDistribution::Gaussian, "noise covariance Q")
+    }
+
+    fn ellipsoid(shape: DMatrix<f64>, distribution: NoiseDistribution) -> Result<Self, ModelError> {
+        Self::factored(shape, distribution, "ellipsoid shape matrix Q")
+    }
+
+    fn factored(shape: DMatrix<f64>, distribution: NoiseDistribution, what: &'static str) -> Result<Self, ModelError> {
         let n = shape.nrows();
-        check_dims("ellipsoid shape matrix Q", &shape, n, n)?;
-        check_finite("ellipsoid shape matrix Q", &shape)?;
-        let asymmetry = (&shape - shape.transpose()).amax();
-        let tolerance = SYMMETRY_TOL * shape.amax();
-        if asymmetry > tolerance {
-            return Err(DynamicsError::NotSymmetric { asymmetry, tolerance });
+        check_dims(what, &shape, n, n)?;
+        check_finite(what, &shape)?;
+        if let Some((_, _, asymmetry, tolerance)) = dense_kernels::max_asymmetry(&shape, SYMMETRY_TOL) {
+            return Err(ModelError::NotSymmetric { what, asymmetry, tolerance });
         }
         let shape = (&shape + shape.transpose()) * 0.5;
-        let factor = shape
-            .clone()
-            .cholesky()
-            .map(|c| c.l())
-            .filter(|l| l.diagonal().iter().all(|d| d.is_finite() && *d > 0.0))
-            .ok_or(DynamicsError::NotPositiveDefinite)?;
+        // nalgebra's factor (bit-stable samples across versions of this crate); positive
+        // definiteness is judged by the workspace's pivot test.
+        let pd = dense_kernels::cholesky_checked(&shape, dense_kernels::PD_RELATIVE_TOLERANCE)
+            .map_err(|f| ModelError::NotPositiveDefinite { what, pivot: f.pivot, value: f.value })?;
+        let factor = shape.clone().cholesky().map(|c| c.l()).unwrap_or(pd);
         Ok(Self { distribution, half_widths: None, shape: Some(shape), factor: Some(factor), dim: n })
     }
 
@@ -150,6 +164,9 @@ impl BoundedNoise {
     pub fn sample(&self, rng: &mut Xoshiro256StarStar) -> DVector<f64> {
         match (&self.half_widths, &self.factor) {
             (Some(a), _) => a.map(|a_i| rng.uniform(-a_i, a_i)),
+            (None, Some(l)) if self.dim > 0 && self.distribution == NoiseDistribution::Gaussian => {
+                l * DVector::from_fn(self.dim, |_, _| rng.standard_normal())
+            }
             (None, Some(l)) if self.dim > 0 => {
                 let dir = Self::unit_direction(self.dim, rng);
                 let radius = if self.distribution == NoiseDistribution::UniformEllipsoid {
@@ -169,7 +186,7 @@ mod tests {
     use super::*;
 
     /// `wᵀ Q⁻¹ w` through the Cholesky factor.
-    fn q_norm2(noise: &BoundedNoise, w: &DVector<f64>) -> f64 {
+    fn q_norm2(noise: &Noise, w: &DVector<f64>) -> f64 {
         let l = noise.factor.as_ref().unwrap();
         let z = l.solve_lower_triangular(w).unwrap();
         z.norm_squared()
@@ -183,7 +200,7 @@ mod tests {
     #[test]
     fn box_samples_stay_in_the_box() {
         let a = DVector::from_row_slice(&[0.3, 0.0, 2.0]);
-        let noise = BoundedNoise::uniform_box(a.clone()).unwrap();
+        let noise = Noise::uniform_box(a.clone()).unwrap();
         assert_eq!(noise.distribution(), NoiseDistribution::UniformBox);
         assert_eq!(noise.half_widths(), Some(&a));
         let mut rng = Xoshiro256StarStar::seed_from_u64(3);
@@ -197,15 +214,15 @@ mod tests {
             max_seen = max_seen.max(w[2].abs());
         }
         assert!(max_seen > 1.9, "box is filled: {max_seen}");
-        let cube = BoundedNoise::uniform_cube(4, 0.5).unwrap();
+        let cube = Noise::uniform_cube(4, 0.5).unwrap();
         assert_eq!(cube.dim(), 4);
     }
 
     #[test]
     fn ellipsoid_samples_are_inside_and_boundary_samples_on_it() {
         let q = test_shape();
-        let inside = BoundedNoise::uniform_ellipsoid(q.clone()).unwrap();
-        let boundary = BoundedNoise::ellipsoid_boundary(q.clone()).unwrap();
+        let inside = Noise::uniform_ellipsoid(q.clone()).unwrap();
+        let boundary = Noise::ellipsoid_boundary(q.clone()).unwrap();
         assert_eq!(boundary.distribution(), NoiseDistribution::EllipsoidBoundary);
         assert_eq!(inside.shape(), Some(&q));
         let mut rng = Xoshiro256StarStar::seed_from_u64(11);
@@ -232,7 +249,7 @@ mod tests {
 
     #[test]
     fn none_draws_nothing() {
-        let noise = BoundedNoise::none(3);
+        let noise = Noise::none(3);
         let mut rng = Xoshiro256StarStar::seed_from_u64(5);
         let before = rng.clone();
         assert_eq!(noise.sample(&mut rng), DVector::zeros(3));
@@ -240,35 +257,58 @@ mod tests {
         assert_eq!(noise.distribution(), NoiseDistribution::None);
         assert!(noise.shape().is_none() && noise.half_widths().is_none());
         // A zero-dimensional ellipsoid is valid and draws nothing either.
-        let e = BoundedNoise::ellipsoid_boundary(DMatrix::zeros(0, 0)).unwrap();
+        let e = Noise::ellipsoid_boundary(DMatrix::zeros(0, 0)).unwrap();
         assert_eq!(e.sample(&mut rng).len(), 0);
     }
 
     #[test]
     fn invalid_noise_parameters_are_named() {
-        let e = BoundedNoise::uniform_box(DVector::from_row_slice(&[0.1, -0.2])).unwrap_err();
+        let e = Noise::uniform_box(DVector::from_row_slice(&[0.1, -0.2])).unwrap_err();
         assert_eq!(e.to_string(), "box noise half-width 1 must be finite and non-negative, got -0.2");
-        let e = BoundedNoise::uniform_cube(2, f64::NAN).unwrap_err();
+        let e = Noise::uniform_cube(2, f64::NAN).unwrap_err();
         assert_eq!(e.to_string(), "box noise half-width 0 must be finite and non-negative, got NaN");
-        let e = BoundedNoise::uniform_ellipsoid(DMatrix::zeros(2, 3)).unwrap_err();
+        let e = Noise::uniform_ellipsoid(DMatrix::zeros(2, 3)).unwrap_err();
         assert_eq!(e.to_string(), "ellipsoid shape matrix Q: expected 2x2, got 2x3");
         let mut q = DMatrix::identity(2, 2);
         q[(0, 1)] = f64::INFINITY;
-        let e = BoundedNoise::uniform_ellipsoid(q).unwrap_err();
+        let e = Noise::uniform_ellipsoid(q).unwrap_err();
         assert_eq!(e.to_string(), "ellipsoid shape matrix Q has a non-finite entry at (0, 1)");
         let q = DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.4, 1.0]);
-        let e = BoundedNoise::ellipsoid_boundary(q).unwrap_err();
+        let e = Noise::ellipsoid_boundary(q).unwrap_err();
         assert!(e.to_string().starts_with("ellipsoid shape matrix Q is not symmetric: max |Q - Q^T| = 0.09999"), "{e}");
         let q = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-        let e = BoundedNoise::uniform_ellipsoid(q).unwrap_err();
-        assert_eq!(e.to_string(), "ellipsoid shape matrix Q is not positive definite (Cholesky factorisation failed)");
-        let e = BoundedNoise::uniform_ellipsoid(DMatrix::zeros(2, 2)).unwrap_err();
-        assert_eq!(e, DynamicsError::NotPositiveDefinite);
+        let e = Noise::uniform_ellipsoid(q).unwrap_err();
+        assert_eq!(e.to_string(), "ellipsoid shape matrix Q is not positive definite (Cholesky pivot 1 is -3e0)");
+        let e = Noise::uniform_ellipsoid(DMatrix::zeros(2, 2)).unwrap_err();
+        assert!(matches!(e, ModelError::NotPositiveDefinite { pivot: 0, .. }));
+        let e = Noise::gaussian(DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.1, 1.0])).unwrap_err();
+        assert!(e.to_string().starts_with("noise covariance Q is not symmetric"), "{e}");
         // Round-off asymmetry is tolerated and removed.
         let mut q = test_shape();
         q[(0, 1)] += 1e-14;
-        let noise = BoundedNoise::uniform_ellipsoid(q).unwrap();
+        let noise = Noise::uniform_ellipsoid(q).unwrap();
         let s = noise.shape().unwrap();
         assert_eq!(s, &s.transpose());
+    }
+
+    #[test]
+    fn gaussian_samples_have_the_covariance() {
+        let q = test_shape();
+        let noise = Noise::gaussian(q.clone()).unwrap();
+        assert_eq!(noise.distribution(), NoiseDistribution::Gaussian);
+        let mut rng = Xoshiro256StarStar::seed_from_u64(17);
+        let n = 20_000;
+        let mut cov = DMatrix::zeros(3, 3);
+        let mut mean = DVector::zeros(3);
+        for _ in 0..n {
+            let w = noise.sample(&mut rng);
+            cov += &w * w.transpose();
+            mean += w;
+        }
+        cov /= f64::from(n);
+        mean /= f64::from(n);
+        // Standard error of a covariance entry ≈ √(2/n)·‖Q‖ ≈ 0.01·‖Q‖.
+        assert!((&cov - &q).amax() < 0.05 * q.amax(), "{cov} vs {q}");
+        assert!(mean.amax() < 0.05 * q.amax().sqrt(), "{mean}");
     }
 }

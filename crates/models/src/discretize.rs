@@ -1,8 +1,9 @@
-//! Matrix exponential and exact zero-order-hold discretisation (paper eqs (10)–(11)).
+//! Matrix exponential and exact zero-order-hold discretisation (the carrier paper's eqs
+//! (10)–(11), `docs/carrier-smf.md`).
 
 use nalgebra::{DMatrix, SMatrix};
 
-use crate::error::{DynamicsError, check_dims, check_finite};
+use crate::error::{ModelError, check_dims, check_finite};
 
 /// Padé degrees and the 1-norm bounds `θ_m` up to which the degree-`m` approximant is accurate
 /// to double precision (Higham 2005, Table 2.3).
@@ -84,20 +85,20 @@ fn pade13(a: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
 }
 
 /// `r = q⁻¹ p` with `p = V + U`, `q = V − U`.
-fn solve_pade(u: &DMatrix<f64>, v: &DMatrix<f64>) -> Result<DMatrix<f64>, DynamicsError> {
+fn solve_pade(u: &DMatrix<f64>, v: &DMatrix<f64>) -> Result<DMatrix<f64>, ModelError> {
     let p = v + u;
     let q = v - u;
-    q.lu().solve(&p).ok_or(DynamicsError::SingularPadeDenominator)
+    q.lu().solve(&p).ok_or(ModelError::SingularPadeDenominator)
 }
 
 /// Matrix exponential `e^M` by scaling and squaring with Padé approximants of degree
 /// 3, 5, 7, 9 or 13 (Higham, *SIAM J. Matrix Anal. Appl.* 26(4), 2005), on any square size.
 ///
 /// # Errors
-/// [`DynamicsError::DimensionMismatch`] if `m` is not square,
-/// [`DynamicsError::NonFiniteEntry`] for NaN/∞ entries, [`DynamicsError::ExponentialOverflow`]
+/// [`ModelError::DimensionMismatch`] if `m` is not square,
+/// [`ModelError::NonFiniteEntry`] for NaN/∞ entries, [`ModelError::ExponentialOverflow`]
 /// if the result does not fit in `f64`.
-pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>, DynamicsError> {
+pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>, ModelError> {
     let n = m.nrows();
     check_dims("matrix to exponentiate", m, n, n)?;
     check_finite("matrix to exponentiate", m)?;
@@ -106,7 +107,7 @@ pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>, DynamicsError> {
     }
     let norm = one_norm(m);
     if !norm.is_finite() {
-        return Err(DynamicsError::ExponentialOverflow { norm });
+        return Err(ModelError::ExponentialOverflow { norm });
     }
     let result = if let Some(&(degree, _)) = THETA.iter().find(|(_, theta)| norm <= *theta) {
         let coeffs: &[f64] = match degree {
@@ -129,7 +130,7 @@ pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>, DynamicsError> {
         r
     };
     if result.iter().any(|x| !x.is_finite()) {
-        return Err(DynamicsError::ExponentialOverflow { norm });
+        return Err(ModelError::ExponentialOverflow { norm });
     }
     Ok(result)
 }
@@ -151,12 +152,12 @@ pub struct ZohDiscretization {
 /// `exp([[A, B], [0, 0]] T_s) = [[A_p, B_p], [0, I]]`, for any `n` and `p`.
 ///
 /// # Errors
-/// [`DynamicsError::InvalidSamplingPeriod`] unless `ts` is positive and finite;
-/// [`DynamicsError::DimensionMismatch`] if `A` is not square or `B` has another number of rows;
-/// [`DynamicsError::NonFiniteEntry`] for NaN/∞ entries; exponential failures of [`expm`].
-pub fn zoh_discretize(a: &DMatrix<f64>, b: &DMatrix<f64>, ts: f64) -> Result<ZohDiscretization, DynamicsError> {
+/// [`ModelError::InvalidSamplingPeriod`] unless `ts` is positive and finite;
+/// [`ModelError::DimensionMismatch`] if `A` is not square or `B` has another number of rows;
+/// [`ModelError::NonFiniteEntry`] for NaN/∞ entries; exponential failures of [`expm`].
+pub fn zoh_discretize(a: &DMatrix<f64>, b: &DMatrix<f64>, ts: f64) -> Result<ZohDiscretization, ModelError> {
     if !(ts.is_finite() && ts > 0.0) {
-        return Err(DynamicsError::InvalidSamplingPeriod(ts));
+        return Err(ModelError::InvalidSamplingPeriod(ts));
     }
     let n = a.nrows();
     let p = b.ncols();
@@ -181,7 +182,7 @@ pub fn zoh_discretize_fixed<const N: usize, const P: usize>(
     a: &SMatrix<f64, N, N>,
     b: &SMatrix<f64, N, P>,
     ts: f64,
-) -> Result<(SMatrix<f64, N, N>, SMatrix<f64, N, P>), DynamicsError> {
+) -> Result<(SMatrix<f64, N, N>, SMatrix<f64, N, P>), ModelError> {
     let d = zoh_discretize(
         &DMatrix::from_column_slice(N, N, a.as_slice()),
         &DMatrix::from_column_slice(N, P, b.as_slice()),
@@ -196,7 +197,6 @@ pub fn zoh_discretize_fixed<const N: usize, const P: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{CarrierModel, CarrierParams};
 
     fn max_rel_err(got: &DMatrix<f64>, want: &DMatrix<f64>) -> f64 {
         let scale = want.amax().max(1e-300);
@@ -224,15 +224,6 @@ mod tests {
             let got = expm(&m).unwrap();
             assert!((&got - &want).amax() < 1e-13, "{got} vs {want}");
             assert!((&got - m.exp()).amax() < 1e-13);
-        }
-        // The carrier block at 1 ms and 0.5 s: ours vs nalgebra's exp.
-        let model = CarrierModel::new(CarrierParams::paper_preset()).unwrap();
-        for ts in [1e-3, 0.5] {
-            let mut block = DMatrix::zeros(12, 12);
-            block.view_mut((0, 0), (4, 4)).copy_from(&(model.a() * ts));
-            block.view_mut((0, 4), (4, 8)).copy_from(&(model.b() * ts));
-            let err = max_rel_err(&expm(&block).unwrap(), &block.exp());
-            assert!(err < 1e-12, "T_s = {ts}: {err}");
         }
     }
 
@@ -266,63 +257,13 @@ mod tests {
         assert!((&d.b_p - want_b).amax() < 1e-14);
     }
 
-    /// RK4 of ẋ = A x + B u over [0, T] with constant u.
-    fn rk4(
-        a: &DMatrix<f64>,
-        bu: &nalgebra::DVector<f64>,
-        x0: &nalgebra::DVector<f64>,
-        t: f64,
-        steps: usize,
-    ) -> nalgebra::DVector<f64> {
-        let h = t / steps as f64;
-        let f = |x: &nalgebra::DVector<f64>| a * x + bu;
-        let mut x = x0.clone();
-        for _ in 0..steps {
-            let k1 = f(&x);
-            let k2 = f(&(&x + &k1 * (h / 2.0)));
-            let k3 = f(&(&x + &k2 * (h / 2.0)));
-            let k4 = f(&(&x + &k3 * h));
-            x += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
-        }
-        x
-    }
-
-    #[test]
-    fn carrier_zoh_matches_fine_rk4() {
-        let model = CarrierModel::new(CarrierParams::for_load(2).unwrap().with_speed(3.0)).unwrap();
-        let a = DMatrix::from_column_slice(4, 4, model.a().as_slice());
-        let b = DMatrix::from_column_slice(4, 8, model.b().as_slice());
-        for (ts, steps) in [(0.01, 50), (0.3, 2000)] {
-            let d = zoh_discretize(&a, &b, ts).unwrap();
-            // Columns of A_p: free response from unit states.
-            for i in 0..4 {
-                let x0 = nalgebra::DVector::from_fn(4, |r, _| f64::from(u8::from(r == i)));
-                let x = rk4(&a, &nalgebra::DVector::zeros(4), &x0, ts, steps);
-                let err = (x - d.a_p.column(i)).amax() / d.a_p.column(i).amax();
-                assert!(err < 1e-10, "T_s = {ts}, A_p column {i}: {err}");
-            }
-            // Columns of B_p: forced response from rest to a unit input.
-            for j in 0..8 {
-                let bu = b.column(j).into_owned();
-                let x = rk4(&a, &bu, &nalgebra::DVector::zeros(4), ts, steps);
-                let err = (x - d.b_p.column(j)).amax() / d.b_p.column(j).amax();
-                assert!(err < 1e-10, "T_s = {ts}, B_p column {j}: {err}");
-            }
-        }
-        // The fixed-size convenience agrees with the generic function.
-        let (a_p, b_p) = zoh_discretize_fixed(model.a(), model.b(), 0.3).unwrap();
-        let d = zoh_discretize(&a, &b, 0.3).unwrap();
-        assert_eq!(a_p.as_slice(), d.a_p.as_slice());
-        assert_eq!(b_p.as_slice(), d.b_p.as_slice());
-    }
-
     #[test]
     fn error_paths_name_the_problem() {
         let a = DMatrix::identity(2, 2);
         let b = DMatrix::zeros(2, 1);
         for ts in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let e = zoh_discretize(&a, &b, ts).unwrap_err();
-            assert!(matches!(e, DynamicsError::InvalidSamplingPeriod(_)));
+            assert!(matches!(e, ModelError::InvalidSamplingPeriod(_)));
             assert!(e.to_string().starts_with("sampling period T_s must be positive and finite, got"));
         }
         let e = zoh_discretize(&DMatrix::zeros(2, 3), &b, 1.0).unwrap_err();

@@ -1,20 +1,32 @@
-//! Small allocation-free dense kernels on column-major `DMatrix` storage.
+//! Small dense kernels shared by the workspace: one home for the Cholesky factorisation,
+//! symmetric-positive-definite checks, symmetrisation and their tolerances, and the
+//! allocation-free products of the filters' hot paths.
 //!
-//! Every function writes into a preallocated output whose dimensions the caller guarantees
-//! (checked by `debug_assert!`). Sizes are those of the filter (a few states), so plain loops
-//! beat blocked BLAS here.
+//! * Hot-path kernels (`mul_nn`, `mul_nt`, `gemv`, `cholesky_in_place`, the triangular solves,
+//!   `symmetrize`, `i_minus_lc`, …) work on column-major [`DMatrix`] storage and write into a
+//!   preallocated output whose dimensions the caller guarantees (checked by `debug_assert!`).
+//!   Sizes are those of the filters (a few states), so plain loops beat blocked BLAS here.
+//! * Validation ([`spd`]): symmetry and positive definiteness with the workspace's tolerances,
+//!   reporting the offending entry or pivot.
+//!
+//! The interior-point SDP backend (`lmi`) keeps its own faer/SIMD kernels: they run inside one
+//! SIMD dispatch on slices of its workspace and are part of that solver's design.
+
+pub mod spd;
 
 use nalgebra::{DMatrix, DVector};
 
+pub use spd::{PD_RELATIVE_TOLERANCE, PivotFailure, SYMMETRY_TOLERANCE, cholesky_checked, max_asymmetry};
+
 /// `out = alpha · a · b + beta · out`.
-pub(crate) fn mul_nn(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
+pub fn mul_nn(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
     debug_assert_eq!(b.nrows(), a.ncols());
     // b[l, j] is at j·k + l (column-major b, k × c).
     mul_strided(alpha, a, b.as_slice(), b.ncols(), (a.ncols(), 1), beta, out);
 }
 
 /// `out = alpha · a · bᵀ + beta · out`.
-pub(crate) fn mul_nt(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
+pub fn mul_nt(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
     debug_assert_eq!(b.ncols(), a.ncols());
     // bᵀ[l, j] = b[j, l] is at l·c + j (column-major b, c × k).
     mul_strided(alpha, a, b.as_slice(), b.nrows(), (1, b.nrows()), beta, out);
@@ -50,7 +62,7 @@ fn mul_strided(
 }
 
 /// `out = alpha · a · x + beta · out` (matrix–vector).
-pub(crate) fn gemv(alpha: f64, a: &DMatrix<f64>, x: &DVector<f64>, beta: f64, out: &mut DVector<f64>) {
+pub fn gemv(alpha: f64, a: &DMatrix<f64>, x: &DVector<f64>, beta: f64, out: &mut DVector<f64>) {
     let (r, k) = a.shape();
     debug_assert_eq!(x.len(), k);
     debug_assert_eq!(out.len(), r);
@@ -77,7 +89,7 @@ fn scale_col(c: &mut [f64], beta: f64) {
 }
 
 /// `Σ aᵢ bᵢ`; for matrices of equal shape, the Frobenius inner product `⟨A, B⟩ = tr(Aᵀ B)`.
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());
     let mut s = 0.0;
     for i in 0..a.len() {
@@ -87,19 +99,19 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Frobenius norm.
-pub(crate) fn fro(a: &[f64]) -> f64 {
+pub fn fro(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
 
 /// `out = x · a + y · b` entrywise (same shapes).
-pub(crate) fn lin2(out: &mut [f64], x: f64, a: &[f64], y: f64, b: &[f64]) {
+pub fn lin2(out: &mut [f64], x: f64, a: &[f64], y: f64, b: &[f64]) {
     for i in 0..out.len() {
         out[i] = x * a[i] + y * b[i];
     }
 }
 
 /// `out += alpha · a` entrywise.
-pub(crate) fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
+pub fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
     for i in 0..out.len() {
         out[i] += alpha * a[i];
     }
@@ -108,7 +120,7 @@ pub(crate) fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
 /// In-place lower Cholesky factor `S = G Gᵀ` of a symmetric matrix (only the lower triangle is
 /// read; the strict upper triangle is zeroed). Returns `false` if a pivot is not positive and
 /// finite.
-pub(crate) fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
+pub fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
     let m = s.nrows();
     debug_assert_eq!(s.ncols(), m);
     let g = s.as_mut_slice();
@@ -137,7 +149,7 @@ pub(crate) fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
 }
 
 /// `x ← x · G⁻ᵀ` for a lower-triangular `G` (solves `Y Gᵀ = X` column by column).
-pub(crate) fn solve_right_lower_t(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
+pub fn solve_right_lower_t(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
     let (r, m) = x.shape();
     debug_assert_eq!(g.shape(), (m, m));
     let g = g.as_slice();
@@ -160,7 +172,7 @@ pub(crate) fn solve_right_lower_t(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
 }
 
 /// `x ← x · G⁻¹` for a lower-triangular `G` (solves `Y G = X`, last column first).
-pub(crate) fn solve_right_lower(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
+pub fn solve_right_lower(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
     let (r, m) = x.shape();
     debug_assert_eq!(g.shape(), (m, m));
     let g = g.as_slice();
@@ -183,7 +195,7 @@ pub(crate) fn solve_right_lower(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
 }
 
 /// `a ← (a + aᵀ)/2`.
-pub(crate) fn symmetrize(a: &mut DMatrix<f64>) {
+pub fn symmetrize(a: &mut DMatrix<f64>) {
     let n = a.nrows();
     for j in 0..n {
         for i in j + 1..n {
@@ -195,7 +207,7 @@ pub(crate) fn symmetrize(a: &mut DMatrix<f64>) {
 }
 
 /// `out = I − L C` (`L` is `n × m`, `C` is `m × n`).
-pub(crate) fn i_minus_lc(l: &DMatrix<f64>, c: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+pub fn i_minus_lc(l: &DMatrix<f64>, c: &DMatrix<f64>, out: &mut DMatrix<f64>) {
     mul_nn(-1.0, l, c, 0.0, out);
     let n = out.nrows();
     for i in 0..n {

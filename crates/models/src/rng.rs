@@ -88,6 +88,47 @@ impl Xoshiro256StarStar {
     }
 }
 
+impl rand_core::RngCore for Xoshiro256StarStar {
+    /// The high 32 bits of [`Xoshiro256StarStar::next_u64`].
+    fn next_u32(&mut self) -> u32 {
+        (Xoshiro256StarStar::next_u64(self) >> 32) as u32
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        Xoshiro256StarStar::next_u64(self)
+    }
+
+    /// Little-endian bytes of successive [`Xoshiro256StarStar::next_u64`] outputs.
+    fn fill_bytes(&mut self, dest: &mut [u8]) {
+        for chunk in dest.chunks_mut(8) {
+            let bytes = Xoshiro256StarStar::next_u64(self).to_le_bytes();
+            chunk.copy_from_slice(&bytes[..chunk.len()]);
+        }
+    }
+}
+
+impl rand_core::SeedableRng for Xoshiro256StarStar {
+    type Seed = [u8; 32];
+
+    /// The four state words from the seed's little-endian bytes; the all-zero seed (a fixed
+    /// point of xoshiro) is replaced by `seed_from_u64(0)`.
+    fn from_seed(seed: [u8; 32]) -> Self {
+        let mut s = [0u64; 4];
+        for (i, w) in s.iter_mut().enumerate() {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&seed[8 * i..8 * i + 8]);
+            *w = u64::from_le_bytes(b);
+        }
+        if s == [0; 4] { Xoshiro256StarStar::seed_from_u64(0) } else { Self { s } }
+    }
+
+    /// The crate's documented SplitMix64 seeding (not `rand_core`'s default), so that a seed
+    /// gives the same stream through either API.
+    fn seed_from_u64(state: u64) -> Self {
+        Xoshiro256StarStar::seed_from_u64(state)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -158,5 +199,25 @@ mod tests {
         assert!((g2 / nf - 1.0).abs() < 0.03);
         let x = rng.uniform(-2.0, 3.0);
         assert!((-2.0..3.0).contains(&x));
+    }
+
+    #[test]
+    fn rand_core_traits_agree_with_the_inherent_api() {
+        use rand_core::{RngCore, SeedableRng};
+        let mut a = <Xoshiro256StarStar as SeedableRng>::seed_from_u64(9);
+        let mut b = Xoshiro256StarStar::seed_from_u64(9);
+        assert_eq!(RngCore::next_u64(&mut a), b.next_u64());
+        let mut bytes = [0u8; 12];
+        a.fill_bytes(&mut bytes);
+        let w = b.next_u64().to_le_bytes();
+        assert_eq!(&bytes[..8], &w);
+        assert_eq!(&bytes[8..], &b.next_u64().to_le_bytes()[..4]);
+        assert_eq!(a.next_u32(), (b.next_u64() >> 32) as u32);
+        let z = Xoshiro256StarStar::from_seed([0; 32]);
+        assert_eq!(z, Xoshiro256StarStar::seed_from_u64(0));
+        let mut seed = [0u8; 32];
+        seed[8] = 1; // s[1] = 1: the output scrambles s[1]
+        let mut one = Xoshiro256StarStar::from_seed(seed);
+        assert_ne!(one.next_u64(), 0);
     }
 }
