@@ -2,9 +2,11 @@
 //! filter's state unchanged.
 
 use lmi::LmiError;
+use models::ModelError;
 
 /// Everything a filter can reject.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum EstimatorError {
     /// A vector or matrix has the wrong size.
     #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
@@ -67,6 +69,26 @@ pub enum EstimatorError {
     /// The step produced a non-finite estimate (for example, an unstable model overflowed).
     #[error("numerical failure: {0}")]
     NumericalFailure(&'static str),
+    /// No estimator of this name in the registry.
+    #[error("unknown estimator {name:?} (known: {known})")]
+    UnknownEstimator {
+        /// The name asked for.
+        name: String,
+        /// The registered names, comma-separated.
+        known: String,
+    },
+    /// The estimator needs a setting that was not given (for example the input box of the
+    /// Yang–Li reconstruction (a)).
+    #[error("estimator {estimator} needs {what}")]
+    MissingSetting {
+        /// The estimator.
+        estimator: &'static str,
+        /// What is missing.
+        what: &'static str,
+    },
+    /// The model could not be evaluated.
+    #[error("model: {0}")]
+    Model(#[from] ModelError),
     /// Setting up an SDP backend failed.
     #[error("SDP backend: {0}")]
     Lmi(#[from] LmiError),

@@ -11,9 +11,12 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::dense;
+use dense_kernels as dense;
+use models::{Dims, LinearModel};
+
 use crate::error::EstimatorError;
-use crate::model::{InitialData, StepModel, check_initial, check_model, check_spd, check_vec};
+use crate::traits::{Estimate, EstimateKind, Estimator, NoiseSettings};
+use crate::validate::{InitialData, check_initial, check_model, check_spd, check_vec};
 
 /// The Kalman estimate after a step: mean, covariance and per-state standard deviations.
 #[derive(Debug, Clone, PartialEq)]
@@ -95,6 +98,28 @@ impl KalmanFilter {
         &self.est
     }
 
+    /// A filter from [`NoiseSettings`] (covariances).
+    pub fn with_noise(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        noise: &NoiseSettings,
+        inputs: usize,
+    ) -> Result<Self, EstimatorError> {
+        Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
+    }
+
+    /// Replaces both covariances in place (validated first; on error nothing changes; no
+    /// allocation).
+    pub fn set_noise(&mut self, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        crate::validate::check_spd_no_alloc("Q", q, self.n, &mut self.tmp)?;
+        crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.s)?;
+        self.q.copy_from(q);
+        dense::symmetrize(&mut self.q);
+        self.r.copy_from(r);
+        dense::symmetrize(&mut self.r);
+        Ok(())
+    }
+
     /// Replaces the process covariance (symmetric positive definite, `n × n`).
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
         self.q = check_spd("Q", q, self.n)?;
@@ -109,26 +134,27 @@ impl KalmanFilter {
 
     /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
     /// state is unchanged. Allocation-free.
-    pub fn step(
+    pub fn step<M: LinearModel + ?Sized>(
         &mut self,
-        model: &StepModel<'_>,
+        model: &M,
         u: &DVector<f64>,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
+        let (a, b, c) = (model.a(), model.b(), model.c());
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         // Predict.
-        dense::gemv(1.0, model.a, &self.est.mean, 0.0, &mut self.x_pred);
-        dense::gemv(1.0, model.b, u, 1.0, &mut self.x_pred);
-        dense::mul_nn(1.0, model.a, &self.est.covariance, 0.0, &mut self.ap);
+        dense::gemv(1.0, a, &self.est.mean, 0.0, &mut self.x_pred);
+        dense::gemv(1.0, b, u, 1.0, &mut self.x_pred);
+        dense::mul_nn(1.0, a, &self.est.covariance, 0.0, &mut self.ap);
         self.p_pred.copy_from(&self.q);
-        dense::mul_nt(1.0, &self.ap, model.a, 1.0, &mut self.p_pred);
+        dense::mul_nt(1.0, &self.ap, a, 1.0, &mut self.p_pred);
         dense::symmetrize(&mut self.p_pred);
         // Gain K = P⁻Cᵀ S⁻¹, S = C P⁻ Cᵀ + R.
-        dense::mul_nt(1.0, &self.p_pred, model.c, 0.0, &mut self.pct);
+        dense::mul_nt(1.0, &self.p_pred, c, 0.0, &mut self.pct);
         self.s.copy_from(&self.r);
-        dense::mul_nn(1.0, model.c, &self.pct, 1.0, &mut self.s);
+        dense::mul_nn(1.0, c, &self.pct, 1.0, &mut self.s);
         if !dense::cholesky_in_place(&mut self.s) {
             return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
         }
@@ -137,11 +163,11 @@ impl KalmanFilter {
         dense::solve_right_lower(&mut self.k, &self.s);
         // Mean.
         self.innov.copy_from(y);
-        dense::gemv(-1.0, model.c, &self.x_pred, 1.0, &mut self.innov);
+        dense::gemv(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
         self.x_new.copy_from(&self.x_pred);
         dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
         // Joseph form.
-        dense::i_minus_lc(&self.k, model.c, &mut self.ikc);
+        dense::i_minus_lc(&self.k, c, &mut self.ikc);
         dense::mul_nn(1.0, &self.ikc, &self.p_pred, 0.0, &mut self.tmp);
         dense::mul_nt(1.0, &self.tmp, &self.ikc, 0.0, &mut self.p_new);
         dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
@@ -156,5 +182,30 @@ impl KalmanFilter {
             self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
         }
         Ok(&self.est)
+    }
+}
+
+impl Estimate for GaussianEstimate {
+    fn kind(&self) -> EstimateKind {
+        EstimateKind::Gaussian
+    }
+    fn center(&self) -> &DVector<f64> {
+        &self.mean
+    }
+    fn shape(&self) -> &DMatrix<f64> {
+        &self.covariance
+    }
+}
+
+impl<M: LinearModel + ?Sized> Estimator<M> for KalmanFilter {
+    type Estimate = GaussianEstimate;
+    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        KalmanFilter::step(self, model, u, y)
+    }
+    fn estimate(&self) -> &GaussianEstimate {
+        &self.est
+    }
+    fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
     }
 }

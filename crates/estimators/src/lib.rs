@@ -10,7 +10,7 @@
 //! x_{k+1} = A_k x_k + B_k u_k + w_k,      y_{k+1} = C_{k+1} x_{k+1} + v_{k+1}
 //! ```
 //!
-//! with the matrices passed per step ([`StepModel`]). One step consumes `u_k` and the
+//! with the matrices passed per step (any [`LinearModel`], e.g. [`StepModel`]). One step consumes `u_k` and the
 //! measurement `y_{k+1}` taken after it, and returns the estimate of `x_{k+1}`. Matrices are
 //! [`nalgebra::DMatrix`] (column-major), dimensions fixed at construction: `n` states, `p`
 //! inputs, `m` outputs.
@@ -18,10 +18,16 @@
 //! * [`KalmanFilter`]: `Q`, `R` are covariances; Joseph-form update.
 //! * [`SetMembershipFilter`]: unknown-but-bounded noise `w ∈ 𝓔(0, Q)`, `v ∈ 𝓔(0, R)` (8)–(9),
 //!   `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}`; the update (13)–(29) with any
-//!   [`UpdateSolver`]: the exact [`TwoMultiplierSolver`] (module [`two_multiplier`], the
-//!   reduction and its derivatives) or an SDP backend ([`SdpUpdateSolver`]). The published shape
-//!   is certified (module [`smf`]: the inflation rule and the fallback).
+//!   [`UpdateSolver`]: the exact [`TwoMultiplierSolver`] (module [`smf::two_multiplier`], the
+//!   reduction and its derivatives) or an SDP backend ([`SdpUpdateSolver`] on LMI (28), module
+//!   [`smf::lmi28`]). The published shape is certified (module [`smf`]: the inflation rule and
+//!   the fallback).
 //! * [`yang_li`]: the reconstruction of the paper's reference \[17\].
+//!
+//! Every filter implements [`Estimator`] for the model capability it needs (here
+//! [`LinearModel`]) and publishes an [`Estimate`] (centre, shape, bounds, and whether it is a
+//! Gaussian covariance or a guaranteed ellipsoid); [`registry`] builds them by name behind the
+//! object-safe [`DynEstimator`]. Equation numbers refer to `docs/carrier-smf.md`.
 //!
 //! Every step validates its input (dimensions, NaN/∞, and for the Yang–Li reconstruction (a)
 //! that the input lies in its declared box) and returns a typed [`EstimatorError`] leaving the
@@ -30,21 +36,21 @@
 //! does an SDP-backed step after the first (which builds the SDP) with the default backend; all
 //! return borrowed views of the filter's estimate.
 
-mod dense;
 pub mod error;
 pub mod kalman;
-pub mod model;
-pub mod sdp_solver;
+pub mod registry;
 pub mod smf;
-pub mod two_multiplier;
+pub mod traits;
+mod validate;
 pub mod yang_li;
 
 pub use error::EstimatorError;
 pub use kalman::{GaussianEstimate, KalmanFilter};
-pub use model::StepModel;
-pub use sdp_solver::SdpUpdateSolver;
+pub use models::{LinearModel, StepModel};
+pub use registry::{EstimatorInfo, LINEAR_ESTIMATORS, LinearSetup};
 pub use smf::{
-    FallbackReason, Inflation, InputModel, SetEstimate, SetMembershipFilter, StepReport, UpdateProblem, UpdateSolution,
-    UpdateSolver,
+    FallbackReason, Inflation, InputModel, SdpUpdateSolver, SetEstimate, SetMembershipFilter, StepReport, TAU_FLOOR,
+    TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus,
 };
-pub use two_multiplier::{TAU_FLOOR, TwoMultiplierSolver};
+pub use traits::{DynEstimator, Estimate, EstimateKind, Estimator, NoiseSettings};
+pub use validate::SYMMETRY_TOLERANCE;

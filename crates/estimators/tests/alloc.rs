@@ -68,7 +68,7 @@ fn overflowing() -> common::FixedSolver {
     common::FixedSolver {
         l: 1e200,
         tau: [0.25, 0.25, 0.5],
-        status: lmi::SolveStatus::Solved,
+        status: estimators::UpdateStatus::Solved,
         iterations: 0,
         closed_form: true,
     }

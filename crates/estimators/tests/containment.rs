@@ -18,7 +18,7 @@ use common::FixedSolver;
 
 use std::time::Duration;
 
-use carrier_dynamics::{BoundedNoise, Xoshiro256StarStar};
+use models::{Noise, Xoshiro256StarStar};
 use estimators::{
     FallbackReason, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver, yang_li,
 };
@@ -72,8 +72,8 @@ fn run<S: UpdateSolver>(
     steps: usize,
     u_of: impl Fn(&mut Xoshiro256StarStar) -> DVector<f64>,
 ) -> (f64, usize) {
-    let wn = BoundedNoise::ellipsoid_boundary(sys.q.clone()).unwrap();
-    let vn = BoundedNoise::ellipsoid_boundary(sys.r.clone()).unwrap();
+    let wn = Noise::ellipsoid_boundary(sys.q.clone()).unwrap();
+    let vn = Noise::ellipsoid_boundary(sys.r.clone()).unwrap();
     let mut x = common::boundary_point(rng, &sys.x_hat0, &sys.p0);
     let mut worst: f64 = 0.0;
     let mut fallbacks = 0;
@@ -181,7 +181,7 @@ fn never_converges() -> FixedSolver {
     FixedSolver {
         l: f64::NAN,
         tau: [0.9, 0.9, 0.9],
-        status: lmi::SolveStatus::IterationLimit,
+        status: estimators::UpdateStatus::IterationLimit,
         iterations: 100,
         closed_form: false,
     }
@@ -204,7 +204,7 @@ fn fallback_path_contains_the_true_state() {
         .unwrap();
         let (w, fb) = run(&sys, &mut f, &mut rng, 100, gauss_u);
         assert_eq!(fb, 100);
-        assert_eq!(f.estimate().report.fallback, Some(FallbackReason::Status(lmi::SolveStatus::IterationLimit)));
+        assert_eq!(f.estimate().report.fallback, Some(FallbackReason::Status(estimators::UpdateStatus::IterationLimit)));
         total += 100;
         worst = worst.max(w);
         // Zero time budget with the exact solver: every step falls back too.
@@ -240,7 +240,7 @@ fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
             let sys = random_system(&mut rng, i);
             // `Solved` with a finite but unusable (L, τ), claiming L is the closed-form gain (so the
             // filter certifies it as it is).
-            let solver = FixedSolver { l, tau, status: lmi::SolveStatus::Solved, iterations: 1, closed_form: true };
+            let solver = FixedSolver { l, tau, status: estimators::UpdateStatus::Solved, iterations: 1, closed_form: true };
             let mut f =
                 SetMembershipFilter::new(sys.x_hat0.clone(), sys.p0.clone(), sys.q.clone(), sys.r.clone(), 2, solver)
                     .unwrap();

@@ -9,7 +9,6 @@
 
 pub mod builder;
 pub mod error;
-pub mod filter_sdp;
 pub mod ipm;
 pub mod problem;
 pub mod registry;

@@ -1,7 +1,7 @@
 //! Shared helpers for the integration tests (random systems, SPD matrices, backends).
 #![allow(dead_code)]
 
-use carrier_dynamics::Xoshiro256StarStar;
+use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
 
 /// `A` of the `lmi` reference case (n = 4).
@@ -98,7 +98,7 @@ pub fn backends(settings: lmi::SolverSettings) -> Vec<(String, Box<dyn lmi::SdpB
 pub struct FixedSolver {
     pub l: f64,
     pub tau: [f64; 3],
-    pub status: lmi::SolveStatus,
+    pub status: estimators::UpdateStatus,
     pub iterations: u32,
     pub closed_form: bool,
 }

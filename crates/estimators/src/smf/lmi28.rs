@@ -27,9 +27,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::builder::{AffineMatrix, LmiBuilder, Var, VariableMap};
-use crate::error::LmiError;
-use crate::problem::SdpProblem;
+use lmi::builder::{AffineMatrix, LmiBuilder, Var, VariableMap};
+use lmi::LmiError;
+use lmi::SdpProblem;
 
 /// The data of one filter step.
 #[derive(Debug, Clone, Copy)]
@@ -502,7 +502,7 @@ mod tests {
         let (a, c, q, r, p, x) = data_case();
         let d = FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x };
         let sdp = FilterSdp::new(&d).unwrap();
-        assert_eq!(sdp.problem().blocks(), &[crate::Block::Psd(2 + 1 + 2 + 2 + 1)]);
+        assert_eq!(sdp.problem().blocks(), &[lmi::Block::Psd(2 + 1 + 2 + 2 + 1)]);
         assert_eq!(sdp.problem().num_vars(), 3 + 2 + 2 + 3);
         let l = DMatrix::from_row_slice(2, 1, &[0.5, 0.1]);
         let tau = [0.4, 0.3, 0.3];

@@ -70,7 +70,7 @@
 //!    chain rule and are shifted to be positive definite if needed;
 //! 3. Armijo backtracking on `g` along that path.
 //!
-//! Stopping ([`SolveStatus`]):
+//! Stopping ([`UpdateStatus`]):
 //!
 //! * **Solved** when the Newton decrement `−∇gᵀd ≤ 10⁻¹³ g` (for a quadratic model the gap
 //!   `g − g*` is half the decrement, so the objective is within about `10⁻¹³` relative of the
@@ -90,149 +90,20 @@
 //! homogeneous of degree 1 in the small multipliers, not quadratic). Typical counts: 0–1
 //! iterations in steady state, 4–5 when `τ` moves far between steps.
 
-use nalgebra::DMatrix;
 
-use crate::dense;
+
+
 use crate::error::EstimatorError;
-use crate::smf::{UpdateProblem, UpdateSolution, UpdateSolver};
-use lmi::SolveStatus;
+use super::gain::GainWork;
+use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
+
 
 /// Lower bound of `τ₁` and `τ₂` (the edges `τ₁ = 0`, `τ₂ = 0` are limits where `M` blows up).
 pub const TAU_FLOOR: f64 = 1e-12;
 
 /// Relative Newton decrement below which a search that can no longer make measurable progress
-/// ends as [`SolveStatus::AlmostSolved`] (module documentation, "Minimisation").
+/// ends as [`UpdateStatus::AlmostSolved`] (module documentation, "Minimisation").
 const STALL_TOLERANCE: f64 = 1e-10;
-
-/// Value, gradient and Hessian of `g` on the positive orthant, at one `τ`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Eval {
-    pub g: f64,
-    pub grad: [f64; 3],
-    pub hess: [[f64; 3]; 3],
-}
-
-/// Buffers for the closed-form gain (G1) and for `g`, its gradient and Hessian.
-#[derive(Debug, Clone)]
-pub(crate) struct GainWork {
-    x1c: DMatrix<f64>,
-    qc: DMatrix<f64>,
-    cx1c: DMatrix<f64>,
-    cqc: DMatrix<f64>,
-    mc: DMatrix<f64>,
-    nmat: DMatrix<f64>,
-    /// `S`, then its Cholesky factor `G`.
-    g: DMatrix<f64>,
-    w: DMatrix<f64>,
-    /// The gain `L = τ₃ W` of the last evaluation.
-    pub l: DMatrix<f64>,
-    k: DMatrix<f64>,
-    kx: DMatrix<f64>,
-    wr: DMatrix<f64>,
-    b1: DMatrix<f64>,
-    b2: DMatrix<f64>,
-    b3: DMatrix<f64>,
-    wn: DMatrix<f64>,
-}
-
-impl GainWork {
-    pub(crate) fn new(n: usize, m: usize) -> Self {
-        let nm = || DMatrix::zeros(n, m);
-        let mm = || DMatrix::zeros(m, m);
-        Self {
-            x1c: nm(),
-            qc: nm(),
-            cx1c: mm(),
-            cqc: mm(),
-            mc: nm(),
-            nmat: mm(),
-            g: mm(),
-            w: nm(),
-            l: nm(),
-            k: DMatrix::zeros(n, n),
-            kx: DMatrix::zeros(n, n),
-            wr: nm(),
-            b1: nm(),
-            b2: nm(),
-            b3: nm(),
-            wn: nm(),
-        }
-    }
-
-    /// Precomputes the `τ`-independent products `X₁Cᵀ`, `QCᵀ`, `CX₁Cᵀ`, `CQCᵀ`.
-    pub(crate) fn load(&mut self, x1: &DMatrix<f64>, q: &DMatrix<f64>, c: &DMatrix<f64>) {
-        dense::mul_nt(1.0, x1, c, 0.0, &mut self.x1c);
-        dense::mul_nt(1.0, q, c, 0.0, &mut self.qc);
-        dense::mul_nn(1.0, c, &self.x1c, 0.0, &mut self.cx1c);
-        dense::mul_nn(1.0, c, &self.qc, 0.0, &mut self.cqc);
-    }
-
-    /// The gain (G1) for `τ` (after [`GainWork::load`]): fills `G`, `W`, `L`, `K`.
-    /// `false` if `S` is not numerically positive definite or something is not finite.
-    pub(crate) fn gain(&mut self, tau: [f64; 3], c: &DMatrix<f64>, r: &DMatrix<f64>) -> bool {
-        let [t1, t2, t3] = tau;
-        // M Cᵀ = X₁Cᵀ/τ₁ + QCᵀ/τ₂ and N = C M Cᵀ without forming M.
-        dense::lin2(self.mc.as_mut_slice(), 1.0 / t1, self.x1c.as_slice(), 1.0 / t2, self.qc.as_slice());
-        dense::lin2(self.nmat.as_mut_slice(), 1.0 / t1, self.cx1c.as_slice(), 1.0 / t2, self.cqc.as_slice());
-        // S = τ₃ N + R = G Gᵀ.
-        dense::lin2(self.g.as_mut_slice(), t3, self.nmat.as_slice(), 1.0, r.as_slice());
-        if !dense::cholesky_in_place(&mut self.g) {
-            return false;
-        }
-        // W = M Cᵀ G⁻ᵀ G⁻¹, L = τ₃ W, K = I − L C.
-        self.w.copy_from(&self.mc);
-        dense::solve_right_lower_t(&mut self.w, &self.g);
-        dense::solve_right_lower(&mut self.w, &self.g);
-        dense::lin2(self.l.as_mut_slice(), t3, self.w.as_slice(), 0.0, self.w.as_slice());
-        dense::i_minus_lc(&self.l, c, &mut self.k);
-        self.w.iter().all(|v| v.is_finite())
-    }
-
-    /// `g(τ)`, (D1) and (D2) after [`GainWork::load`]. `None` if the gain fails.
-    pub(crate) fn eval(
-        &mut self,
-        tau: [f64; 3],
-        x1: &DMatrix<f64>,
-        q: &DMatrix<f64>,
-        c: &DMatrix<f64>,
-        r: &DMatrix<f64>,
-    ) -> Option<Eval> {
-        if !self.gain(tau, c, r) {
-            return None;
-        }
-        let [t1, t2, t3] = tau;
-        // tr T₁ = ⟨K X₁, K⟩/τ₁, tr T₂ = ⟨K Q, K⟩/τ₂, tr(W R Wᵀ) = ⟨W R, W⟩.
-        dense::mul_nn(1.0, &self.k, x1, 0.0, &mut self.kx);
-        let tr1 = dense::dot(self.kx.as_slice(), self.k.as_slice()) / t1;
-        dense::mul_nn(1.0, &self.k, q, 0.0, &mut self.kx);
-        let tr2 = dense::dot(self.kx.as_slice(), self.k.as_slice()) / t2;
-        dense::mul_nn(1.0, &self.w, r, 0.0, &mut self.wr);
-        let wrw = dense::dot(self.wr.as_slice(), self.w.as_slice());
-        let g = tr1 + tr2 + t3 * wrw;
-        let grad = [-tr1 / t1, -tr2 / t2, -wrw];
-        // βᵢ = ãᵢ G⁻ᵀ.
-        dense::mul_nn(1.0 / t1, &self.k, &self.x1c, 0.0, &mut self.b1);
-        dense::solve_right_lower_t(&mut self.b1, &self.g);
-        dense::mul_nn(1.0 / t2, &self.k, &self.qc, 0.0, &mut self.b2);
-        dense::solve_right_lower_t(&mut self.b2, &self.g);
-        self.b3.copy_from(&self.wr);
-        dense::solve_right_lower_t(&mut self.b3, &self.g); // −β₃
-        dense::mul_nn(1.0, &self.w, &self.nmat, 0.0, &mut self.wn);
-        dense::solve_right_lower_t(&mut self.wn, &self.g);
-        let d = |a: &DMatrix<f64>, b: &DMatrix<f64>| dense::dot(a.as_slice(), b.as_slice());
-        let h11 = 2.0 * (tr1 - t3 * d(&self.b1, &self.b1)) / (t1 * t1);
-        let h22 = 2.0 * (tr2 - t3 * d(&self.b2, &self.b2)) / (t2 * t2);
-        let h12 = -2.0 * t3 * d(&self.b1, &self.b2) / (t1 * t2);
-        let h13 = 2.0 * d(&self.b1, &self.b3) / t1;
-        let h23 = 2.0 * d(&self.b2, &self.b3) / t2;
-        let h33 = 2.0 * d(&self.wn, &self.b3);
-        let hess = [[h11, h12, h13], [h12, h22, h23], [h13, h23, h33]];
-        if !g.is_finite() || grad.iter().chain(hess.iter().flatten()).any(|v| !v.is_finite()) {
-            return None;
-        }
-        Some(Eval { g, grad, hess })
-    }
-}
 
 /// The exact solver of (29) by minimisation over the two free multipliers (module docs).
 #[derive(Debug, Clone)]
@@ -297,7 +168,7 @@ impl TwoMultiplierSolver {
         Point { t1, t2, on3 }
     }
 
-    fn minimise(&mut self, pr: &UpdateProblem<'_>, warm: [f64; 3]) -> (Point, SolveStatus, u32) {
+    fn minimise(&mut self, pr: &UpdateProblem<'_>, warm: [f64; 3]) -> (Point, UpdateStatus, u32) {
         let work = self.work.as_mut().expect("prepared");
         let eval = |w: &mut GainWork, p: &Point| w.eval(p.tau(), pr.x1, pr.q, pr.c, pr.r);
         let mut pt = Self::start(warm);
@@ -307,7 +178,7 @@ impl TwoMultiplierSolver {
                 pt = Self::start([1.0 / 3.0; 3]);
                 match eval(work, &pt) {
                     Some(e) => e,
-                    None => return (pt, SolveStatus::NumericalTrouble, 0),
+                    None => return (pt, UpdateStatus::NumericalTrouble, 0),
                 }
             }
         };
@@ -333,7 +204,7 @@ impl TwoMultiplierSolver {
                         let mu_a = (gr[0] * nb[1] - nb[0] * gr[1]) / det;
                         let mu_b = (na[0] * gr[1] - gr[0] * na[1]) / det;
                         if mu_a >= 0.0 && mu_b >= 0.0 {
-                            return (pt, SolveStatus::Solved, iters);
+                            return (pt, UpdateStatus::Solved, iters);
                         }
                         if mu_a < mu_b {
                             ws[a] = false;
@@ -446,13 +317,13 @@ impl TwoMultiplierSolver {
             if dec.is_nan() {
                 // The model at this point is broken (a NaN gradient or Hessian entry that
                 // escaped the finiteness check through the step computation): not a solution.
-                return (pt, SolveStatus::NumericalTrouble, iters);
+                return (pt, UpdateStatus::NumericalTrouble, iters);
             }
             if dec <= self.tolerance * ev.g.abs() {
-                return (pt, SolveStatus::Solved, iters);
+                return (pt, UpdateStatus::Solved, iters);
             }
             if iters >= self.max_iterations {
-                return (pt, SolveStatus::IterationLimit, iters);
+                return (pt, UpdateStatus::IterationLimit, iters);
             }
             let mut alpha: f64 = 1.0;
             if let Path::Linear(d) = path {
@@ -484,14 +355,14 @@ impl TwoMultiplierSolver {
                     if gain <= 4.0 * f64::EPSILON * ev.g.abs() && dec <= STALL_TOLERANCE * ev.g.abs() {
                         // No measurable progress: g is at its rounding floor, further steps
                         // cannot certify the 1e-13 test; the decrement still bounds the gap.
-                        return (pt, SolveStatus::AlmostSolved, iters);
+                        return (pt, UpdateStatus::AlmostSolved, iters);
                     }
                 }
                 None => {
                     let status = if dec <= 1e-9 * ev.g.abs() {
-                        SolveStatus::AlmostSolved
+                        UpdateStatus::AlmostSolved
                     } else {
-                        SolveStatus::NumericalTrouble
+                        UpdateStatus::NumericalTrouble
                     };
                     return (pt, status, iters);
                 }
@@ -655,7 +526,7 @@ impl UpdateSolver for TwoMultiplierSolver {
             out.l.copy_from(&work.l);
             out.status = status;
         } else {
-            out.status = SolveStatus::NumericalTrouble;
+            out.status = UpdateStatus::NumericalTrouble;
         }
         Ok(())
     }
@@ -664,6 +535,7 @@ impl UpdateSolver for TwoMultiplierSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::DMatrix;
 
     fn case() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
         let a = DMatrix::from_row_slice(3, 3, &[0.9, 0.2, -0.1, 0.0, 1.1, 0.3, 0.2, -0.4, 0.7]);
@@ -721,7 +593,7 @@ mod tests {
         s.prepare(3, 2).unwrap();
         let mut out = UpdateSolution::new(3, 2);
         s.solve(&pr, [1.0 / 3.0; 3], &mut out).unwrap();
-        assert_eq!(out.status, SolveStatus::Solved);
+        assert_eq!(out.status, UpdateStatus::Solved);
         let tau = out.tau;
         let w = s.work.as_mut().unwrap();
         let e = w.eval(tau, &x1, &q, &c, &r).unwrap();

@@ -4,7 +4,7 @@
 //! Reference (an independent solver): `tr P_{k+1} = 0.98464424`, `τ ≈ (0.55710, 0.10383,
 //! 0.33907)`, zero free first column.
 
-use lmi::filter_sdp::{FilterSdp, FilterSdpData};
+use estimators::smf::lmi28::{FilterSdp, FilterSdpData};
 use lmi::{SolveStatus, SolverSettings, backend_by_name, backend_names};
 use nalgebra::{DMatrix, DVector};
 

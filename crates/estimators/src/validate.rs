@@ -1,32 +1,14 @@
-//! Per-step model matrices and the validation shared by all filters.
+//! The validation shared by all filters (allocation-free on the hot path).
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::dense;
+use models::LinearModel;
+
 use crate::error::EstimatorError;
 
-/// The matrices of one step of `x_{k+1} = A_k x_k + B_k u_k + w_k`, `y_{k+1} = C_{k+1} x_{k+1} +
-/// v_{k+1}`: `a` is `n × n`, `b` is `n × p`, `c` is `m × n`. Borrowed, so a time-varying model
-/// costs nothing per step.
-#[derive(Debug, Clone, Copy)]
-pub struct StepModel<'a> {
-    /// `A_k`.
-    pub a: &'a DMatrix<f64>,
-    /// `B_k`.
-    pub b: &'a DMatrix<f64>,
-    /// `C_{k+1}`, the output matrix of the measurement taken after the step.
-    pub c: &'a DMatrix<f64>,
-}
-
-impl<'a> StepModel<'a> {
-    /// Bundles the three matrices.
-    pub fn new(a: &'a DMatrix<f64>, b: &'a DMatrix<f64>, c: &'a DMatrix<f64>) -> Self {
-        Self { a, b, c }
-    }
-}
-
-/// Relative symmetry tolerance for `Q`, `R`, `P`: `|M_ij − M_ji| ≤ 1e-10 · max |M_kl|`.
-pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
+/// Relative symmetry tolerance for `Q`, `R`, `P`: `|M_ij − M_ji| ≤ 1e-10 · max |M_kl|` (the
+/// workspace's, from `dense-kernels`).
+pub const SYMMETRY_TOLERANCE: f64 = dense_kernels::SYMMETRY_TOLERANCE;
 
 /// Checks that `m` is `rows × cols`; the error names the wrong dimension: `what.0` (for
 /// example "rows of A") or `what.1` ("columns of A").
@@ -60,13 +42,13 @@ pub(crate) fn check_vec(what: &'static str, v: &DVector<f64>, len: usize) -> Res
 }
 
 /// Checks the step matrices against `(n, p, m)`; allocation-free.
-pub(crate) fn check_model(model: &StepModel<'_>, n: usize, p: usize, m: usize) -> Result<(), EstimatorError> {
-    check_shape(("rows of A", "columns of A"), model.a, n, n)?;
-    check_shape(("rows of B", "columns of B"), model.b, n, p)?;
-    check_shape(("rows of C", "columns of C"), model.c, m, n)?;
-    check_finite("A", model.a.as_slice())?;
-    check_finite("B", model.b.as_slice())?;
-    check_finite("C", model.c.as_slice())
+pub(crate) fn check_model<M: LinearModel + ?Sized>(model: &M, n: usize, p: usize, m: usize) -> Result<(), EstimatorError> {
+    check_shape(("rows of A", "columns of A"), model.a(), n, n)?;
+    check_shape(("rows of B", "columns of B"), model.b(), n, p)?;
+    check_shape(("rows of C", "columns of C"), model.c(), m, n)?;
+    check_finite("A", model.a().as_slice())?;
+    check_finite("B", model.b().as_slice())?;
+    check_finite("C", model.c().as_slice())
 }
 
 /// Validates a square symmetric positive definite matrix of order `n` and returns its
@@ -75,27 +57,42 @@ pub(crate) fn check_spd(what: &'static str, m: &DMatrix<f64>, n: usize) -> Resul
     // Square: the order is the size that matters, so both dimensions are reported as `what`.
     check_shape((what, what), m, n, n)?;
     check_finite(what, m.as_slice())?;
-    let scale = m.amax();
-    for j in 0..n {
-        for i in j + 1..n {
-            if (m[(i, j)] - m[(j, i)]).abs() > SYMMETRY_TOLERANCE * scale {
-                return Err(EstimatorError::NotSymmetric { what });
-            }
-        }
+    if dense_kernels::max_asymmetry(m, SYMMETRY_TOLERANCE).is_some() {
+        return Err(EstimatorError::NotSymmetric { what });
     }
     let mut s = m.clone();
-    dense::symmetrize(&mut s);
-    let mut g = s.clone();
+    dense_kernels::symmetrize(&mut s);
     // Positive definite, and not numerically singular: every pivot above 4 ε n max diag.
-    let max_diag = (0..n).map(|i| s[(i, i)]).fold(0.0, f64::max);
-    if n == 0 || !dense::cholesky_in_place(&mut g) {
-        return Err(EstimatorError::NotPositiveDefinite { what });
-    }
-    let floor = 4.0 * f64::EPSILON * n as f64 * max_diag;
-    if (0..n).any(|i| g[(i, i)] * g[(i, i)] <= floor) {
+    if n == 0 || dense_kernels::cholesky_checked(&s, dense_kernels::PD_RELATIVE_TOLERANCE).is_err() {
         return Err(EstimatorError::NotPositiveDefinite { what });
     }
     Ok(s)
+}
+
+/// [`check_spd`] without allocating: the Cholesky factorisation runs in `work` (`n × n`,
+/// overwritten). Used by the in-place noise setters.
+pub(crate) fn check_spd_no_alloc(
+    what: &'static str,
+    m: &DMatrix<f64>,
+    n: usize,
+    work: &mut DMatrix<f64>,
+) -> Result<(), EstimatorError> {
+    check_shape((what, what), m, n, n)?;
+    check_finite(what, m.as_slice())?;
+    if dense_kernels::max_asymmetry(m, SYMMETRY_TOLERANCE).is_some() {
+        return Err(EstimatorError::NotSymmetric { what });
+    }
+    if n == 0 || work.shape() != (n, n) {
+        return Err(EstimatorError::NotPositiveDefinite { what });
+    }
+    work.copy_from(m);
+    dense_kernels::symmetrize(work);
+    let max_diag = (0..n).map(|i| work[(i, i)]).fold(0.0, f64::max);
+    let floor = dense_kernels::PD_RELATIVE_TOLERANCE * n as f64 * max_diag;
+    if !dense_kernels::cholesky_in_place(work) || (0..n).any(|i| work[(i, i)] * work[(i, i)] <= floor) {
+        return Err(EstimatorError::NotPositiveDefinite { what });
+    }
+    Ok(())
 }
 
 /// The validated initial data shared by the filters' constructors.

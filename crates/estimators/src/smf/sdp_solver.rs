@@ -1,5 +1,5 @@
 //! Solving (29) with any [`lmi::SdpBackend`]: the filter SDP (28) of
-//! [`lmi::filter_sdp::FilterSdp`] is built on the first step, its numbers rewritten at each
+//! [`FilterSdp`](super::lmi28::FilterSdp) is built on the first step, its numbers rewritten at each
 //! later step, the backend set up once and called every step. Only `τ` is used (and `L`
 //! read back with [`FilterSdp::read_gain`] for diagnostics): the SDP's `L` is not the exact
 //! closed-form gain for its `τ` ([`UpdateSolver::gain_is_closed_form`] is `false`), so the filter
@@ -10,11 +10,11 @@
 //! whose solve does not allocate (the default [`lmi::DEFAULT_BACKEND`]), perform no heap
 //! allocation (checked by `tests/alloc.rs`).
 
-use lmi::filter_sdp::{FilterSdp, FilterSdpData};
+use super::lmi28::{FilterSdp, FilterSdpData};
 use lmi::{SdpBackend, SdpSolution, SolverSettings};
 
 use crate::error::EstimatorError;
-use crate::smf::{UpdateProblem, UpdateSolution, UpdateSolver};
+use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 
 /// An [`UpdateSolver`] backed by an SDP solver.
 pub struct SdpUpdateSolver {
@@ -70,7 +70,7 @@ impl UpdateSolver for SdpUpdateSolver {
         out: &mut UpdateSolution,
     ) -> Result<(), EstimatorError> {
         let data = FilterSdpData { a: pr.a, c: pr.c, q: pr.q, r: pr.r, p: pr.p, x_hat: pr.x_hat };
-        out.status = lmi::SolveStatus::Unsolved;
+        out.status = UpdateStatus::Unsolved;
         out.iterations = 0;
         match self.sdp.as_mut() {
             Some(sdp) => sdp.update(&data)?,
@@ -85,7 +85,7 @@ impl UpdateSolver for SdpUpdateSolver {
             return Err(EstimatorError::NumericalFailure("SDP not set up"));
         };
         self.backend.solve(sdp.problem(), sol)?;
-        out.status = sol.status;
+        out.status = sol.status.into();
         out.iterations = sol.iterations;
         if sol.status.is_optimal() {
             out.tau = sdp.read_gain(&sol.x, &mut out.l)?;

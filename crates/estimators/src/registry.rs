@@ -1,0 +1,157 @@
+//! Estimators by name, so that the CLI, the reproduction and user interfaces choose one at run
+//! time and adding a filter touches one place (this table and its constructor).
+//!
+//! Estimators are grouped by the model capability they need; today every registered estimator
+//! runs on linear (time-varying) models, `Box<dyn DynEstimator<dyn LinearModel>>`.
+
+use nalgebra::{DMatrix, DVector};
+
+use lmi::SolverSettings;
+use models::LinearModel;
+
+use crate::error::EstimatorError;
+use crate::kalman::KalmanFilter;
+use crate::smf::{SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver};
+use crate::traits::{DynEstimator, EstimateKind, NoiseSettings};
+use crate::yang_li;
+
+/// The solver name of the exact two-multiplier method (the default of the set-membership
+/// filters); any `lmi` backend name (`faer-ipm`, `clarabel` with that feature) selects an SDP
+/// solver instead.
+pub const TWO_MULTIPLIER: &str = "two-multiplier";
+
+/// A registered estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EstimatorInfo {
+    /// Its name in the registry (CLI `--estimator`).
+    pub name: &'static str,
+    /// What kind of set it publishes.
+    pub kind: EstimateKind,
+    /// One line for `--help` and reports.
+    pub summary: &'static str,
+    /// Whether it uses [`LinearSetup::solver`].
+    pub uses_solver: bool,
+    /// Whether it needs [`LinearSetup::input_bounds`].
+    pub needs_input_bounds: bool,
+}
+
+/// The estimators for linear models, in display order.
+pub const LINEAR_ESTIMATORS: &[EstimatorInfo] = &[
+    EstimatorInfo {
+        name: "smf",
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "improved set-membership filter (carrier paper (13)-(29)), certified containment",
+        uses_solver: true,
+        needs_input_bounds: false,
+    },
+    EstimatorInfo {
+        name: "kf",
+        kind: EstimateKind::Gaussian,
+        summary: "Kalman filter, Joseph form (Q, R, P0 as covariances)",
+        uses_solver: false,
+        needs_input_bounds: false,
+    },
+    EstimatorInfo {
+        name: "yang-li",
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "reconstruction (a) of the carrier paper's reference [17]: input unused, bounded by its box",
+        uses_solver: true,
+        needs_input_bounds: true,
+    },
+    EstimatorInfo {
+        name: "yang-li-with-input",
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "reconstruction (b) of [17]: the input in the predictor",
+        uses_solver: true,
+        needs_input_bounds: false,
+    },
+];
+
+/// Everything a linear-model estimator is built from.
+#[derive(Debug, Clone)]
+pub struct LinearSetup {
+    /// Initial centre (mean) `x̂₀`.
+    pub x0: DVector<f64>,
+    /// Initial shape (covariance) `P₀`.
+    pub p0: DMatrix<f64>,
+    /// `Q`, `R`: ellipsoid shapes for set-membership filters, covariances for the Kalman filter.
+    pub noise: NoiseSettings,
+    /// Number of inputs `p`.
+    pub inputs: usize,
+    /// The known input box `[lower, upper]` (needed by `yang-li`).
+    pub input_bounds: Option<(DVector<f64>, DVector<f64>)>,
+    /// How a set-membership filter solves (29): [`TWO_MULTIPLIER`] (default) or an `lmi`
+    /// backend name.
+    pub solver: String,
+    /// Settings of an SDP backend.
+    pub sdp_settings: SolverSettings,
+}
+
+impl LinearSetup {
+    /// A setup with the default solver and no input box.
+    #[must_use]
+    pub fn new(x0: DVector<f64>, p0: DMatrix<f64>, noise: NoiseSettings, inputs: usize) -> Self {
+        Self {
+            x0,
+            p0,
+            noise,
+            inputs,
+            input_bounds: None,
+            solver: TWO_MULTIPLIER.to_owned(),
+            sdp_settings: SolverSettings::default(),
+        }
+    }
+}
+
+/// The names of the solvers a set-membership filter accepts.
+#[must_use]
+pub fn solver_names() -> Vec<&'static str> {
+    let mut v = vec![TWO_MULTIPLIER];
+    v.extend(lmi::backend_names());
+    v
+}
+
+/// A linear-model estimator.
+pub type BoxedLinearEstimator = Box<dyn DynEstimator<dyn LinearModel>>;
+
+/// Builds the registered estimator `name` from `setup`.
+///
+/// # Errors
+/// [`EstimatorError::UnknownEstimator`]; [`EstimatorError::MissingSetting`] (the input box of
+/// `yang-li`); an unknown solver ([`EstimatorError::Lmi`]); the constructors' validation
+/// errors.
+pub fn linear(name: &str, setup: &LinearSetup) -> Result<BoxedLinearEstimator, EstimatorError> {
+    let LinearSetup { x0, p0, noise, inputs, .. } = setup;
+    let (x0, p0, q, r) = (x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone());
+    let two = setup.solver == TWO_MULTIPLIER;
+    let sdp = || SdpUpdateSolver::by_name(&setup.solver, setup.sdp_settings.clone());
+    Ok(match name {
+        "kf" => Box::new(KalmanFilter::new(x0, p0, q, r, *inputs)?),
+        "smf" if two => Box::new(SetMembershipFilter::two_multiplier(x0, p0, q, r, *inputs)?),
+        "smf" => Box::new(SetMembershipFilter::new(x0, p0, q, r, *inputs, sdp()?)?),
+        "yang-li" => {
+            let Some((lo, hi)) = &setup.input_bounds else {
+                return Err(EstimatorError::MissingSetting { estimator: "yang-li", what: "the input box" });
+            };
+            if two {
+                Box::new(yang_li::without_input(x0, p0, q, r, lo, hi, TwoMultiplierSolver::new())?)
+            } else {
+                Box::new(yang_li::without_input(x0, p0, q, r, lo, hi, sdp()?)?)
+            }
+        }
+        "yang-li-with-input" if two => Box::new(yang_li::with_input(x0, p0, q, r, *inputs, TwoMultiplierSolver::new())?),
+        "yang-li-with-input" => Box::new(yang_li::with_input(x0, p0, q, r, *inputs, sdp()?)?),
+        _ => {
+            return Err(EstimatorError::UnknownEstimator {
+                name: name.to_owned(),
+                known: LINEAR_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
+            });
+        }
+    })
+}
+
+/// The registry entry called `name`.
+#[must_use]
+pub fn info(name: &str) -> Option<&'static EstimatorInfo> {
+    LINEAR_ESTIMATORS.iter().find(|e| e.name == name)
+}

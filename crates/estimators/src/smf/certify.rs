@@ -1,0 +1,128 @@
+//! Certification of the published set (module documentation of [`crate::smf`],
+//! "Certification"): the shape recomputed from the `(L, τ)` used and inflated by a bound on the
+//! rounding errors, so that containment never depends on solver accuracy.
+
+use nalgebra::{DMatrix, DVector};
+
+use models::StepModel;
+
+use super::filter::SetEstimate;
+
+/// The certification inflation: `P_{k+1} = (1 + relative) Φ̂ + absolute · I`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Inflation {
+    /// `s`, the relative factor from the centre's rounding error.
+    pub relative: f64,
+    /// `ε`, added to the diagonal.
+    pub absolute: f64,
+}
+
+pub(crate) const U: f64 = f64::EPSILON / 2.0;
+
+pub(crate) fn gamma(k: usize) -> f64 {
+    let ku = k as f64 * U;
+    ku / (1.0 - ku)
+}
+
+/// Buffers of the certification.
+#[derive(Debug, Clone)]
+pub(crate) struct CertWork {
+    pub(crate) z: DVector<f64>,
+    pub(crate) k: DMatrix<f64>,
+    pub(crate) t: DMatrix<f64>,
+    pub(crate) kx: DMatrix<f64>,
+    pub(crate) lr: DMatrix<f64>,
+    pub(crate) p_new: DMatrix<f64>,
+    pub(crate) x_new: DVector<f64>,
+}
+
+impl CertWork {
+    /// Buffers for `n` states and `m` outputs.
+    pub(crate) fn new(n: usize, m: usize) -> Self {
+        let nn = || DMatrix::zeros(n, n);
+        Self {
+            z: DVector::zeros(n),
+            k: nn(),
+            t: nn(),
+            kx: nn(),
+            lr: DMatrix::zeros(n, m),
+            p_new: nn(),
+            x_new: DVector::zeros(n),
+        }
+    }
+}
+
+/// Computes the certified `P_{k+1}` into `cw.p_new` and the centre into `cw.x_new` from
+/// `(L, τ)` (module documentation, "Certification"). `None` if the shape, the centre or the
+/// inflation is not finite. `τ` must come from [`clamp_tau`] and `L` must be 0 if `τ₃ = 0`.
+pub(crate) fn certify(
+    cw: &mut CertWork,
+    model: &StepModel<'_>,
+    l: &DMatrix<f64>,
+    tau: [f64; 3],
+    x1: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    est: &SetEstimate,
+    u: &DVector<f64>,
+    y: &DVector<f64>,
+) -> Option<Inflation> {
+    let (n, m) = l.shape();
+    dense_kernels::i_minus_lc(l, model.c, &mut cw.k);
+    let fro = |a: &DMatrix<f64>| dense_kernels::fro(a.as_slice());
+    let (na, nb, nc, nl, nk) = (fro(model.a), fro(model.b), fro(model.c), fro(l), fro(&cw.k));
+    let (nx1, nq, nr, np) = (fro(x1), fro(q), fro(r), fro(&est.shape));
+    let e_x = gamma(2 * n) * na * na * np;
+    let e_k = gamma(m + 1) * ((n as f64).sqrt() + nl * nc);
+    let kappa = nk + e_k;
+    let lin = 2.0 * nk * e_k + e_k * e_k;
+    // T₁ = K X₁ Kᵀ/τ₁.
+    dense_kernels::mul_nn(1.0, &cw.k, x1, 0.0, &mut cw.kx);
+    dense_kernels::mul_nt(1.0 / tau[0], &cw.kx, &cw.k, 0.0, &mut cw.p_new);
+    let nt1 = fro(&cw.p_new);
+    let mut err = (gamma(2 * n + 2) * nk * nk * nx1 + lin * nx1 + kappa * kappa * e_x) / tau[0];
+    // T₂ = K Q Kᵀ/τ₂.
+    dense_kernels::mul_nn(1.0, &cw.k, q, 0.0, &mut cw.kx);
+    dense_kernels::mul_nt(1.0 / tau[1], &cw.kx, &cw.k, 0.0, &mut cw.t);
+    let nt2 = fro(&cw.t);
+    err += (gamma(2 * n + 2) * nk * nk * nq + lin * nq) / tau[1];
+    dense_kernels::add_scaled(cw.p_new.as_mut_slice(), 1.0, cw.t.as_slice());
+    let mut nt3 = 0.0;
+    if tau[2] > 0.0 {
+        // T₃ = L R Lᵀ/τ₃.
+        dense_kernels::mul_nn(1.0, l, r, 0.0, &mut cw.lr);
+        dense_kernels::mul_nt(1.0 / tau[2], &cw.lr, l, 0.0, &mut cw.t);
+        nt3 = fro(&cw.t);
+        err += gamma(2 * m + 2) * nl * nl * nr / tau[2];
+        dense_kernels::add_scaled(cw.p_new.as_mut_slice(), 1.0, cw.t.as_slice());
+    }
+    err += gamma(4) * (nt1 + nt2 + nt3);
+    dense_kernels::symmetrize(&mut cw.p_new);
+    let nphi = fro(&cw.p_new);
+    let eps2 = 2.0 * err + 4.0 * U * nphi;
+    // Centre: z = A x̂ + B ū, x̂⁺ = K̂ z + L y.
+    dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut cw.z);
+    dense_kernels::gemv(1.0, model.b, u, 1.0, &mut cw.z);
+    dense_kernels::gemv(1.0, &cw.k, &cw.z, 0.0, &mut cw.x_new);
+    dense_kernels::gemv(1.0, l, y, 1.0, &mut cw.x_new);
+    let nxh = dense_kernels::fro(est.center.as_slice());
+    let nu = dense_kernels::fro(u.as_slice());
+    let nz = dense_kernels::fro(cw.z.as_slice());
+    let ny = dense_kernels::fro(y.as_slice());
+    let e_z = gamma(n + u.len()) * (na * nxh + nb * nu);
+    let rho = 2.0 * (gamma(n + m + 1) * (nk * nz + nl * ny) + e_k * nz + kappa * e_z);
+    let trc = cw.p_new.trace() + n as f64 * eps2;
+    let s = if rho > 0.0 && trc > 0.0 { rho * (n as f64 / trc).sqrt() } else { 0.0 };
+    let nc_pub = nphi + (n as f64).sqrt() * eps2;
+    let extra = if s > 0.0 { (1.0 + 1.0 / s) * rho * rho } else { 0.0 };
+    let absolute = (1.0 + s) * eps2 + extra + 4.0 * U * (1.0 + s) * nc_pub;
+    if s > 0.0 {
+        cw.p_new.iter_mut().for_each(|v| *v *= 1.0 + s);
+    }
+    for i in 0..n {
+        cw.p_new[(i, i)] += absolute;
+    }
+    let finite = cw.p_new.iter().chain(cw.x_new.iter()).all(|v| v.is_finite());
+    (finite && absolute.is_finite() && s.is_finite()).then_some(Inflation { relative: s, absolute })
+}
+

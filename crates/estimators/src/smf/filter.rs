@@ -1,0 +1,399 @@
+//! The set-membership filter itself: state, step, estimate and report.
+
+use std::time::{Duration, Instant};
+
+use nalgebra::{DMatrix, DVector};
+
+use models::{Dims, LinearModel, StepModel};
+
+use super::certify::{CertWork, Inflation, U, certify};
+use super::fallback::{FallbackReason, GainCtx, clamp_tau, near_simplex};
+use super::gain::GainWork;
+use super::input::{InputModel, check_in_box, effective_noise};
+use super::two_multiplier::TwoMultiplierSolver;
+use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
+use crate::error::EstimatorError;
+use crate::traits::{Estimate, EstimateKind, Estimator, NoiseSettings};
+use crate::validate::{InitialData, check_initial, check_model, check_spd, check_vec};
+
+/// What one step did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepReport {
+    /// The multipliers used (after clamping onto the simplex).
+    pub tau: [f64; 3],
+    /// The solver's status.
+    pub status: UpdateStatus,
+    /// The solver's iterations.
+    pub iterations: u32,
+    /// `Some(reason)` if the step did not use the solver's `(L, τ)` as returned but a feasible `τ`
+    /// with its closed-form gain (the fallback of the module documentation, or `L = 0` for a
+    /// solver's `τ₃ = 0`).
+    pub fallback: Option<FallbackReason>,
+    /// The certification inflation applied.
+    pub inflation: Inflation,
+    /// Wall-clock time of the solver call.
+    pub solve_time: Duration,
+}
+
+impl StepReport {
+    /// Whether a fallback was used.
+    pub fn fallback_used(&self) -> bool {
+        self.fallback.is_some()
+    }
+}
+
+/// The set estimate `𝓔(center, shape)` after a step, its per-state bounds and the report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SetEstimate {
+    /// `x̂_{k+1}`.
+    pub center: DVector<f64>,
+    /// `P_{k+1}` (symmetric positive definite, certified).
+    pub shape: DMatrix<f64>,
+    /// `x̂_i − √P_ii`.
+    pub lower: DVector<f64>,
+    /// `x̂_i + √P_ii`.
+    pub upper: DVector<f64>,
+    /// What the step did (for the initial set: `τ = (⅓, ⅓, ⅓)`, status unsolved).
+    pub report: StepReport,
+}
+
+impl SetEstimate {
+    /// `tr P`.
+    pub fn trace(&self) -> f64 {
+        self.shape.trace()
+    }
+
+    /// The estimate as an [`ellipsoid::Ellipsoid`] (allocates).
+    pub fn to_ellipsoid(&self) -> Result<ellipsoid::Ellipsoid, ellipsoid::EllipsoidError> {
+        ellipsoid::Ellipsoid::new(self.center.clone(), self.shape.clone())
+    }
+
+    fn set_bounds(&mut self) {
+        for i in 0..self.center.len() {
+            let r = self.shape[(i, i)].max(0.0).sqrt();
+            self.lower[i] = self.center[i] - r;
+            self.upper[i] = self.center[i] + r;
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Workspace {
+    ap: DMatrix<f64>,
+    x1: DMatrix<f64>,
+    q_eff: DMatrix<f64>,
+    bw: DMatrix<f64>,
+    cert: CertWork,
+    gain: GainWork,
+    /// `m × m` scratch for validating a new `R` in place.
+    gain_r: DMatrix<f64>,
+}
+
+/// The improved set-membership filter, generic over the solver of (29).
+#[derive(Debug, Clone)]
+pub struct SetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
+    n: usize,
+    p: usize,
+    m: usize,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    input: InputModel,
+    solver: S,
+    time_budget: Option<Duration>,
+    est: SetEstimate,
+    sol: UpdateSolution,
+    ws: Workspace,
+}
+
+impl SetMembershipFilter<TwoMultiplierSolver> {
+    /// The filter with the exact two-multiplier solver, from [`NoiseSettings`] (ellipsoid shapes).
+    pub fn with_noise(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        noise: &NoiseSettings,
+        inputs: usize,
+    ) -> Result<Self, EstimatorError> {
+        Self::two_multiplier(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
+    }
+
+    /// The filter with the exact two-multiplier solver.
+    pub fn two_multiplier(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        q: DMatrix<f64>,
+        r: DMatrix<f64>,
+        inputs: usize,
+    ) -> Result<Self, EstimatorError> {
+        Self::new(x0, p0, q, r, inputs, TwoMultiplierSolver::new())
+    }
+}
+
+impl<S: UpdateSolver> SetMembershipFilter<S> {
+    /// A filter with initial set `𝓔(x0, p0)`, noise shapes `q` (`n × n`) and `r` (`m × m`),
+    /// `inputs` input components and the given solver.
+    pub fn new(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        q: DMatrix<f64>,
+        r: DMatrix<f64>,
+        inputs: usize,
+        mut solver: S,
+    ) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
+        solver.prepare(n, m)?;
+        let mut est = SetEstimate {
+            center: x0,
+            shape: p0,
+            lower: DVector::zeros(n),
+            upper: DVector::zeros(n),
+            report: StepReport {
+                tau: [1.0 / 3.0; 3],
+                status: UpdateStatus::Unsolved,
+                iterations: 0,
+                fallback: None,
+                inflation: Inflation::default(),
+                solve_time: Duration::ZERO,
+            },
+        };
+        est.set_bounds();
+        let nn = || DMatrix::zeros(n, n);
+        Ok(Self {
+            n,
+            p: inputs,
+            m,
+            q,
+            r,
+            input: InputModel::Predictor,
+            solver,
+            time_budget: None,
+            est,
+            sol: UpdateSolution::new(n, m),
+            ws: Workspace {
+                ap: nn(),
+                x1: nn(),
+                q_eff: nn(),
+                bw: DMatrix::zeros(n, inputs),
+                cert: CertWork::new(n, m),
+                gain: GainWork::new(n, m),
+                gain_r: DMatrix::zeros(m, m),
+            },
+        })
+    }
+
+    /// Switches to the "input as bounded disturbance" model with the input box
+    /// `[lower, upper]` (see [`InputModel::BoundedDisturbance`]).
+    pub fn with_input_bounds(mut self, lower: &DVector<f64>, upper: &DVector<f64>) -> Result<Self, EstimatorError> {
+        check_vec("input lower bounds", lower, self.p)?;
+        check_vec("input upper bounds", upper, self.p)?;
+        let mut mid = DVector::zeros(self.p);
+        let mut w_diag = DVector::zeros(self.p);
+        for i in 0..self.p {
+            let (lo, hi) = (lower[i], upper[i]);
+            // Halves first: lo + hi and hi − lo cannot overflow.
+            let c = 0.5 * lo + 0.5 * hi;
+            // |u − c| ≤ h_exact for u in the box; fl(h) ≥ h_exact (1 − u).
+            let h = (hi - c).max(c - lo);
+            // The box lies in c ⊕ 𝓔(0, p·diag(h²)): Σ dᵢ²/(p hᵢ²) ≤ Σ 1/p = 1. The factor 1 + 8u
+            // covers h_exact ≤ h/(1 − u) and the three roundings of the product: (1 + 8u)(1 − u)⁵ > 1.
+            let w = self.p as f64 * h * h * (1.0 + 8.0 * U);
+            if lo > hi || !w.is_finite() {
+                return Err(EstimatorError::InvalidInputBounds { index: i, lower: lo, upper: hi });
+            }
+            mid[i] = c;
+            w_diag[i] = w;
+        }
+        self.input = InputModel::BoundedDisturbance { lower: lower.clone(), upper: upper.clone(), mid, w_diag };
+        Ok(self)
+    }
+
+    /// Replaces both noise shapes in place (validated first; on error nothing changes; no
+    /// allocation).
+    pub fn set_noise(&mut self, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        crate::validate::check_spd_no_alloc("Q", q, self.n, &mut self.ws.cert.t)?;
+        crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.ws.gain_r)?;
+        self.q.copy_from(q);
+        dense_kernels::symmetrize(&mut self.q);
+        self.r.copy_from(r);
+        dense_kernels::symmetrize(&mut self.r);
+        Ok(())
+    }
+
+    /// Per-step wall-clock budget for the solver; a step exceeding it falls back.
+    pub fn set_time_budget(&mut self, budget: Option<Duration>) {
+        self.time_budget = budget;
+    }
+
+    /// Replaces the process-noise shape `Q` (symmetric positive definite).
+    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        self.q = check_spd("Q", q, self.n)?;
+        Ok(())
+    }
+
+    /// Replaces the measurement-noise shape `R` (symmetric positive definite).
+    pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        self.r = check_spd("R", r, self.m)?;
+        Ok(())
+    }
+
+    /// Number of states, inputs, outputs `(n, p, m)`.
+    pub fn dims(&self) -> (usize, usize, usize) {
+        (self.n, self.p, self.m)
+    }
+
+    /// How the input enters.
+    pub fn input_model(&self) -> &InputModel {
+        &self.input
+    }
+
+    /// The current set estimate.
+    pub fn estimate(&self) -> &SetEstimate {
+        &self.est
+    }
+
+    /// The solver.
+    pub fn solver(&self) -> &S {
+        &self.solver
+    }
+
+    /// The solver, mutably (for example to change its settings).
+    pub fn solver_mut(&mut self) -> &mut S {
+        &mut self.solver
+    }
+
+    /// One step: consumes `u_k` and the measurement `y_{k+1}`, returns the certified set
+    /// estimate. On error the filter is unchanged. After the first step (which may set a
+    /// solver up), this does not allocate with the two-multiplier solver or an SDP backend whose
+    /// solve does not allocate.
+    pub fn step<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        let model = &StepModel::new(model.a(), model.b(), model.c());
+        check_vec("u", u, self.p)?;
+        check_vec("y", y, self.m)?;
+        if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
+            check_in_box(u, lower, upper)?;
+        }
+        let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, .. } = self;
+        let (n, m) = (*n, *m);
+        // X₁ = A P_k Aᵀ.
+        dense_kernels::mul_nn(1.0, model.a, &est.shape, 0.0, &mut ws.ap);
+        dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
+        // Effective process noise and the input used by the predictor.
+        let (q_used, u_used): (&DMatrix<f64>, &DVector<f64>) = match input {
+            InputModel::Predictor => (q, u),
+            InputModel::BoundedDisturbance { mid, w_diag, .. } => {
+                effective_noise(q, model.b, w_diag, &mut ws.bw, &mut ws.q_eff);
+                (&ws.q_eff, mid)
+            }
+        };
+        let problem =
+            UpdateProblem { a: model.a, c: model.c, q: q_used, r, p: &est.shape, x_hat: &est.center, x1: &ws.x1 };
+        let warm = est.report.tau;
+        let t0 = Instant::now();
+        let result = solver.solve(&problem, warm, sol);
+        let solve_time = t0.elapsed();
+        let closed_form = solver.gain_is_closed_form();
+        if sol.l.shape() != (n, m) {
+            // A solver resized the gain buffer: restore it (allocates; never with our solvers).
+            sol.l = DMatrix::zeros(n, m);
+            sol.status = UpdateStatus::NumericalTrouble;
+        }
+        // Decide whether the solver's (L, τ) is usable.
+        let mut reason = match result {
+            Err(_) => Some(FallbackReason::SolverError),
+            Ok(()) if !sol.status.is_optimal() => Some(FallbackReason::Status(sol.status)),
+            Ok(()) => None,
+        };
+        if reason.is_none() && time_budget.is_some_and(|b| solve_time >= b) {
+            reason = Some(FallbackReason::TimeBudget);
+        }
+        let mut gain = GainCtx { work: &mut ws.gain, loaded: false, x1: &ws.x1, q: q_used, c: model.c, r };
+        let mut tau = [0.0; 3];
+        // Whether (τ, L) is already the fallback one.
+        let mut fell_back = reason.is_some();
+        if !fell_back {
+            match clamp_tau(sol.tau).filter(|_| near_simplex(sol.tau)) {
+                None => fell_back = true,
+                Some(t) if t[2] == 0.0 => {
+                    // τ₃ = 0: the measurement is not used, which (27) allows only with L = 0 (also
+                    // the closed-form gain for τ₃ = 0). A closed-form solver's non-zero L is
+                    // inconsistent with its τ: reported, but (τ, 0) is still a valid choice.
+                    tau = t;
+                    if closed_form && sol.l.iter().any(|v| *v != 0.0) {
+                        reason = Some(FallbackReason::InvalidSolution);
+                    }
+                    sol.l.fill(0.0);
+                }
+                Some(t) if !closed_form => {
+                    tau = t;
+                    fell_back = !gain.closed_form(t, &mut sol.l);
+                }
+                Some(t) => {
+                    tau = t;
+                    fell_back = !sol.l.iter().all(|v| v.is_finite());
+                }
+            }
+            if fell_back {
+                reason = Some(FallbackReason::InvalidSolution);
+            }
+        }
+        if fell_back {
+            tau = gain.fallback(warm, &mut sol.l);
+        }
+        // Certified P_{k+1} and centre; redone with the fallback if they overflowed.
+        let mut inflation = certify(&mut ws.cert, model, &sol.l, tau, gain.x1, q_used, r, est, u_used, y);
+        if inflation.is_none() && !fell_back {
+            reason = Some(FallbackReason::InvalidSolution);
+            tau = gain.fallback(warm, &mut sol.l);
+            inflation = certify(&mut ws.cert, model, &sol.l, tau, gain.x1, q_used, r, est, u_used, y);
+        }
+        let Some(inflation) = inflation else {
+            return Err(EstimatorError::NumericalFailure("the set estimate is not finite"));
+        };
+        std::mem::swap(&mut est.center, &mut ws.cert.x_new);
+        std::mem::swap(&mut est.shape, &mut ws.cert.p_new);
+        est.set_bounds();
+        est.report =
+            StepReport { tau, status: sol.status, iterations: sol.iterations, fallback: reason, inflation, solve_time };
+        Ok(est)
+    }
+}
+
+
+impl Estimate for SetEstimate {
+    fn kind(&self) -> EstimateKind {
+        EstimateKind::GuaranteedEllipsoid
+    }
+    fn center(&self) -> &DVector<f64> {
+        &self.center
+    }
+    fn shape(&self) -> &DMatrix<f64> {
+        &self.shape
+    }
+    fn bounds(&self, i: usize) -> Option<(f64, f64)> {
+        (i < self.lower.len()).then(|| (self.lower[i], self.upper[i]))
+    }
+    fn multipliers(&self) -> Option<[f64; 3]> {
+        Some(self.report.tau)
+    }
+    fn fallback_used(&self) -> bool {
+        self.report.fallback_used()
+    }
+}
+
+impl<S: UpdateSolver, M: LinearModel + ?Sized> Estimator<M> for SetMembershipFilter<S> {
+    type Estimate = SetEstimate;
+    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
+        SetMembershipFilter::step(self, model, u, y)
+    }
+    fn estimate(&self) -> &SetEstimate {
+        &self.est
+    }
+    fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
+    }
+}
