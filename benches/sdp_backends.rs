@@ -5,7 +5,7 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use lmi::filter_sdp::{FilterSdp, FilterSdpData};
+use estimators::smf::lmi28::{FilterSdp, FilterSdpData};
 use lmi::{SdpSolution, SolverSettings, backend_by_name, backend_names};
 use nalgebra::{DMatrix, DVector};
 

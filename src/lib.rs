@@ -2,12 +2,15 @@
 //!
 //! ## This crate
 //!
-//! A facade over the workspace crates, for users who want one dependency:
-//! [`carrier_dynamics`] (vehicle models), [`ellipsoid`] (set algebra), [`lmi`] (semidefinite
-//! programs and their backends) and [`estimators`] (filters). Including the README here also
-//! compiles and runs its example as a doctest.
+//! A facade over the workspace crates, for users who want one dependency: [`models`] (model
+//! traits, discretisation, simulation), [`carrier_dynamics`] (the straddle carrier),
+//! [`ellipsoid`] (set algebra), [`lmi`] (semidefinite programs and their backends),
+//! [`estimators`] (estimator traits, registry and filters) and [`dense_kernels`]. Including the
+//! README here also compiles and runs its example as a doctest.
 
 pub use carrier_dynamics;
+pub use dense_kernels;
 pub use ellipsoid;
 pub use estimators;
 pub use lmi;
+pub use models;

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 fn quick_reproduction_writes_everything_and_matches_its_snapshot() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("reproduce-quick");
     let _ = std::fs::remove_dir_all(&out);
-    let summary =
-        xtask::reproduce::reproduce(true, &out, xtask::reproduce::DEFAULT_SEED, None).expect("reproduction runs");
+    let summary = xtask::reproduce::carrier::reproduce(true, &out, xtask::reproduce::DEFAULT_SEED, None)
+        .expect("reproduction runs");
 
     for f in ["report.md", "summary.json"] {
         assert!(out.join(f).is_file(), "{f} missing");

@@ -2,7 +2,7 @@
 //! binary (`cargo xtask …`) is a thin command-line layer over it.
 
 pub mod args;
-pub mod filter;
+
 pub mod plot;
 pub mod reproduce;
 pub mod sdplib;

@@ -3,7 +3,7 @@
 //! Always run through the alias in `.cargo/config.toml`, which builds it optimised, so that the
 //! numbers and timings it prints never come from a debug build.
 
-use xtask::{filter, reproduce, sdplib};
+use xtask::{reproduce, sdplib};
 
 use std::process::ExitCode;
 
@@ -11,14 +11,12 @@ const HELP: &str = "\
 cargo xtask <command> [options]
 
 Commands:
-  reproduce [--quick] [--out DIR] [--seed S] [--runs R]
-                         Regenerate the straddle-carrier experiment and the extended scenarios:
-                         figures, CSV, summary.json and report.md in DIR (default out/reproduce)
+  reproduce [--paper NAME] [--quick] [--out DIR] [--seed S] [--runs R]
+                         Regenerate every paper's experiment (or one: --paper carrier) into
+                         DIR/NAME/ (report.md, summary.json, figures/, csv/) and DIR/index.md
+                         (default DIR: out/reproduce)
   sdplib [--dir D] [--backend NAME]
                          Solve the SDPLIB suite and print a table (default: every compiled backend)
-  filter --model MODEL.toml --input DATA.csv --output OUT.csv [--estimator smf|kf|yang-li] [--solver NAME]
-                         Run an estimator over logged data (formats: README); --solver is
-                         two-multiplier (default) or an SDP backend (faer-ipm, clarabel)
   help                   This text
 ";
 
@@ -29,7 +27,11 @@ fn main() -> ExitCode {
     let result = match command.as_deref() {
         Some("reproduce") => reproduce::run(&rest),
         Some("sdplib") => sdplib::run(&rest),
-        Some("filter") => filter::run(&rest),
+        Some("filter") => {
+            Err("`cargo xtask filter` moved to the installable CLI: `cargo run -p port-est -- filter …` \
+                               (or `cargo install --path crates/port-est`, then `port-est filter …`)"
+                .to_owned())
+        }
         Some("help") | Some("--help") | Some("-h") | None => {
             print!("{HELP}");
             Ok(())

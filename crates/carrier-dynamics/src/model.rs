@@ -3,9 +3,9 @@
 
 use nalgebra::{Complex, DMatrix, Matrix4, SMatrix, SVector, Schur};
 
-use models::{Dims, LinearTimeVarying, ModelError, StepMatrices, zoh_discretize_fixed};
 use crate::error::{DynamicsError, check_finite};
 use crate::params::CarrierParams;
+use models::{Dims, LinearTimeVarying, ModelError, StepMatrices, zoh_discretize_fixed};
 
 /// Number of states: `x = [β, γ, φ, φ̇]`.
 pub const STATE_DIM: usize = 4;

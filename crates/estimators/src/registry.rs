@@ -112,7 +112,7 @@ pub fn solver_names() -> Vec<&'static str> {
 }
 
 /// A linear-model estimator.
-pub type BoxedLinearEstimator = Box<dyn DynEstimator<dyn LinearModel>>;
+pub type BoxedLinearEstimator = Box<dyn for<'m> DynEstimator<dyn LinearModel + 'm>>;
 
 /// Builds the registered estimator `name` from `setup`.
 ///
@@ -139,7 +139,9 @@ pub fn linear(name: &str, setup: &LinearSetup) -> Result<BoxedLinearEstimator, E
                 Box::new(yang_li::without_input(x0, p0, q, r, lo, hi, sdp()?)?)
             }
         }
-        "yang-li-with-input" if two => Box::new(yang_li::with_input(x0, p0, q, r, *inputs, TwoMultiplierSolver::new())?),
+        "yang-li-with-input" if two => {
+            Box::new(yang_li::with_input(x0, p0, q, r, *inputs, TwoMultiplierSolver::new())?)
+        }
         "yang-li-with-input" => Box::new(yang_li::with_input(x0, p0, q, r, *inputs, sdp()?)?),
         _ => {
             return Err(EstimatorError::UnknownEstimator {

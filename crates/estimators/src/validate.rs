@@ -42,7 +42,12 @@ pub(crate) fn check_vec(what: &'static str, v: &DVector<f64>, len: usize) -> Res
 }
 
 /// Checks the step matrices against `(n, p, m)`; allocation-free.
-pub(crate) fn check_model<M: LinearModel + ?Sized>(model: &M, n: usize, p: usize, m: usize) -> Result<(), EstimatorError> {
+pub(crate) fn check_model<M: LinearModel + ?Sized>(
+    model: &M,
+    n: usize,
+    p: usize,
+    m: usize,
+) -> Result<(), EstimatorError> {
     check_shape(("rows of A", "columns of A"), model.a(), n, n)?;
     check_shape(("rows of B", "columns of B"), model.b(), n, p)?;
     check_shape(("rows of C", "columns of C"), model.c(), m, n)?;

@@ -7,12 +7,12 @@
 mod common;
 
 use carrier_dynamics::{CarrierModel, CarrierParams};
-use models::Xoshiro256StarStar;
 use estimators::{
     EstimatorError, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateProblem,
     UpdateSolution, UpdateSolver,
 };
 use lmi::SolverSettings;
+use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
 
 struct Case {

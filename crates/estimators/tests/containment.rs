@@ -18,10 +18,10 @@ use common::FixedSolver;
 
 use std::time::Duration;
 
-use models::{Noise, Xoshiro256StarStar};
 use estimators::{
     FallbackReason, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver, yang_li,
 };
+use models::{Noise, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
 const TOL: f64 = 1e-9;
@@ -204,7 +204,10 @@ fn fallback_path_contains_the_true_state() {
         .unwrap();
         let (w, fb) = run(&sys, &mut f, &mut rng, 100, gauss_u);
         assert_eq!(fb, 100);
-        assert_eq!(f.estimate().report.fallback, Some(FallbackReason::Status(estimators::UpdateStatus::IterationLimit)));
+        assert_eq!(
+            f.estimate().report.fallback,
+            Some(FallbackReason::Status(estimators::UpdateStatus::IterationLimit))
+        );
         total += 100;
         worst = worst.max(w);
         // Zero time budget with the exact solver: every step falls back too.
@@ -240,7 +243,8 @@ fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
             let sys = random_system(&mut rng, i);
             // `Solved` with a finite but unusable (L, τ), claiming L is the closed-form gain (so the
             // filter certifies it as it is).
-            let solver = FixedSolver { l, tau, status: estimators::UpdateStatus::Solved, iterations: 1, closed_form: true };
+            let solver =
+                FixedSolver { l, tau, status: estimators::UpdateStatus::Solved, iterations: 1, closed_form: true };
             let mut f =
                 SetMembershipFilter::new(sys.x_hat0.clone(), sys.p0.clone(), sys.q.clone(), sys.r.clone(), 2, solver)
                     .unwrap();

@@ -13,7 +13,7 @@ pub mod ipm;
 pub mod problem;
 pub mod registry;
 pub mod sdpa;
-pub mod sdplib;
+
 pub mod solver;
 pub mod svec;
 

@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::discretize::{expm, zoh_discretize};
 use crate::error::{ModelError, check_dims, check_finite};
-use crate::model::{DifferentiableModel, DiscreteModel, Dims, StepMatrices};
+use crate::model::{DifferentiableModel, Dims, DiscreteModel, StepMatrices};
 
 /// A continuous-time model `ẋ = f_c(x, u)`, `y = h(x, u)`.
 pub trait ContinuousModel {
@@ -362,8 +362,7 @@ mod tests {
     fn discretized_jacobians_match_finite_differences() {
         for integrator in [Integrator::Euler, Integrator::Rk4 { substeps: 3 }] {
             let d = Discretized::new(oscillator(), 0.05, integrator).unwrap();
-            let check =
-                check_jacobians(&d, &DVector::from_vec(vec![0.2, 0.1]), &DVector::from_vec(vec![1.0])).unwrap();
+            let check = check_jacobians(&d, &DVector::from_vec(vec![0.2, 0.1]), &DVector::from_vec(vec![1.0])).unwrap();
             assert!(check.f_error < 1e-8 && check.h_error < 1e-8, "{integrator:?}: {check:?}");
         }
         // RK4's Jacobian of a linear model is the RK4 transition matrix, close to e^{A T_s}.

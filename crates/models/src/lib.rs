@@ -53,7 +53,7 @@ pub use continuous::{
 pub use discretize::{ZohDiscretization, expm, zoh_discretize, zoh_discretize_fixed};
 pub use error::{ModelError, check_spd};
 pub use model::{
-    ConstantModel, DifferentiableModel, DiscreteModel, Dims, FnModel, JacobianCheck, LinearModel, LinearTimeVarying,
+    ConstantModel, DifferentiableModel, Dims, DiscreteModel, FnModel, JacobianCheck, LinearModel, LinearTimeVarying,
     StepMatrices, StepModel, check_jacobians, numeric_jacobians,
 };
 pub use noise::{Noise, NoiseDistribution};

@@ -6,7 +6,7 @@
 use nalgebra::DVector;
 
 use crate::error::{ModelError, check_dims, check_finite};
-use crate::model::{DiscreteModel, Dims, LinearTimeVarying, StepMatrices};
+use crate::model::{Dims, DiscreteModel, LinearTimeVarying, StepMatrices};
 use crate::noise::Noise;
 use crate::rng::Xoshiro256StarStar;
 
@@ -217,8 +217,8 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::DMatrix;
     use crate::model::{ConstantModel, FnModel};
+    use nalgebra::DMatrix;
 
     /// A lightly damped 2-state oscillator with two inputs and one output.
     fn oscillator() -> ConstantModel {
@@ -321,7 +321,8 @@ mod tests {
             x += 0.1 * x.sin() * 2.0;
             assert_eq!(t.states[k + 1][0], x);
         }
-        let g = SimulationConfig { measurement_noise: Noise::gaussian(DMatrix::identity(1, 1)).unwrap(), ..cfg.clone() };
+        let g =
+            SimulationConfig { measurement_noise: Noise::gaussian(DMatrix::identity(1, 1)).unwrap(), ..cfg.clone() };
         let tg = simulate(&Nonlinear, &g).unwrap();
         assert_eq!(tg.states, t.states);
         assert_ne!(tg.measurements, t.measurements);

@@ -1,289 +1,133 @@
-//! `cargo xtask reproduce [--quick] [--out DIR] [--seed S] [--runs R]`: the straddle-carrier
-//! experiment of the paper, extended scenarios, a Monte Carlo study, figures and an honest report.
+//! `cargo xtask reproduce [--paper NAME] [--quick] [--out DIR] [--seed S] [--runs R]`: every
+//! paper's experiment (or one), each into `DIR/NAME/` with its report, and `DIR/index.md` linking
+//! the reports with their claim counts and wall times.
+//!
+//! One module per paper (scenarios, runner, report) implements [`Paper`]; the pieces they share
+//! are written once: [`runner`] (driving registry estimators over simulated data, metrics),
+//! [`outputs`] (CSV, atomic writes) and the figures of `crate::plot`.
 
-pub mod filters;
+pub mod carrier;
 pub mod outputs;
-pub mod report;
 pub mod runner;
-pub mod scenarios;
 
-use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use carrier_dynamics::{FnModel, StepMatrices, Trajectory, simulate};
-use serde::Serialize;
-
 use crate::args::Args;
-use runner::{Metrics, Run, metrics, run_filter};
-use scenarios::Scenario;
 
-/// Sizes of a run: the full reproduction or the few-second `--quick` mode.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct Sizes {
-    /// Steps of the extended scenarios (10 s at 1 kHz in full mode).
-    pub extended_steps: usize,
-    /// Steps on which the SDP backends run in the extended scenarios.
-    pub sdp_steps: usize,
-    /// Monte Carlo runs.
-    pub mc_runs: usize,
-    /// Steps per Monte Carlo run.
-    pub mc_steps: usize,
-}
-
-impl Sizes {
-    fn new(quick: bool, runs: Option<usize>) -> Self {
-        let mut s = if quick {
-            Sizes { extended_steps: 400, sdp_steps: 20, mc_runs: 8, mc_steps: 300 }
-        } else {
-            Sizes { extended_steps: 10_000, sdp_steps: 1_000, mc_runs: 100, mc_steps: 10_000 }
-        };
-        if let Some(r) = runs {
-            s.mc_runs = r;
-        }
-        s
-    }
-}
-
-/// One scenario's results in `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct ScenarioSummary {
-    /// Identifier (file names).
-    pub id: String,
-    /// Description.
-    pub title: String,
-    /// Filter steps.
-    pub steps: usize,
-    /// Seed of the simulation.
-    pub seed: u64,
-    /// Choices made where the paper is silent.
-    pub notes: Vec<String>,
-    /// Per-estimator figures.
-    pub estimators: Vec<Metrics>,
-    /// Largest relative difference of `tr P` between the filter driven by each SDP backend and
-    /// the one driven by the two-multiplier solver, along their own runs (their `P_k` histories
-    /// are independent, so this measures trajectory divergence; per-step agreement of the solvers
-    /// on the same data is tested in `estimators`).
-    pub solver_agreement: Vec<(String, f64)>,
-    /// Fraction of (step, state) pairs where the improved filter's interval lies inside the
-    /// interval of the [17]-style filter without input.
-    pub proposed_inside_reference17: f64,
-    /// Mean over (step, state) of the improved filter's interval width divided by that of the
-    /// [17]-style filter without input (1 means the bounds coincide).
-    pub width_ratio_reference17: f64,
-    /// Figures written, `(file, caption)`.
-    pub figures: Vec<(String, String)>,
-}
-
-/// Monte Carlo results in `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct MonteCarloSummary {
-    /// Runs.
-    pub runs: usize,
-    /// Steps per run.
-    pub steps: usize,
-    /// Seeds used: `base_seed + run`.
-    pub base_seed: u64,
-    /// Published sets that missed the true state, summed over all runs (must be 0).
-    pub steps_outside: usize,
-    /// Largest normalised distance over all runs and steps.
-    pub max_normalized_distance: f64,
-    /// Quantiles (min, 5 %, 50 %, 95 %, max) over runs of the mean bound width per state.
-    pub bound_width_quantiles: Vec<[f64; 5]>,
-    /// Quantiles over runs of the improved filter's RMSE per state.
-    pub smf_rmse_quantiles: Vec<[f64; 5]>,
-    /// Quantiles over runs of the Kalman filter's RMSE per state.
-    pub kf_rmse_quantiles: Vec<[f64; 5]>,
-    /// Wall-clock seconds, and threads used.
-    pub seconds: f64,
-    /// Worker threads.
-    pub threads: usize,
-}
-
-/// Everything `summary.json` holds.
-#[derive(Debug, Serialize)]
-pub struct Summary {
-    /// Whether this was a `--quick` run.
+/// Options shared by every paper's reproduction.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// A few-second version (smaller sizes; same code paths).
     pub quick: bool,
     /// Base seed.
     pub seed: u64,
-    /// Run sizes.
-    pub sizes: Sizes,
-    /// SDP backends compiled in.
-    pub backends: Vec<String>,
-    /// The scenarios.
-    pub scenarios: Vec<ScenarioSummary>,
-    /// The Monte Carlo study.
-    pub monte_carlo: MonteCarloSummary,
-    /// The paper's inconsistencies, with numbers.
-    pub inconsistencies: Vec<report::Inconsistency>,
-    /// The paper's claims and verdicts.
-    pub claims: Vec<report::Claim>,
-    /// Total wall-clock seconds of the reproduction.
-    pub total_seconds: f64,
+    /// Override of the number of Monte Carlo runs.
+    pub runs: Option<usize>,
 }
 
-fn simulate_scenario(sc: &Scenario) -> Result<Trajectory, String> {
-    let steps: &[StepMatrices] = &sc.steps;
-    let (n, p, m) = (steps[0].a.nrows(), steps[0].b.ncols(), steps[0].c.nrows());
-    let model = FnModel::new(n, p, m, |k: usize| Ok(steps[k.min(steps.len() - 1)].clone()));
-    simulate(&model, &sc.sim).map_err(|e| format!("simulating {}: {e}", sc.id))
+/// What one paper's reproduction reports back to the index.
+#[derive(Debug, Clone)]
+pub struct PaperOutcome {
+    /// Number of the paper's claims judged.
+    pub claims: usize,
+    /// The verdict of each claim.
+    pub verdicts: Vec<String>,
 }
 
-/// How often scenarios shorter than 1000 steps are rerun to time their steps.
-pub const TIMING_REPEATS: usize = 20;
+/// One paper's reproduction.
+pub trait Paper {
+    /// Short name (`--paper NAME`, output directory).
+    fn name(&self) -> &'static str;
+    /// Title for the index.
+    fn title(&self) -> &'static str;
+    /// Runs the reproduction into `out` (created by the caller), writing at least `report.md`.
+    ///
+    /// # Errors
+    /// A message naming what failed.
+    fn run(&self, opts: &Options, out: &Path) -> Result<PaperOutcome, String>;
+}
 
-/// Runs every estimator of a scenario and writes its CSV files and figures.
-fn run_scenario(sc: &Scenario, out: &Path) -> Result<(ScenarioSummary, Vec<Run>), String> {
-    eprintln!("scenario {}: {} steps …", sc.id, sc.len());
-    let traj = simulate_scenario(sc)?;
-    let mut runs = Vec::new();
-    for (mut f, max_steps) in filters::for_scenario(sc)? {
-        runs.push(run_filter(f.as_mut(), &sc.steps, &traj, max_steps)?);
+/// Every paper, in the order of the index.
+pub fn papers() -> Vec<Box<dyn Paper>> {
+    vec![Box::new(carrier::CarrierPaper)]
+}
+
+/// Default base seed of the reproduction.
+pub const DEFAULT_SEED: u64 = carrier::DEFAULT_SEED;
+
+/// A progress bar on standard error, hidden when standard error is not a terminal.
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::with_draw_target(Some(len), indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed})") {
+        bar.set_style(style.progress_chars("#>-"));
     }
-    // Short scenarios give too few steps for a stable median: rerun fresh filters for timing only.
-    let repeats = if sc.len() < 1000 { TIMING_REPEATS } else { 1 };
-    for _ in 1..repeats {
-        for (run, (mut f, max_steps)) in runs.iter_mut().zip(filters::for_scenario(sc)?) {
-            let again = run_filter(f.as_mut(), &sc.steps, &traj, max_steps)?;
-            run.step_ns.extend(again.step_ns);
+    bar.set_message(what.to_owned());
+    bar
+}
+
+/// Runs the papers selected by `paper` (all if `None`) into `out/NAME/` and writes
+/// `out/index.md`; returns each paper's name, outcome and wall time.
+///
+/// # Errors
+/// An unknown paper name, a failed reproduction, or an output that cannot be written.
+pub fn reproduce_papers(
+    paper: Option<&str>,
+    opts: &Options,
+    out: &Path,
+) -> Result<Vec<(&'static str, &'static str, PaperOutcome, f64)>, String> {
+    let all = papers();
+    let selected: Vec<&Box<dyn Paper>> = match paper {
+        None => all.iter().collect(),
+        Some(name) => {
+            let p = all.iter().find(|p| p.name() == name).ok_or_else(|| {
+                format!(
+                    "unknown paper {name:?} (known: {})",
+                    all.iter().map(|p| p.name()).collect::<Vec<_>>().join(", ")
+                )
+            })?;
+            vec![p]
         }
-    }
-    let io = |e: std::io::Error| e.to_string();
-    for run in &runs {
-        let path = out.join("csv").join(format!("{}_{}.csv", sc.id, outputs::slug(&run.label)));
-        outputs::write_csv(&path, run, &traj.states).map_err(io)?;
-    }
-    let find = |label: &str| runs.iter().find(|r| r.label == label);
-    let proposed = find(filters::PROPOSED).ok_or("missing the improved filter")?;
-    let yl_a = find(filters::YANG_LI_NO_INPUT).ok_or("missing the [17] reconstruction")?;
-    let kf = find(filters::KALMAN).ok_or("missing the Kalman filter")?;
-    let figures = outputs::write_figures(&out.join("figures"), &sc.id, &sc.id, &traj.states, &[proposed, yl_a], &[kf])
-        .map_err(io)?;
-    let solver_agreement = runs
-        .iter()
-        .filter(|r| r.label.starts_with(filters::PROPOSED_VIA))
-        .map(|r| {
-            let worst = r
-                .snapshots
-                .iter()
-                .zip(&proposed.snapshots)
-                .skip(1)
-                .map(|(a, b)| (a.shape.trace() - b.shape.trace()).abs() / b.shape.trace())
-                .fold(0.0, f64::max);
-            (r.label.clone(), worst)
-        })
-        .collect();
-    let mut inside = 0usize;
-    let mut total = 0usize;
-    let mut ratio_sum = 0.0;
-    for (a, b) in proposed.snapshots.iter().zip(&yl_a.snapshots).skip(1) {
-        for i in 0..a.centre.len() {
-            let (ra, rb) = (a.shape[(i, i)].sqrt(), b.shape[(i, i)].sqrt());
-            total += 1;
-            ratio_sum += ra / rb;
-            if a.centre[i] - ra >= b.centre[i] - rb - 1e-12 && a.centre[i] + ra <= b.centre[i] + rb + 1e-12 {
-                inside += 1;
-            }
-        }
-    }
-    let summary = ScenarioSummary {
-        id: sc.id.clone(),
-        title: sc.title.clone(),
-        steps: sc.len(),
-        seed: sc.sim.seed,
-        notes: sc.notes.clone(),
-        estimators: runs.iter().map(|r| metrics(r, &traj.states)).collect(),
-        solver_agreement,
-        proposed_inside_reference17: inside as f64 / total.max(1) as f64,
-        width_ratio_reference17: ratio_sum / total.max(1) as f64,
-        figures,
     };
-    Ok((summary, runs))
-}
-
-fn quantiles(mut v: Vec<f64>) -> [f64; 5] {
-    v.sort_by(f64::total_cmp);
-    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-    if v.is_empty() { [f64::NAN; 5] } else { [q(0.0), q(0.05), q(0.5), q(0.95), q(1.0)] }
-}
-
-/// Monte Carlo over seeds of the no-sideslip scenario with noise on the boundary of its sets, in
-/// parallel over the cores, with a progress bar on standard error.
-fn monte_carlo(sizes: Sizes, base_seed: u64) -> Result<MonteCarloSummary, String> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(sizes.mc_runs.max(1));
-    let t0 = Instant::now();
-    let next = AtomicUsize::new(0);
-    let done = Mutex::new(0usize);
-    let results: Mutex<Vec<Option<(Metrics, Metrics)>>> = Mutex::new((0..sizes.mc_runs).map(|_| None).collect());
-    let error: Mutex<Option<String>> = Mutex::new(None);
-    let tty = std::io::stderr().is_terminal();
-    std::thread::scope(|s| {
-        for _ in 0..threads {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::SeqCst);
-                    if i >= sizes.mc_runs {
-                        break;
-                    }
-                    let res = (|| -> Result<(Metrics, Metrics), String> {
-                        let sc = scenarios::no_sideslip(sizes.mc_steps, 0, base_seed.wrapping_add(i as u64))?;
-                        let traj = simulate_scenario(&sc)?;
-                        let mut smf = filters::proposed(&sc)?;
-                        let mut kf = filters::kalman(&sc)?;
-                        let a = run_filter(smf.as_mut(), &sc.steps, &traj, sc.len())?;
-                        let b = run_filter(kf.as_mut(), &sc.steps, &traj, sc.len())?;
-                        Ok((metrics(&a, &traj.states), metrics(&b, &traj.states)))
-                    })();
-                    match res {
-                        Ok(r) => results.lock().unwrap()[i] = Some(r),
-                        Err(e) => *error.lock().unwrap() = Some(e),
-                    }
-                    let mut done = done.lock().unwrap();
-                    *done += 1;
-                    let d = *done;
-                    if tty || d == sizes.mc_runs || d % (sizes.mc_runs / 10).max(1) == 0 {
-                        let w = 30 * d / sizes.mc_runs;
-                        eprint!(
-                            "{}Monte Carlo [{}{}] {d}/{} runs{}",
-                            if tty { "\r" } else { "" },
-                            "#".repeat(w),
-                            " ".repeat(30 - w),
-                            sizes.mc_runs,
-                            if tty && d < sizes.mc_runs { "" } else { "\n" }
-                        );
-                    }
-                }
-            });
-        }
-    });
-    if let Some(e) = error.into_inner().unwrap() {
-        return Err(e);
+    std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+    let mut done = Vec::new();
+    for p in selected {
+        let dir = out.join(p.name());
+        std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+        eprintln!("== paper {}: {}", p.name(), p.title());
+        let t0 = Instant::now();
+        let outcome = p.run(opts, &dir).map_err(|e| format!("paper {}: {e}", p.name()))?;
+        done.push((p.name(), p.title(), outcome, t0.elapsed().as_secs_f64()));
     }
-    let results: Vec<(Metrics, Metrics)> = results.into_inner().unwrap().into_iter().flatten().collect();
-    let per_state = |f: &dyn Fn(&(Metrics, Metrics)) -> Vec<f64>| -> Vec<[f64; 5]> {
-        (0..4).map(|i| quantiles(results.iter().map(|r| f(r)[i]).collect())).collect()
-    };
-    Ok(MonteCarloSummary {
-        runs: results.len(),
-        steps: sizes.mc_steps,
-        base_seed,
-        steps_outside: results.iter().map(|r| r.0.steps_outside.unwrap_or(0)).sum(),
-        max_normalized_distance: results.iter().filter_map(|r| r.0.max_normalized_distance).fold(0.0, f64::max),
-        bound_width_quantiles: per_state(&|r| r.0.mean_bound_width.clone().unwrap_or_default()),
-        smf_rmse_quantiles: per_state(&|r| r.0.rmse.clone()),
-        kf_rmse_quantiles: per_state(&|r| r.1.rmse.clone()),
-        seconds: t0.elapsed().as_secs_f64(),
-        threads,
-    })
+    outputs::write_atomic(&out.join("index.md"), index(&done, opts).as_bytes())
+        .map_err(|e| format!("writing {}: {e}", out.join("index.md").display()))?;
+    Ok(done)
+}
+
+fn index(done: &[(&'static str, &'static str, PaperOutcome, f64)], opts: &Options) -> String {
+    let mut s = String::from("# Reproductions\n\n");
+    s.push_str(&format!(
+        "Base seed {}{}. Each report says which numbers are the paper's and which are reconstructed.\n\n",
+        opts.seed,
+        if opts.quick { ", `--quick` sizes (not the full experiment)" } else { "" }
+    ));
+    s.push_str("| paper | report | claims | reproduced | wall time |\n|---|---|---:|---:|---:|\n");
+    for (name, title, o, secs) in done {
+        let reproduced = o.verdicts.iter().filter(|v| v.as_str() == "reproduced").count();
+        s.push_str(&format!(
+            "| {title} | [{name}/report.md]({name}/report.md) | {} | {reproduced} | {secs:.1} s |\n",
+            o.claims
+        ));
+    }
+    s
 }
 
 /// Entry point of `cargo xtask reproduce`.
+///
+/// # Errors
+/// Bad arguments or a failed reproduction.
 pub fn run(args: &[String]) -> Result<(), String> {
-    let args = Args::parse(args, &["out", "seed", "runs"], &["quick"])?;
-    let quick = args.flag("quick");
+    let args = Args::parse(args, &["out", "seed", "runs", "paper"], &["quick"])?;
     let out = PathBuf::from(args.value("out").unwrap_or("out/reproduce"));
     let seed: u64 = match args.value("seed") {
         Some(s) => s.parse().map_err(|_| format!("--seed: not an integer: {s:?}"))?,
@@ -295,120 +139,12 @@ pub fn run(args: &[String]) -> Result<(), String> {
         }
         None => None,
     };
-    let summary = reproduce(quick, &out, seed, runs)?;
-    println!("{}", report::console(&summary));
-    println!("Wrote {} (report.md, summary.json, figures/, csv/) in {:.1} s.", out.display(), summary.total_seconds);
-    Ok(())
-}
-
-/// Default base seed of the reproduction.
-pub const DEFAULT_SEED: u64 = 2024;
-
-/// Runs the whole reproduction into `out` and returns its summary (also written as
-/// `summary.json`, with `report.md`, `figures/` and `csv/`). `runs` overrides the number of
-/// Monte Carlo runs.
-pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Result<Summary, String> {
-    let sizes = Sizes::new(quick, runs);
+    let opts = Options { quick: args.flag("quick"), seed, runs };
     let t0 = Instant::now();
-    for sub in ["figures", "csv"] {
-        std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
+    let done = reproduce_papers(args.value("paper"), &opts, &out)?;
+    for (name, _, o, secs) in &done {
+        println!("{name}: {} claims judged, {secs:.1} s → {}", o.claims, out.join(name).join("report.md").display());
     }
-    let e = sizes.extended_steps;
-    let list = [
-        scenarios::paper(seed)?,
-        scenarios::no_sideslip(e, sizes.sdp_steps, seed.wrapping_add(1))?,
-        scenarios::load(0, e, sizes.sdp_steps, seed.wrapping_add(2))?,
-        scenarios::load(1, e, sizes.sdp_steps, seed.wrapping_add(3))?,
-        scenarios::load(2, e, sizes.sdp_steps, seed.wrapping_add(4))?,
-        scenarios::speed_schedule(e, sizes.sdp_steps, seed.wrapping_add(5))?,
-    ];
-    let mut summaries = Vec::new();
-    let mut paper_runs = Vec::new();
-    for (i, sc) in list.iter().enumerate() {
-        let (s, runs) = run_scenario(sc, out)?;
-        if i == 0 {
-            paper_runs = runs;
-        }
-        summaries.push(s);
-    }
-    let mc = monte_carlo(sizes, seed.wrapping_add(1000))?;
-    let inconsistencies = report::inconsistencies(&list[0], &paper_runs)?;
-    let claims = report::claims(&summaries, &mc);
-    let summary = Summary {
-        quick,
-        seed,
-        sizes,
-        backends: lmi::backend_names().into_iter().map(str::to_owned).collect(),
-        scenarios: summaries,
-        monte_carlo: mc,
-        inconsistencies,
-        claims,
-        total_seconds: t0.elapsed().as_secs_f64(),
-    };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(out.join("summary.json"), json).map_err(|e| e.to_string())?;
-    let md = report::markdown(&summary);
-    std::fs::write(out.join("report.md"), &md).map_err(|e| e.to_string())?;
-    Ok(summary)
-}
-
-impl Summary {
-    /// The deterministic part of the summary (no timings, no machine-dependent solver figures),
-    /// with numbers rounded to 6 significant digits: what snapshot tests compare.
-    pub fn deterministic_view(&self) -> serde_json::Value {
-        use serde_json::json;
-        let r = |v: f64| -> serde_json::Value {
-            if v.is_finite() && v != 0.0 {
-                let e = v.abs().log10().floor() as i32;
-                let f = 10f64.powi(5 - e);
-                json!((v * f).round() / f)
-            } else {
-                json!(v)
-            }
-        };
-        let rv = |v: &[f64]| v.iter().map(|x| r(*x)).collect::<Vec<_>>();
-        let scenarios: Vec<_> = self
-            .scenarios
-            .iter()
-            .map(|s| {
-                let est: Vec<_> = s
-                    .estimators
-                    .iter()
-                    .filter(|m| !m.estimator.starts_with(filters::PROPOSED_VIA))
-                    .map(|m| {
-                        json!({
-                            "estimator": m.estimator,
-                            "steps": m.steps,
-                            "steps_outside": m.steps_outside,
-                            "max_normalized_distance": m.max_normalized_distance.map(r),
-                            "initial_normalized_distance": r(m.initial_normalized_distance),
-                            "rmse": rv(&m.rmse),
-                            "mean_bound_width": m.mean_bound_width.as_deref().map(rv),
-                            "mean_trace": r(m.mean_trace),
-                            "fallback_steps": m.fallback_steps,
-                        })
-                    })
-                    .collect();
-                json!({
-                    "id": s.id, "steps": s.steps, "seed": s.seed, "estimators": est,
-                    "proposed_inside_reference17": r(s.proposed_inside_reference17),
-                    "width_ratio_reference17": r(s.width_ratio_reference17),
-                    "figures": s.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
-                })
-            })
-            .collect();
-        let mc = &self.monte_carlo;
-        json!({
-            "quick": self.quick,
-            "seed": self.seed,
-            "sizes": self.sizes,
-            "scenarios": scenarios,
-            "monte_carlo": {
-                "runs": mc.runs, "steps": mc.steps, "steps_outside": mc.steps_outside,
-                "max_normalized_distance": r(mc.max_normalized_distance),
-            },
-            "claims": self.claims.iter().filter(|c| !c.claim.starts_with("Run time") && !c.claim.starts_with("All three"))
-                .map(|c| json!({"claim": c.claim, "verdict": c.verdict})).collect::<Vec<_>>(),
-        })
-    }
+    println!("Wrote {} in {:.1} s.", out.join("index.md").display(), t0.elapsed().as_secs_f64());
+    Ok(())
 }

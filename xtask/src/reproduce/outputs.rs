@@ -1,13 +1,33 @@
-//! CSV files and SVG figures of a scenario's runs.
+//! Output files shared by every paper's reproduction: file-name slugs, per-run CSV files, and
+//! atomic writes (a temporary file in the target directory renamed into place, so that no
+//! half-written output is ever left behind).
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::Path;
 
 use nalgebra::DVector;
 
 use super::runner::Run;
-use super::scenarios::{STATES, TS};
-use crate::plot::{Chart, PALETTE, Series};
+
+/// Writes `bytes` to `path` atomically: to a temporary file in the same directory, flushed and
+/// synced, then renamed over `path`. On error the temporary file is removed and `path` is
+/// untouched.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().ok_or_else(|| std::io::Error::other(format!("{}: not a file path", path.display())))?;
+    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
 
 /// A file-name-safe identifier of an estimator label.
 pub fn slug(label: &str) -> String {
@@ -19,20 +39,15 @@ pub fn slug(label: &str) -> String {
     s.trim_matches('_').to_owned()
 }
 
-/// Colour of the `j`-th estimator: the palette without black (the truth) and the pale yellow.
-fn series_color(j: usize) -> &'static str {
-    PALETTE[1 + j % 6]
-}
-
 /// One CSV per run: `k,t,x1..xn,xhat1..xhatn,lo1..lon,hi1..hin,trace,tau1,tau2,tau3,fallback`.
-pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>]) -> std::io::Result<()> {
+pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>], ts: f64) -> std::io::Result<()> {
     let n = truth[0].len();
     let mut out = String::new();
     let cols = |p: &str| (1..=n).map(|i| format!("{p}{i}")).collect::<Vec<_>>().join(",");
     let _ =
         writeln!(out, "k,t,{},{},{},{},trace,tau1,tau2,tau3,fallback", cols("x"), cols("xhat"), cols("lo"), cols("hi"));
     for (k, s) in run.snapshots.iter().enumerate() {
-        let mut line = format!("{k},{}", k as f64 * TS);
+        let mut line = format!("{k},{}", k as f64 * ts);
         for v in truth[k].iter().chain(s.centre.iter()) {
             let _ = write!(line, ",{v:e}");
         }
@@ -51,68 +66,29 @@ pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>]) -> std::io::Res
         let _ = writeln!(line, ",{}", u8::from(s.fallback));
         out.push_str(&line);
     }
-    std::fs::write(path, out)
+    write_atomic(path, out.as_bytes())
 }
 
-/// The paper's Figures 3–6 (per state: truth, bounds of the set filters, Kalman estimate) and
-/// 7–10 (errors) for one scenario; returns the written file names (relative to `dir`).
-pub fn write_figures(
-    dir: &Path,
-    scenario_id: &str,
-    scenario_title: &str,
-    truth: &[DVector<f64>],
-    bound_runs: &[&Run],
-    estimate_runs: &[&Run],
-) -> std::io::Result<Vec<(String, String)>> {
-    let mut files = Vec::new();
-    let steps = bound_runs.iter().chain(estimate_runs).map(|r| r.snapshots.len()).min().unwrap_or(0);
-    let t: Vec<f64> = (0..steps).map(|k| k as f64 * TS).collect();
-    for (i, (id, name, unit)) in STATES.iter().enumerate() {
-        let fig = 3 + i;
-        let mut chart = Chart::new(
-            format!("Fig. {fig} — {name}: truth and bounds ({scenario_title})"),
-            "time t [s]",
-            format!("{name} [{unit}]"),
-        );
-        for (j, run) in bound_runs.iter().enumerate() {
-            let color = series_color(j);
-            let lo: Vec<f64> =
-                run.snapshots[..steps].iter().map(|s| s.centre[i] - s.shape[(i, i)].max(0.0).sqrt()).collect();
-            let hi: Vec<f64> =
-                run.snapshots[..steps].iter().map(|s| s.centre[i] + s.shape[(i, i)].max(0.0).sqrt()).collect();
-            if j == 0 {
-                chart.add(Series::band(format!("{} bounds", run.label), t.clone(), lo, hi, color));
-            } else {
-                chart.add(Series::dashed(format!("{} upper", run.label), t.clone(), hi, color));
-                chart.add(Series::dashed(format!("{} lower", run.label), t.clone(), lo, color));
-            }
-        }
-        for (j, run) in estimate_runs.iter().enumerate() {
-            let color = series_color(bound_runs.len() + j);
-            let y = run.snapshots[..steps].iter().map(|s| s.centre[i]).collect();
-            chart.add(Series::line(format!("{} estimate", run.label), t.clone(), y, color));
-        }
-        chart.add(Series::line("truth", t.clone(), truth[..steps].iter().map(|x| x[i]).collect(), PALETTE[0]));
-        let file = format!("{scenario_id}_fig{fig}_{id}.svg");
-        chart.write(&dir.join(&file))?;
-        files.push((file, format!("Fig. {fig}: {name}")));
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_whole_files_and_leaves_no_temporary() {
+        let dir = std::env::temp_dir().join(format!("xtask-atomic-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.txt");
+        write_atomic(&p, b"first").unwrap();
+        write_atomic(&p, b"second").unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "second");
+        // A directory in the way: an error, the directory untouched, no temporary left.
+        let blocked = dir.join("sub");
+        std::fs::create_dir_all(&blocked).unwrap();
+        assert!(write_atomic(&blocked, b"x").is_err());
+        assert!(blocked.is_dir());
+        let names: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(slug("[17] without input"), "17_without_input");
     }
-    for (i, (id, name, unit)) in STATES.iter().enumerate() {
-        let fig = 7 + i;
-        let mut chart = Chart::new(
-            format!("Fig. {fig} — {name}: estimation error ({scenario_title})"),
-            "time t [s]",
-            format!("error in {name} [{unit}]"),
-        );
-        for (j, run) in bound_runs.iter().chain(estimate_runs).enumerate() {
-            let color = series_color(j);
-            let y = run.snapshots[..steps].iter().zip(truth).map(|(s, x)| s.centre[i] - x[i]).collect();
-            let what = if run.is_set { "centre − truth" } else { "estimate − truth" };
-            chart.add(Series::line(format!("{} {what}", run.label), t.clone(), y, color));
-        }
-        let file = format!("{scenario_id}_fig{fig}_{id}_error.svg");
-        chart.write(&dir.join(&file))?;
-        files.push((file, format!("Fig. {fig}: error in {name}")));
-    }
-    Ok(files)
 }

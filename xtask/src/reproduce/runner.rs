@@ -2,20 +2,47 @@
 
 use std::time::Instant;
 
-use carrier_dynamics::{StepMatrices, Trajectory};
+use estimators::registry::BoxedLinearEstimator;
+use estimators::{Estimate, EstimateKind};
+use models::{StepMatrices, Trajectory};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-/// What the reproduction needs from one estimator (adapters in `filters.rs`).
-pub trait Filter {
+/// An estimator of the registry with the label the report gives it.
+pub struct Filter {
     /// Label for tables and legends.
-    fn label(&self) -> String;
-    /// Whether the estimate is a guaranteed set (set-membership) rather than a mean/covariance.
-    fn is_set(&self) -> bool;
-    /// One step: consumes `u_k` and `y_{k+1}` with the step's matrices. Timed by the caller.
-    fn step(&mut self, m: &StepMatrices, u: &DVector<f64>, y: &DVector<f64>) -> Result<(), String>;
-    /// The current centre and shape (covariance for the Kalman filter), and the step's report.
-    fn current(&self) -> Snapshot;
+    pub label: String,
+    /// The estimator, driven through the registry's object-safe trait.
+    pub estimator: BoxedLinearEstimator,
+}
+
+impl Filter {
+    /// Builds the registry's estimator `name` from `setup`, labelled `label`.
+    pub fn new(label: &str, name: &str, setup: &estimators::LinearSetup) -> Result<Self, String> {
+        let estimator = estimators::registry::linear(name, setup).map_err(|e| format!("{label}: {e}"))?;
+        Ok(Self { label: label.to_owned(), estimator })
+    }
+
+    /// Whether the estimate is a guaranteed set rather than a mean/covariance.
+    pub fn is_set(&self) -> bool {
+        self.estimator.estimate_dyn().kind() == EstimateKind::GuaranteedEllipsoid
+    }
+
+    fn current(&self) -> Snapshot {
+        Snapshot::of(self.estimator.estimate_dyn())
+    }
+}
+
+impl Snapshot {
+    /// A copy of an estimate.
+    pub fn of(e: &dyn Estimate) -> Self {
+        Snapshot {
+            centre: e.center().clone(),
+            shape: e.shape().clone(),
+            tau: e.multipliers(),
+            fallback: e.fallback_used(),
+        }
+    }
 }
 
 /// A copy of an estimator's state after a step.
@@ -45,7 +72,7 @@ pub struct Run {
 
 /// Runs `filter` over the first `max_steps` steps of `traj` (timing only the step calls).
 pub fn run_filter(
-    filter: &mut dyn Filter,
+    filter: &mut Filter,
     steps: &[StepMatrices],
     traj: &Trajectory,
     max_steps: usize,
@@ -57,23 +84,20 @@ pub fn run_filter(
     for k in 0..n {
         let (u, y) = (&traj.inputs[k], &traj.measurements[k + 1]);
         let t0 = Instant::now();
-        let r = filter.step(&steps[k], u, y);
+        let r = filter.estimator.step_dyn(&steps[k].as_step(), u, y).map(|_| ());
         step_ns.push(t0.elapsed().as_nanos() as u64);
-        r.map_err(|e| format!("{} at step {k}: {e}", filter.label()))?;
+        r.map_err(|e| format!("{} at step {k}: {e}", filter.label))?;
         snapshots.push(filter.current());
     }
-    Ok(Run { label: filter.label(), is_set: filter.is_set(), snapshots, step_ns })
+    Ok(Run { label: filter.label.clone(), is_set: filter.is_set(), snapshots, step_ns })
 }
 
-/// `(x − c)ᵀ P⁻¹ (x − c)`, or `+∞` if `P` is not positive definite.
+/// `(x − c)ᵀ P⁻¹ (x − c)` through the `ellipsoid` crate, or `+∞` if `𝓔(c, P)` is not a valid
+/// ellipsoid (P not positive definite, non-finite entries).
 pub fn normalized_distance(x: &DVector<f64>, centre: &DVector<f64>, shape: &DMatrix<f64>) -> f64 {
-    match shape.clone().cholesky() {
-        Some(ch) => {
-            let d = x - centre;
-            d.dot(&ch.solve(&d))
-        }
-        None => f64::INFINITY,
-    }
+    ellipsoid::Ellipsoid::new(centre.clone(), shape.clone())
+        .and_then(|e| e.normalized_distance(x))
+        .unwrap_or(f64::INFINITY)
 }
 
 /// Per-estimator figures of one scenario (`summary.json`).

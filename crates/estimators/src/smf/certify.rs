@@ -125,4 +125,3 @@ pub(crate) fn certify(
     let finite = cw.p_new.iter().chain(cw.x_new.iter()).all(|v| v.is_finite());
     (finite && absolute.is_finite() && s.is_finite()).then_some(Inflation { relative: s, absolute })
 }
-

@@ -187,5 +187,4 @@ mod tests {
         assert!(!near_simplex([-1e-3, 0.5, 0.5]));
         assert!(!near_simplex([f64::NAN, 0.5, 0.5]));
     }
-
 }

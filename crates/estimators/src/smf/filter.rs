@@ -363,7 +363,6 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     }
 }
 
-
 impl Estimate for SetEstimate {
     fn kind(&self) -> EstimateKind {
         EstimateKind::GuaranteedEllipsoid

@@ -133,4 +133,3 @@ impl GainWork {
         Some(Eval { g, grad, hess })
     }
 }
-

@@ -27,9 +27,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use lmi::builder::{AffineMatrix, LmiBuilder, Var, VariableMap};
 use lmi::LmiError;
 use lmi::SdpProblem;
+use lmi::builder::{AffineMatrix, LmiBuilder, Var, VariableMap};
 
 /// The data of one filter step.
 #[derive(Debug, Clone, Copy)]

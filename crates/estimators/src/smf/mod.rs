@@ -92,7 +92,6 @@
 //! an input outside it is refused with [`EstimatorError::InputOutsideBounds`] before anything
 //! changes.
 
-
 pub mod certify;
 pub mod fallback;
 pub mod filter;

@@ -13,8 +13,8 @@
 use super::lmi28::{FilterSdp, FilterSdpData};
 use lmi::{SdpBackend, SdpSolution, SolverSettings};
 
-use crate::error::EstimatorError;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
+use crate::error::EstimatorError;
 
 /// An [`UpdateSolver`] backed by an SDP solver.
 pub struct SdpUpdateSolver {

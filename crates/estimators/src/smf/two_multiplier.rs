@@ -90,13 +90,9 @@
 //! homogeneous of degree 1 in the small multipliers, not quadratic). Typical counts: 0–1
 //! iterations in steady state, 4–5 when `τ` moves far between steps.
 
-
-
-
-use crate::error::EstimatorError;
 use super::gain::GainWork;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
-
+use crate::error::EstimatorError;
 
 /// Lower bound of `τ₁` and `τ₂` (the edges `τ₁ = 0`, `τ₂ = 0` are limits where `M` blows up).
 pub const TAU_FLOOR: f64 = 1e-12;

@@ -3,8 +3,10 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use lmi::sdplib::{Expected, Verdict, sdplib_dir, suite, suite_settings, verdict};
+pub mod suite;
+
 use lmi::{backend_by_name, backend_names, read_sdpa_file};
+use suite::{Expected, Verdict, sdplib_dir, suite, suite_settings, verdict};
 
 use crate::args::Args;
 

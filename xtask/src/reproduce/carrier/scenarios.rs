@@ -1,7 +1,8 @@
 //! The experiments: the paper's, as published, and extended scenarios where the filter has work
 //! to do. Every choice the paper leaves open is stated here and repeated in the report.
 
-use carrier_dynamics::{BoundedNoise, CarrierModel, CarrierParams, SimulationConfig, StepMatrices};
+use carrier_dynamics::{CarrierModel, CarrierParams};
+use models::{Noise as BoundedNoise, SimulationConfig, StepMatrices};
 use nalgebra::{DMatrix, DVector};
 
 /// Sampling period of every scenario (the paper's 1 ms).

@@ -6,9 +6,9 @@ use carrier_dynamics::{CarrierModel, CarrierParams};
 use serde::Serialize;
 
 use super::filters::{KALMAN, PROPOSED, PROPOSED_VIA, YANG_LI_NO_INPUT, YANG_LI_WITH_INPUT};
-use super::runner::{Metrics, Run};
 use super::scenarios::{STATES, Scenario};
 use super::{MonteCarloSummary, ScenarioSummary, Summary};
+use crate::reproduce::runner::{Metrics, Run};
 
 /// One of the paper's inconsistencies, shown with numbers.
 #[derive(Debug, Serialize)]

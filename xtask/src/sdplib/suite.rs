@@ -14,9 +14,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::LmiError;
-use crate::problem::SdpProblem;
-use crate::solver::{SdpSolution, SolveStatus, SolverSettings};
+use lmi::LmiError;
+use lmi::SdpProblem;
+use lmi::{SdpSolution, SolveStatus, SolverSettings};
 
 /// Environment variable that overrides the SDPLIB directory.
 pub const SDPLIB_DIR_VAR: &str = "SDPLIB_DIR";
@@ -26,7 +26,7 @@ pub const SDPLIB_DIR_VAR: &str = "SDPLIB_DIR";
 pub fn sdplib_dir() -> Option<PathBuf> {
     let dir = match std::env::var_os(SDPLIB_DIR_VAR) {
         Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/sdplib"),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/sdplib"),
     };
     dir.is_dir().then_some(dir)
 }
@@ -290,7 +290,7 @@ mod tests {
 
     #[test]
     fn nan_certificates_are_rejected() {
-        use crate::problem::{Block, Entry};
+        use lmi::{Block, Entry};
         let p = SdpProblem::new(
             vec![Block::Psd(1)],
             vec![1.0],

@@ -2,12 +2,12 @@
 //!
 //! The directory is `$SDPLIB_DIR` or `../shared/sdplib` beside the workspace; the test skips with
 //! a message when it is absent. Reference outcomes come from the suite's README (see
-//! `lmi::sdplib`): the objective must match to relative 1e-6 (or to the digits given), and the
+//! `xtask::sdplib::suite`): the objective must match to relative 1e-6 (or to the digits given), and the
 //! infeasible problems must end infeasible on the correct side with a certificate that checks.
 
-use lmi::sdplib::{Verdict, sdplib_dir, suite, suite_settings, verdict};
 use lmi::{DEFAULT_BACKEND, SdpProblem};
 use lmi::{backend_by_name, backend_names, read_sdpa_file};
+use xtask::sdplib::suite::{Verdict, sdplib_dir, suite, suite_settings, verdict};
 
 #[test]
 fn every_backend_solves_the_sdplib_suite() {
