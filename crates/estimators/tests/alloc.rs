@@ -181,3 +181,49 @@ fn sdp_step_with_the_default_backend_does_not_allocate_after_setup() {
     });
     assert_eq!(n, 0, "SDP-backed step allocated");
 }
+
+#[test]
+fn registry_estimators_and_noise_setters_do_not_allocate_after_warm_up() {
+    use estimators::registry::{LINEAR_ESTIMATORS, LinearSetup, linear};
+    use estimators::{LinearModel, NoiseSettings};
+    let a = common::reference_a();
+    let b = DMatrix::from_fn(4, 2, |i, j| 0.01 * (i + 2 * j) as f64);
+    let c = common::reference_c();
+    let model = StepModel::new(&a, &b, &c);
+    let dyn_model: &dyn LinearModel = &model;
+    let u = DVector::from_vec(vec![0.2, -0.1]);
+    let ys: Vec<DVector<f64>> = (0..50).map(|k| DVector::from_fn(3, |i, _| ((k * 7 + i) as f64).sin() * 0.1)).collect();
+    let q = DMatrix::identity(4, 4) * 0.01;
+    let r = DMatrix::identity(3, 3) * 0.05;
+    let mut setup =
+        LinearSetup::new(DVector::zeros(4), DMatrix::identity(4, 4) * 0.5, NoiseSettings::new(q.clone(), r.clone()), 2);
+    setup.input_bounds = Some((DVector::from_element(2, -1.0), DVector::from_element(2, 1.0)));
+    for info in LINEAR_ESTIMATORS {
+        let mut est = linear(info.name, &setup).unwrap();
+        est.step_dyn(dyn_model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                let e = est.step_dyn(dyn_model, &u, y).unwrap();
+                assert_eq!(e.kind(), info.kind);
+            }
+        });
+        assert_eq!(n, 0, "{} through the registry allocated", info.name);
+    }
+    // In-place noise setters: no allocation, and a rejected matrix changes nothing.
+    let mut kf = KalmanFilter::new(DVector::zeros(4), DMatrix::identity(4, 4), q.clone(), r.clone(), 2).unwrap();
+    let mut smf =
+        SetMembershipFilter::two_multiplier(DVector::zeros(4), DMatrix::identity(4, 4), q.clone(), r, 2).unwrap();
+    let q2 = &q * 2.0;
+    let r2 = DMatrix::identity(3, 3) * 0.07;
+    let (ok, n) = count(|| kf.set_noise(&q2, &r2).is_ok() && smf.set_noise(&q2, &r2).is_ok());
+    assert!(ok);
+    assert_eq!(n, 0, "set_noise allocated");
+    let bad = DMatrix::from_row_slice(3, 3, &[1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+    let before =
+        (kf.clone().step(&model, &u, &ys[0]).unwrap().clone(), smf.clone().step(&model, &u, &ys[0]).unwrap().clone());
+    let (rejected, n) = count(|| kf.set_noise(&q2, &bad).is_err() && smf.set_noise(&q2, &bad).is_err());
+    assert!(rejected);
+    assert_eq!(n, 0, "rejecting a noise matrix allocated");
+    assert_eq!(kf.step(&model, &u, &ys[0]).unwrap(), &before.0, "a rejected R changed the Kalman filter");
+    assert_eq!(smf.step(&model, &u, &ys[0]).unwrap().center, before.1.center);
+}

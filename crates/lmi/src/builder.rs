@@ -441,6 +441,7 @@ impl LmiBuilder {
         let mut out = AffineMatrix::zeros(rows, cols);
         for j in 0..cols {
             for i in 0..rows {
+                // tidy: invariant — (i, j) ranges over the variable's own shape.
                 let idx = var.scalar_index(i, j).expect("index inside the variable's shape");
                 out.data[j * rows + i] = Affine::unknown(idx);
             }
@@ -640,6 +641,7 @@ impl VariableMap {
             VarShape::Symmetric(n) => (n, n),
             VarShape::Matrix(r, c) => (r, c),
         };
+        // tidy: invariant — (i, j) ranges over the variable's own shape (checked above).
         Ok(DMatrix::from_fn(rows, cols, |i, j| x[var.scalar_index(i, j).expect("inside shape")]))
     }
 }

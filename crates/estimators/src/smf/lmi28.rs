@@ -347,9 +347,11 @@ impl FilterSdp {
         }
         for j in 0..self.m {
             for i in 0..self.n {
+                // tidy: invariant — (i, j) ranges over L's own shape.
                 l[(i, j)] = x[self.vars.l.scalar_index(i, j).expect("inside L")];
             }
         }
+        // tidy: invariant — τ₁, τ₂, τ₃ are scalar variables.
         let t = |k: usize| x[self.vars.tau[k].scalar_index(0, 0).expect("scalar")];
         Ok([t(0), t(1), t(2)])
     }

@@ -165,6 +165,7 @@ impl TwoMultiplierSolver {
     }
 
     fn minimise(&mut self, pr: &UpdateProblem<'_>, warm: [f64; 3]) -> (Point, UpdateStatus, u32) {
+        // tidy: invariant — `solve` prepares the work buffers before calling `minimise`.
         let work = self.work.as_mut().expect("prepared");
         let eval = |w: &mut GainWork, p: &Point| w.eval(p.tau(), pr.x1, pr.q, pr.c, pr.r);
         let mut pt = Self::start(warm);
@@ -512,9 +513,11 @@ impl UpdateSolver for TwoMultiplierSolver {
         if self.work.as_ref().is_none_or(|w| w.l.shape() != (n, m)) {
             self.prepare(n, m)?;
         }
+        // tidy: invariant — prepared just above.
         self.work.as_mut().expect("prepared").load(pr.x1, pr.q, pr.c);
         let (pt, status, iters) = self.minimise(pr, warm);
         let tau = pt.tau();
+        // tidy: invariant — prepared just above.
         let work = self.work.as_mut().expect("prepared");
         out.iterations = iters;
         out.tau = tau;
