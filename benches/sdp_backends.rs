@@ -66,7 +66,7 @@ fn filter_lmi(crit: &mut Criterion) {
 }
 
 fn sdplib(crit: &mut Criterion) {
-    let Some(dir) = lmi::sdplib::sdplib_dir() else {
+    let Some(dir) = xtask::sdplib::suite::sdplib_dir() else {
         eprintln!("SDPLIB directory not found (set SDPLIB_DIR); skipping the SDPLIB benchmarks");
         return;
     };

@@ -16,7 +16,7 @@ use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
 use crate::traits::{Estimate, EstimateKind, Estimator, NoiseSettings};
-use crate::validate::{InitialData, check_initial, check_model, check_spd, check_vec};
+use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// The Kalman estimate after a step: mean, covariance and per-state standard deviations.
 #[derive(Debug, Clone, PartialEq)]
@@ -108,28 +108,24 @@ impl KalmanFilter {
         Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
     }
 
-    /// Replaces both covariances in place (validated first; on error nothing changes; no
-    /// allocation).
+    /// Replaces both noise matrices in place (each validated first; if either is rejected
+    /// nothing changes; no allocation).
     pub fn set_noise(&mut self, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::check_spd_no_alloc("Q", q, self.n, &mut self.tmp)?;
         crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.s)?;
-        self.q.copy_from(q);
-        dense::symmetrize(&mut self.q);
-        self.r.copy_from(r);
-        dense::symmetrize(&mut self.r);
-        Ok(())
+        self.set_process_noise(q)?;
+        self.set_measurement_noise(r)
     }
 
-    /// Replaces the process covariance (symmetric positive definite, `n × n`).
+    /// Replaces the process-noise covariance `Q` in place (symmetric positive definite, `n × n`;
+    /// no allocation; unchanged on error).
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        self.q = check_spd("Q", q, self.n)?;
-        Ok(())
+        crate::validate::replace_spd("Q", &mut self.q, q, &mut self.tmp)
     }
 
-    /// Replaces the measurement covariance (symmetric positive definite, `m × m`).
+    /// Replaces the measurement-noise covariance `R` in place (symmetric positive definite, `m × m`;
+    /// no allocation; unchanged on error).
     pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        self.r = check_spd("R", r, self.m)?;
-        Ok(())
+        crate::validate::replace_spd("R", &mut self.r, r, &mut self.s)
     }
 
     /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the

@@ -100,6 +100,21 @@ pub(crate) fn check_spd_no_alloc(
     Ok(())
 }
 
+/// Validates `src` as [`check_spd`] does and copies it, symmetrised, into `dst` (same order),
+/// using `work` (`n × n`) for the factorisation: the in-place noise setters, allocation-free;
+/// on error `dst` is unchanged.
+pub(crate) fn replace_spd(
+    what: &'static str,
+    dst: &mut DMatrix<f64>,
+    src: &DMatrix<f64>,
+    work: &mut DMatrix<f64>,
+) -> Result<(), EstimatorError> {
+    check_spd_no_alloc(what, src, dst.nrows(), work)?;
+    dst.copy_from(src);
+    dense_kernels::symmetrize(dst);
+    Ok(())
+}
+
 /// The validated initial data shared by the filters' constructors.
 pub(crate) struct InitialData {
     /// States `n`.

@@ -14,7 +14,7 @@ use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 use crate::error::EstimatorError;
 use crate::traits::{Estimate, EstimateKind, Estimator, NoiseSettings};
-use crate::validate::{InitialData, check_initial, check_model, check_spd, check_vec};
+use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// What one step did.
 #[derive(Debug, Clone, PartialEq)]
@@ -206,33 +206,29 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         Ok(self)
     }
 
-    /// Replaces both noise shapes in place (validated first; on error nothing changes; no
-    /// allocation).
+    /// Replaces both noise matrices in place (each validated first; if either is rejected
+    /// nothing changes; no allocation).
     pub fn set_noise(&mut self, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::check_spd_no_alloc("Q", q, self.n, &mut self.ws.cert.t)?;
         crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.ws.gain_r)?;
-        self.q.copy_from(q);
-        dense_kernels::symmetrize(&mut self.q);
-        self.r.copy_from(r);
-        dense_kernels::symmetrize(&mut self.r);
-        Ok(())
+        self.set_process_noise(q)?;
+        self.set_measurement_noise(r)
+    }
+
+    /// Replaces the process-noise shape `Q` in place (symmetric positive definite, `n × n`;
+    /// no allocation; unchanged on error).
+    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        crate::validate::replace_spd("Q", &mut self.q, q, &mut self.ws.cert.t)
+    }
+
+    /// Replaces the measurement-noise shape `R` in place (symmetric positive definite, `m × m`;
+    /// no allocation; unchanged on error).
+    pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        crate::validate::replace_spd("R", &mut self.r, r, &mut self.ws.gain_r)
     }
 
     /// Per-step wall-clock budget for the solver; a step exceeding it falls back.
     pub fn set_time_budget(&mut self, budget: Option<Duration>) {
         self.time_budget = budget;
-    }
-
-    /// Replaces the process-noise shape `Q` (symmetric positive definite).
-    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        self.q = check_spd("Q", q, self.n)?;
-        Ok(())
-    }
-
-    /// Replaces the measurement-noise shape `R` (symmetric positive definite).
-    pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        self.r = check_spd("R", r, self.m)?;
-        Ok(())
     }
 
     /// Number of states, inputs, outputs `(n, p, m)`.
