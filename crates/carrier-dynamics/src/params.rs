@@ -5,6 +5,7 @@ use crate::error::DynamicsError;
 /// How the roll inertia is given: about the CG (`I_x`) or about the roll axis
 /// (`I_xeq = I_x + m h²`, parallel-axis theorem, paper §1).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum RollInertia {
     /// `I_x` \[kg m²\], roll inertia about the longitudinal axis through the CG.
     AboutCg(f64),

@@ -142,6 +142,7 @@ impl MeasurementSet {
 
 /// Outcome of an intersection bound.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum IntersectionBound {
     /// The intersection is contained in this ellipsoid.
     Bounded(Ellipsoid),

@@ -221,6 +221,7 @@ proptest! {
             match prior.intersect_measurement(&meas, lambda) {
                 Ok(IntersectionBound::Bounded(e)) => scan_min = scan_min.min(e.trace()),
                 Ok(IntersectionBound::Empty { .. }) => scan_empty = true,
+                Ok(other) => return Err(TestCaseError::fail(format!("λ = {lambda}: unexpected {other:?}"))),
                 Err(
                     EllipsoidError::UnboundedIntersection { .. }
                     | EllipsoidError::DegenerateResult { .. },

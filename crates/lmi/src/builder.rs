@@ -31,6 +31,7 @@ use crate::problem::{Block, Entry, SdpProblem};
 
 /// Shape of a named decision variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum VarShape {
     /// One scalar.
     Scalar,

@@ -3,6 +3,7 @@
 
 /// Everything that can be wrong with what a caller passes to this crate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum LmiError {
     /// The problem data are inconsistent (index out of range, NaN, lower-triangle entry…).
     #[error("invalid problem: {0}")]

@@ -20,6 +20,7 @@ use crate::error::LmiError;
 
 /// One diagonal block of the block-diagonal structure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Block {
     /// A dense symmetric block of the given order that must be positive semidefinite.
     Psd(usize),

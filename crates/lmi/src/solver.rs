@@ -11,6 +11,7 @@ use crate::problem::{Block, SdpProblem};
 ///
 /// "Primal" is the problem in `x`, "dual" the problem in `Y` (see [`crate::problem`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum SolveStatus {
     /// Not solved yet (a freshly allocated [`SdpSolution`]).
     Unsolved,
