@@ -1,0 +1,120 @@
+//! The command line, declared with `clap`'s derive API. Paths are `PathBuf`s, so arguments that
+//! are not UTF-8 are accepted (paths) or refused by `clap` with a message (names), never a
+//! panic.
+
+use std::path::PathBuf;
+
+use clap::builder::{PossibleValue, PossibleValuesParser};
+use clap::{Args, Parser, Subcommand};
+use estimators::registry;
+
+/// Guaranteed (set-membership) and Kalman state estimation over logged data of port vehicles.
+#[derive(Debug, Parser)]
+#[command(name = "port-est", version, arg_required_else_help = true, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run an estimator over logged inputs and measurements, one estimate per step
+    Filter(FilterArgs),
+    /// List the estimators (--estimator) and the solvers of the set-membership filters (--solver)
+    Estimators,
+}
+
+const FILE_FORMATS: &str = "\
+Files:
+  MODEL.toml  the discrete-time model x_{k+1} = a x_k + b u_k + w_k, y_{k+1} = c x_{k+1} + v_{k+1}:
+              `a` (n×n), `b` (n×p), `c` (m×n), `q` (n×n), `r` (m×m), `p0` (n×n) as arrays of rows and
+              `x0` (length n); optional `u_lower`, `u_upper` (length p), the input range (yang-li).
+              Set-membership filters read q, r, p0 as ellipsoid shapes, the Kalman filter as
+              covariances.
+  DATA.csv    header `k,u1,…,up,y1,…,ym`; row k holds the input u_k and the measurement y_{k+1}.
+  OUT.csv     header `k,xhat1,…,xhatn,lo1,…,lon,hi1,…,hin,trace` (plus `tau1,tau2,tau3` for the
+              set-membership filters); one row per step, labelled k+1. It is written to a temporary
+              file beside it and renamed on success, and may not be the model or the input.
+
+Malformed files are reported at their file:line:column.
+
+Example:
+  port-est filter --model examples/filter/model.toml --input examples/filter/data.csv --output out.csv";
+
+/// The arguments of `port-est filter`.
+#[derive(Debug, Args)]
+#[command(after_long_help = FILE_FORMATS)]
+pub struct FilterArgs {
+    /// The model: a, b, c, q, r, p0, x0 and optionally u_lower, u_upper (TOML)
+    #[arg(short, long, value_name = "MODEL.toml")]
+    pub model: PathBuf,
+    /// The logged data: header `k,u1,…,up,y1,…,ym` (CSV)
+    #[arg(short, long, value_name = "DATA.csv")]
+    pub input: PathBuf,
+    /// Where to write the estimates (CSV; replaced only if the run succeeds)
+    #[arg(short, long, value_name = "OUT.csv")]
+    pub output: PathBuf,
+    /// The estimator
+    #[arg(short, long, value_name = "NAME", default_value = "smf", value_parser = estimator_names())]
+    pub estimator: String,
+    /// How the set-membership filters solve their SDP (29) [default: two-multiplier]
+    #[arg(short, long, value_name = "NAME", value_parser = solver_names())]
+    pub solver: Option<String>,
+}
+
+/// The registry's estimators, with their summaries for `--help`.
+fn estimator_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(registry::LINEAR_ESTIMATORS.iter().map(|e| PossibleValue::new(e.name).help(e.summary)))
+}
+
+/// The solvers this build has.
+fn solver_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(registry::solver_names().into_iter().map(|s| {
+        let help = if s == registry::TWO_MULTIPLIER { "exact two-multiplier method (fastest)" } else { "SDP backend" };
+        PossibleValue::new(s).help(help)
+    }))
+}
+
+impl From<FilterArgs> for crate::FilterOptions {
+    fn from(a: FilterArgs) -> Self {
+        Self { model: a.model, input: a.input, output: a.output, estimator: a.estimator, solver: a.solver }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn the_command_line_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn filter_arguments_parse_with_defaults() {
+        let cli = Cli::try_parse_from(["port-est", "filter", "-m", "m.toml", "--input", "d.csv", "-o", "o.csv"]).unwrap();
+        let Command::Filter(a) = cli.command else { panic!("not filter") };
+        assert_eq!((a.estimator.as_str(), a.solver), ("smf", None));
+        let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d", "-o", "o", "-e", "ukf"]).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::InvalidValue);
+        let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d"]).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::MissingRequiredArgument);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn non_utf8_arguments_do_not_panic() {
+        use std::ffi::OsString;
+        use std::os::unix::ffi::OsStringExt;
+        let bad = OsString::from_vec(b"d\xff.csv".to_vec());
+        let args = [OsString::from("port-est"), "filter".into(), "-m".into(), "m".into(), "-i".into(), bad.clone()];
+        let cli = Cli::try_parse_from(args.iter().cloned().chain(["-o".into(), "o".into()])).unwrap();
+        let Command::Filter(a) = cli.command else { panic!("not filter") };
+        assert_eq!(a.input.as_os_str(), bad);
+        let e = Cli::try_parse_from(args.iter().cloned().chain(["-o".into(), "o".into(), "-e".into(), bad.clone()]));
+        assert!(e.is_err());
+    }
+}

@@ -1,0 +1,449 @@
+//! `DATA.csv`: header `k,u1,…,up,y1,…,ym`, then one row per step holding `k`, the input `u_k`
+//! and the measurement `y_{k+1}` taken after it. Read with the `csv` crate one row at a time
+//! (cells trimmed, blank lines skipped, quoted cells allowed, a UTF-8 byte-order mark ignored);
+//! a bad cell is reported at its `file:line:column`.
+//!
+//! The `csv` crate gives the byte offset of each record; to name the column of a bad cell the
+//! reader re-reads that record's raw bytes (only when there is an error) and finds the cell's
+//! first non-blank character, so positions are exact with padding, quotes, CRLF line ends and a
+//! byte-order mark.
+
+use std::fs::File;
+use std::io::{self, Cursor, Read, Seek, SeekFrom};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use csv::StringRecord;
+use nalgebra::DVector;
+
+use crate::error::{Error, Location, echo};
+
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// Where a data reader's bytes come from: a stream that can also give back the raw bytes of a
+/// byte range (used only to locate a bad cell).
+pub trait Source: Read {
+    /// The raw bytes at `range` of the stream (offsets from the stream's start).
+    ///
+    /// # Errors
+    /// When the bytes cannot be read again.
+    fn raw(&self, range: Range<u64>) -> io::Result<Vec<u8>>;
+}
+
+/// A data file on disk.
+#[derive(Debug)]
+pub struct FileSource {
+    file: File,
+    path: PathBuf,
+}
+
+impl Read for FileSource {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.file.read(buf)
+    }
+}
+
+impl Source for FileSource {
+    fn raw(&self, range: Range<u64>) -> io::Result<Vec<u8>> {
+        // A second handle, so that the reader's own position is untouched.
+        let mut f = File::open(&self.path)?;
+        f.seek(SeekFrom::Start(range.start))?;
+        let mut out = Vec::new();
+        f.take(range.end.saturating_sub(range.start)).read_to_end(&mut out)?;
+        Ok(out)
+    }
+}
+
+impl<T: AsRef<[u8]>> Source for Cursor<T> {
+    fn raw(&self, range: Range<u64>) -> io::Result<Vec<u8>> {
+        let bytes = self.get_ref().as_ref();
+        let clamp = |x: u64| usize::try_from(x).unwrap_or(usize::MAX).min(bytes.len());
+        Ok(bytes[clamp(range.start)..clamp(range.end.max(range.start))].to_vec())
+    }
+}
+
+/// One row of `DATA.csv`, reused from row to row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DataRow {
+    /// The row's `k`.
+    pub k: u64,
+    /// `u_k` (p entries).
+    pub u: DVector<f64>,
+    /// `y_{k+1}` (m entries).
+    pub y: DVector<f64>,
+}
+
+impl DataRow {
+    /// A zero row for `p` inputs and `m` outputs.
+    #[must_use]
+    pub fn zeros(p: usize, m: usize) -> Self {
+        Self { k: 0, u: DVector::zeros(p), y: DVector::zeros(m) }
+    }
+}
+
+/// Reads `DATA.csv` row by row for a model with `p` inputs and `m` outputs.
+#[derive(Debug)]
+pub struct DataReader<R: Source> {
+    csv: csv::Reader<R>,
+    path: PathBuf,
+    /// Bytes skipped before the `csv` reader's offset 0 (a byte-order mark).
+    skipped: u64,
+    /// `k`, `u1`…, `y1`….
+    names: Vec<String>,
+    p: usize,
+    record: StringRecord,
+    /// Start (as `csv` gives it: possibly before skipped blank lines) and end of the last record.
+    start: csv::Position,
+    end: u64,
+    header_line: u64,
+    rows: u64,
+}
+
+impl DataReader<FileSource> {
+    /// Opens `path` and checks its header against the model's `p` inputs and `m` outputs.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if the file cannot be read; [`Error::At`] for an empty file or a header
+    /// that is not `k,u1,…,up,y1,…,ym`.
+    pub fn open(path: &Path, p: usize, m: usize) -> Result<Self, Error> {
+        let io = |e| Error::io(path, e);
+        let mut file = File::open(path).map_err(io)?;
+        let mut head = [0u8; 3];
+        let mut got = 0;
+        while got < 3 {
+            match file.read(&mut head[got..]) {
+                Ok(0) => break,
+                Ok(k) => got += k,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(io(e)),
+            }
+        }
+        let skipped = if head[..got] == *BOM { 3 } else { 0 };
+        file.seek(SeekFrom::Start(skipped)).map_err(io)?;
+        Self::new(FileSource { file, path: path.to_owned() }, path, skipped, p, m)
+    }
+}
+
+impl DataReader<Cursor<Vec<u8>>> {
+    /// Reads data from memory (`path` names it in errors); see [`DataReader::open`].
+    ///
+    /// # Errors
+    /// As [`DataReader::open`].
+    pub fn from_text(path: &Path, text: &str, p: usize, m: usize) -> Result<Self, Error> {
+        let mut cursor = Cursor::new(text.as_bytes().to_vec());
+        let skipped = if text.as_bytes().starts_with(BOM) { 3 } else { 0 };
+        cursor.set_position(skipped);
+        Self::new(cursor, path, skipped, p, m)
+    }
+}
+
+impl<R: Source> DataReader<R> {
+    fn new(source: R, path: &Path, skipped: u64, p: usize, m: usize) -> Result<Self, Error> {
+        let csv = csv::ReaderBuilder::new()
+            .has_headers(false) // checked here, to say which cell is wrong
+            .flexible(true) // the field count is checked here too
+            .trim(csv::Trim::All)
+            .from_reader(source);
+        let names = std::iter::once("k".to_owned())
+            .chain((1..=p).map(|i| format!("u{i}")))
+            .chain((1..=m).map(|i| format!("y{i}")))
+            .collect();
+        let mut r = Self {
+            csv,
+            path: path.to_owned(),
+            skipped,
+            names,
+            p,
+            record: StringRecord::new(),
+            start: csv::Position::new(),
+            end: 0,
+            header_line: 1,
+            rows: 0,
+        };
+        r.read_header()?;
+        Ok(r)
+    }
+
+    /// The file's name, as given.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The column names: `k`, `u1`…, `y1`….
+    #[must_use]
+    pub fn columns(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Number of data rows read so far.
+    #[must_use]
+    pub fn rows_read(&self) -> u64 {
+        self.rows
+    }
+
+    /// Reads the next non-blank record; `false` at the end of the file.
+    fn next_record(&mut self) -> Result<bool, Error> {
+        loop {
+            match self.csv.read_record(&mut self.record) {
+                Ok(false) => return Ok(false),
+                Ok(true) => {
+                    self.start = self.record.position().cloned().unwrap_or_else(|| self.csv.position().clone());
+                    self.end = self.csv.position().byte();
+                    let blank = self.record.len() == 1 && self.record[0].is_empty();
+                    if !blank {
+                        return Ok(true);
+                    }
+                }
+                Err(e) => return Err(self.csv_error(e)),
+            }
+        }
+    }
+
+    fn csv_error(&mut self, e: csv::Error) -> Error {
+        if let csv::ErrorKind::Utf8 { pos, err } = e.kind() {
+            let field = err.field();
+            self.start = pos.clone().unwrap_or_else(|| self.csv.position().clone());
+            self.end = self.csv.position().byte();
+            let name = self.names.get(field).map_or("the cell", |s| s.as_str()).to_owned();
+            return Error::at(self.locate(Some(field)), format!("{name} is not valid UTF-8"));
+        }
+        let message = e.to_string();
+        match e.into_kind() {
+            csv::ErrorKind::Io(e) => Error::io(&self.path, e),
+            _ => Error::File { path: self.path.clone(), message },
+        }
+    }
+
+    fn read_header(&mut self) -> Result<(), Error> {
+        let expected = self.names.join(",");
+        if !self.next_record()? {
+            let at = Location::new(&self.path, 1, 1);
+            return Err(Error::at(at, format!("empty file, expected the header `{expected}`")));
+        }
+        self.header_line = self.locate(None).line;
+        let (p, m) = (self.p, self.names.len() - 1 - self.p);
+        for j in 0..self.names.len() {
+            let want = &self.names[j];
+            match self.record.get(j) {
+                Some(got) if got == want => {}
+                got => {
+                    let got = got.map_or_else(|| "missing".to_owned(), |g| format!("is {}", echo(g)));
+                    let message = format!(
+                        "header column {} {got}, expected {want:?} (model has p = {p} inputs, m = {m} outputs)",
+                        j + 1
+                    );
+                    return Err(Error::at(self.locate(Some(j)), message));
+                }
+            }
+        }
+        if let Some(extra) = self.record.get(self.names.len()) {
+            let message = format!("unexpected extra header column {} (expected `{expected}`)", echo(extra));
+            return Err(Error::at(self.locate(Some(self.names.len())), message));
+        }
+        Ok(())
+    }
+
+    /// Reads the next data row into `row`; `Ok(false)` at the end of the file.
+    ///
+    /// # Errors
+    /// [`Error::At`] for a row with the wrong number of cells, a `k` that is not a nonnegative
+    /// integer, a value that is not a finite number, or a file without data rows;
+    /// [`Error::Io`] if reading fails.
+    pub fn read_row(&mut self, row: &mut DataRow) -> Result<bool, Error> {
+        if !self.next_record()? {
+            if self.rows == 0 {
+                let at = Location::new(&self.path, self.header_line + 1, 1);
+                return Err(Error::at(at, "no data rows after the header"));
+            }
+            return Ok(false);
+        }
+        let n = self.names.len();
+        if self.record.len() != n {
+            let message = format!("{} fields, expected {n} (`{}`)", self.record.len(), self.names.join(","));
+            return Err(Error::at(self.locate(None), message));
+        }
+        let ks = &self.record[0];
+        let Ok(k) = ks.parse::<u64>() else {
+            let message = format!("k = {} is not a nonnegative integer", echo(ks));
+            return Err(Error::at(self.locate(Some(0)), message));
+        };
+        if row.u.len() != self.p || row.y.len() != n - 1 - self.p {
+            *row = DataRow::zeros(self.p, n - 1 - self.p);
+        }
+        row.k = k;
+        for j in 1..n {
+            let s = &self.record[j];
+            let v = match s.parse::<f64>() {
+                Ok(v) if v.is_finite() => v,
+                Ok(_) => {
+                    let message = format!("{} = {} is not finite", self.names[j], echo(s));
+                    return Err(Error::at(self.locate(Some(j)), message));
+                }
+                Err(_) => {
+                    let message = format!("{} = {} is not a number", self.names[j], echo(s));
+                    return Err(Error::at(self.locate(Some(j)), message));
+                }
+            };
+            if j <= self.p {
+                row.u[j - 1] = v;
+            } else {
+                row.y[j - 1 - self.p] = v;
+            }
+        }
+        self.rows += 1;
+        Ok(true)
+    }
+
+    /// Where the last record read starts (`column = None`: its line, column 1) or where its
+    /// cell `column` (0 = `k`, then `u1`…, `y1`…) starts, at the cell's first non-blank
+    /// character. A missing cell is placed where it would start after one more comma.
+    pub fn locate(&mut self, column: Option<usize>) -> Location {
+        let range = self.skipped + self.start.byte()..self.skipped + self.end;
+        let (line, col) = match self.csv.get_ref().raw(range) {
+            Ok(bytes) => locate_in(&String::from_utf8_lossy(&bytes), self.start.line(), column),
+            Err(_) => (self.start.line(), 1),
+        };
+        Location::new(&self.path, line, col)
+    }
+}
+
+/// Line and column of cell `field` (or of the record's start) in the raw text of a record that
+/// starts on line `line` (the text may begin with the line ends of skipped blank lines). Follows
+/// the `csv` crate's defaults: `,` separates, `"` quotes at the start of a cell, `""` escapes.
+fn locate_in(raw: &str, mut line: u64, field: Option<usize>) -> (u64, u64) {
+    let mut col = 1;
+    let mut chars = raw.chars().peekable();
+    while let Some(&c) = chars.peek() {
+        match c {
+            '\n' => (line, col) = (line + 1, 1),
+            '\r' => {}
+            _ => break,
+        }
+        chars.next();
+    }
+    let Some(want) = field else {
+        return (line, col);
+    };
+    let (mut index, mut at_start, mut quoted) = (0, true, false);
+    while let Some(c) = chars.next() {
+        if index == want && !quoted {
+            if at_start && c.is_whitespace() && c != '\n' && c != '\r' {
+                col += 1;
+                continue;
+            }
+            return (line, col);
+        }
+        if quoted {
+            if c == '"' {
+                if chars.peek() == Some(&'"') {
+                    chars.next();
+                    col += 1;
+                } else {
+                    quoted = false;
+                }
+            }
+        } else {
+            match c {
+                '"' if at_start => quoted = true,
+                ',' => {
+                    index += 1;
+                    at_start = true;
+                    col += 1;
+                    continue;
+                }
+                '\n' | '\r' => return (line, col + (want - index) as u64),
+                _ => {}
+            }
+        }
+        at_start = false;
+        if c == '\n' {
+            (line, col) = (line + 1, 1);
+        } else {
+            col += 1;
+        }
+    }
+    (line, col + want.saturating_sub(index) as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn err(text: &str) -> String {
+        let p = Path::new("d.csv");
+        let result = DataReader::from_text(p, text, 1, 1).and_then(|mut r| {
+            let mut row = DataRow::zeros(1, 1);
+            while r.read_row(&mut row)? {}
+            Ok(())
+        });
+        result.unwrap_err().to_string()
+    }
+
+    fn rows(text: &str) -> Vec<(u64, f64, f64)> {
+        let mut r = DataReader::from_text(Path::new("d.csv"), text, 1, 1).unwrap();
+        let mut row = DataRow::zeros(1, 1);
+        let mut out = Vec::new();
+        while r.read_row(&mut row).unwrap() {
+            out.push((row.k, row.u[0], row.y[0]));
+        }
+        out
+    }
+
+    #[test]
+    fn data_errors_name_line_and_column() {
+        assert_eq!(rows("k,u1,y1\n0,1.0,0.5\n1,1.0,0.6\n"), vec![(0, 1.0, 0.5), (1, 1.0, 0.6)]);
+        let e = err("k,u1,z1\n");
+        assert!(e.starts_with("d.csv:1:6: header column 3 is \"z1\", expected \"y1\""), "{e}");
+        let e = err("k,u1,y1\n0,1.0,abc\n");
+        assert!(e.starts_with("d.csv:2:7: y1 = \"abc\" is not a number"), "{e}");
+        let e = err("k,u1,y1\n0,1.0\n");
+        assert!(e.starts_with("d.csv:2:1: 2 fields, expected 3"), "{e}");
+        let e = err("k,u1,y1\n-1,1.0,2\n");
+        assert!(e.starts_with("d.csv:2:1: k = \"-1\" is not a nonnegative integer"), "{e}");
+        let e = err("k,u1,y1\n0,NaN,2\n");
+        assert!(e.starts_with("d.csv:2:3: u1 = \"NaN\" is not finite"), "{e}");
+        let e = err("");
+        assert!(e.starts_with("d.csv:1:1: empty file, expected the header `k,u1,y1`"), "{e}");
+        let e = err("k,u1,y1\n");
+        assert!(e.starts_with("d.csv:2:1: no data rows"), "{e}");
+        let e = err("k,u1\n");
+        assert!(e.starts_with("d.csv:1:6: header column 3 missing"), "{e}");
+        let e = err("k,u1,y1,z\n");
+        assert!(e.starts_with("d.csv:1:9: unexpected extra header column \"z\""), "{e}");
+    }
+
+    #[test]
+    fn padding_blank_lines_crlf_quotes_and_bom_do_not_shift_positions() {
+        let e = err(" k , u1 , z1 \n");
+        assert!(e.starts_with("d.csv:1:11: header column 3 is \"z1\""), "{e}");
+        assert_eq!(rows("\u{feff}k,u1,y1\n0,1,2\n"), vec![(0, 1.0, 2.0)]);
+        let e = err("\u{feff}k,u1,z1\n");
+        assert!(e.starts_with("d.csv:1:6: "), "{e}");
+        let e = err("\n  \nk,u1,y1\r\n0,1,2\r\n\r\n \r\n1,1,  x\r\n");
+        assert!(e.starts_with("d.csv:7:7: y1 = \"x\""), "{e}");
+        let e = err("k,u1,y1\n\"0\",\"a,\"\"b\",1\n2,\"multi\nline\", z\n");
+        assert!(e.starts_with("d.csv:2:5: u1 = \"a,\\\"b\" is not a number"), "{e}");
+        assert_eq!(rows("k,u1,y1\n\"0\",\" 1.5 \",2\n"), vec![(0, 1.5, 2.0)]);
+        let e = err("k,u1,y1\n0,\"multi\nline\", z\n");
+        assert!(e.starts_with("d.csv:2:3: "), "{e}");
+        let e = err("k,u1,y1\n0,\"1\",\n  \n");
+        assert!(e.starts_with("d.csv:2:7: y1 = \"\" is not a number"), "{e}");
+    }
+
+    #[test]
+    fn an_overlong_cell_is_echoed_truncated() {
+        let e = err(&format!("k,u1,y1\n0,1,{}\n", "x".repeat(10_000)));
+        assert!(e.starts_with("d.csv:2:5: y1 = \"xxx") && e.len() < 150, "{e}");
+    }
+
+    #[test]
+    fn invalid_utf8_is_located() {
+        let p = Path::new("d.csv");
+        let mut c = Cursor::new(b"k,u1,y1\n0,1,\xff\n".to_vec());
+        c.set_position(0);
+        let mut r = DataReader::new(c, p, 0, 1, 1).unwrap();
+        let e = r.read_row(&mut DataRow::zeros(1, 1)).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:2:5: y1 is not valid UTF-8"), "{e}");
+    }
+}

@@ -1,0 +1,254 @@
+//! `port-est filter`: run a registered estimator over logged data, one output row per step.
+//!
+//! `OUT.csv` has the header `k,xhat1,…,xhatn,lo1,…,lon,hi1,…,hin,trace`, plus `tau1,tau2,tau3`
+//! (the S-procedure multipliers) when the estimator's estimate has them (the set-membership
+//! filters); the row of step `k` is labelled `k + 1` (it estimates `x_{k+1}`). Numbers are
+//! written in Rust's `{:e}` notation, exact to the last bit.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use estimators::registry::{self, EstimatorInfo, LinearSetup, TWO_MULTIPLIER};
+use estimators::{EstimatorError, NoiseSettings};
+use models::StepModel;
+
+use crate::data::{DataReader, DataRow, Source};
+use crate::error::{Error, echo};
+use crate::model::{Model, read_model};
+use crate::output::OutputFile;
+
+/// What `port-est filter` is asked to do.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FilterOptions {
+    /// `MODEL.toml`.
+    pub model: PathBuf,
+    /// `DATA.csv`.
+    pub input: PathBuf,
+    /// `OUT.csv`.
+    pub output: PathBuf,
+    /// A name of [`estimators::LINEAR_ESTIMATORS`].
+    pub estimator: String,
+    /// How a set-membership filter solves (29) (`None`: [`TWO_MULTIPLIER`]); only for the
+    /// estimators that use a solver.
+    pub solver: Option<String>,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FilterSummary {
+    /// The estimator's registry name.
+    pub estimator: &'static str,
+    /// Steps run (rows written).
+    pub steps: u64,
+    /// Steps whose solver failed and that published a fallback (still certified) estimate.
+    pub fallbacks: u64,
+}
+
+/// The registry entry of `estimator` and the solver to use, checked against each other.
+///
+/// # Errors
+/// [`Error::Usage`] for an unknown estimator or solver, or a solver given to an estimator
+/// that has none.
+pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static EstimatorInfo, String), Error> {
+    let known = |names: &mut dyn Iterator<Item = &str>| names.collect::<Vec<_>>().join(", ");
+    let Some(info) = registry::info(estimator) else {
+        return Err(Error::Usage(format!(
+            "unknown estimator {} (known: {})",
+            echo(estimator),
+            known(&mut registry::LINEAR_ESTIMATORS.iter().map(|e| e.name))
+        )));
+    };
+    let Some(solver) = solver else {
+        return Ok((info, TWO_MULTIPLIER.to_owned()));
+    };
+    if !info.uses_solver {
+        return Err(Error::Usage(format!(
+            "--solver applies to the estimators that solve the SDP (29) ({}), not {}",
+            known(&mut registry::LINEAR_ESTIMATORS.iter().filter(|e| e.uses_solver).map(|e| e.name)),
+            info.name
+        )));
+    }
+    let names = registry::solver_names();
+    if !names.contains(&solver) {
+        return Err(Error::Usage(format!(
+            "unknown solver {} (known: {})",
+            echo(solver),
+            known(&mut names.iter().copied())
+        )));
+    }
+    Ok((info, solver.to_owned()))
+}
+
+/// Runs `options`: checks the options and the output, reads the model, streams the data
+/// through the estimator into the output, and publishes the output only if every step
+/// succeeded.
+///
+/// # Errors
+/// Every [`Error`]: bad options, an output that would overwrite an input or cannot be written,
+/// malformed files (at their `file:line:column`), a step the estimator rejects.
+pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
+    let (info, solver) = select(&options.estimator, options.solver.as_deref())?;
+    let mut out = OutputFile::create(&options.output, &[("input", &options.input), ("model", &options.model)])?;
+    let model = read_model(&options.model)?;
+    let mut data = DataReader::open(&options.input, model.inputs(), model.outputs())?;
+    let summary = run_filter(&model, &mut data, info, &solver, &mut out, &options.output)?;
+    out.commit()?;
+    Ok(summary)
+}
+
+/// Builds the estimator `info` for `model` (the errors in the model file's terms).
+fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::BoxedLinearEstimator, Error> {
+    if info.needs_input_bounds && model.input_range.is_none() {
+        return Err(Error::File {
+            path: model.path().to_owned(),
+            message: format!(
+                "--estimator {} needs the input range `u_lower`, `u_upper` in the model file",
+                info.name
+            ),
+        });
+    }
+    let noise = NoiseSettings::new(model.q.clone(), model.r.clone());
+    let mut setup = LinearSetup::new(model.x0.clone(), model.p0.clone(), noise, model.inputs());
+    setup.input_bounds.clone_from(&model.input_range);
+    solver.clone_into(&mut setup.solver);
+    registry::linear(info.name, &setup).map_err(|e| match e {
+        EstimatorError::Lmi(_) | EstimatorError::UnknownEstimator { .. } | EstimatorError::MissingSetting { .. } => {
+            Error::Estimator(e)
+        }
+        e => model.estimator_error(e),
+    })
+}
+
+/// Runs the estimator `info` (with `solver`) over every row of `data`, writing the output CSV
+/// to `out` row by row (`out_path` names it in errors).
+///
+/// # Errors
+/// As [`filter`], except for the checks of the output path.
+pub fn run_filter<R: Source, W: Write>(
+    model: &Model,
+    data: &mut DataReader<R>,
+    info: &EstimatorInfo,
+    solver: &str,
+    out: &mut W,
+    out_path: &Path,
+) -> Result<FilterSummary, Error> {
+    let mut est = build(model, info, solver)?;
+    let wio = |e| Error::io(out_path, e);
+    let n = model.states();
+    let with_tau = est.estimate_dyn().multipliers().is_some();
+    let mut header = String::from("k");
+    for prefix in ["xhat", "lo", "hi"] {
+        for i in 1..=n {
+            header.push_str(&format!(",{prefix}{i}"));
+        }
+    }
+    header.push_str(if with_tau { ",trace,tau1,tau2,tau3" } else { ",trace" });
+    writeln!(out, "{header}").map_err(wio)?;
+
+    let sm = StepModel::new(&model.a, &model.b, &model.c);
+    let mut row = DataRow::zeros(model.inputs(), model.outputs());
+    let (mut steps, mut fallbacks) = (0, 0);
+    while data.read_row(&mut row)? {
+        let Some(label) = row.k.checked_add(1) else {
+            let message = format!("k = {} is too large (the output row is labelled k + 1)", row.k);
+            return Err(Error::at(data.locate(Some(0)), message));
+        };
+        let e = match est.step_dyn(&sm, &row.u, &row.y) {
+            Ok(e) => e,
+            Err(source) => {
+                // Point at the cell at fault when the estimator says which; else at `k`.
+                let cell = match source {
+                    EstimatorError::InputOutsideBounds { index, .. } => 1 + index,
+                    _ => 0,
+                };
+                return Err(Error::Step { at: data.locate(Some(cell)), k: row.k, source });
+            }
+        };
+        write!(out, "{label}").map_err(wio)?;
+        for v in e.center().iter() {
+            write!(out, ",{v:e}").map_err(wio)?;
+        }
+        // `bounds(i)` is `Some` for every state `i < n` (the estimator was built for `n`).
+        for i in 0..n {
+            write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.0)).map_err(wio)?;
+        }
+        for i in 0..n {
+            write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.1)).map_err(wio)?;
+        }
+        write!(out, ",{:e}", e.shape().trace()).map_err(wio)?;
+        if with_tau {
+            match e.multipliers() {
+                Some([t1, t2, t3]) => write!(out, ",{t1:e},{t2:e},{t3:e}"),
+                None => write!(out, ",,,"),
+            }
+            .map_err(wio)?;
+        }
+        writeln!(out).map_err(wio)?;
+        steps += 1;
+        fallbacks += u64::from(e.fallback_used());
+    }
+    Ok(FilterSummary { estimator: info.name, steps, fallbacks })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::parse_model;
+
+    const MODEL: &str = "a = [[1.0, 0.01], [0.0, 0.99]]\nb = [[0.0], [0.01]]\nc = [[1.0, 0.0]]\nq = [[1e-4, 0.0], [0.0, 1e-4]]\nr = [[1e-2]]\np0 = [[1.0, 0.0], [0.0, 1.0]]\nx0 = [0.0, 0.0]\n";
+
+    fn run(model: &str, data: &str, estimator: &str, solver: Option<&str>) -> Result<String, Error> {
+        let model = parse_model(Path::new("m.toml"), model)?;
+        let mut data = DataReader::from_text(Path::new("d.csv"), data, model.inputs(), model.outputs())?;
+        let (info, solver) = select(estimator, solver)?;
+        let mut out = Vec::new();
+        run_filter(&model, &mut data, info, &solver, &mut out, Path::new("o.csv"))?;
+        Ok(String::from_utf8(out).unwrap())
+    }
+
+    fn ramp(rows: u64) -> String {
+        let mut s = String::from("k,u1,y1\n");
+        for k in 0..rows {
+            s.push_str(&format!("{k},1.0,{}\n", 0.01 * k as f64));
+        }
+        s
+    }
+
+    #[test]
+    fn every_estimator_runs_and_the_set_contains_what_the_centre_implies() {
+        for (est, solver) in [("smf", None), ("smf", Some("faer-ipm")), ("kf", None), ("yang-li-with-input", None)] {
+            let csv = run(MODEL, &ramp(30), est, solver).unwrap();
+            let lines: Vec<&str> = csv.lines().collect();
+            assert_eq!(lines.len(), 31, "{est}");
+            assert!(lines[0].starts_with("k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace"));
+            assert_eq!(lines[0].ends_with(",tau1,tau2,tau3"), est != "kf");
+            assert!(lines[1].starts_with("1,"));
+            let last: Vec<f64> = lines[30].split(',').map(|v| v.parse().unwrap()).collect();
+            assert!(last[3] <= last[1] && last[1] <= last[5], "{est}: lo ≤ xhat ≤ hi");
+        }
+    }
+
+    #[test]
+    fn option_and_model_errors_say_what_to_change() {
+        let e = run(MODEL, &ramp(3), "yang-li", None).unwrap_err().to_string();
+        assert!(e.starts_with("m.toml: --estimator yang-li needs the input range `u_lower`"), "{e}");
+        let e = run(MODEL, &ramp(3), "ukf", None).unwrap_err().to_string();
+        assert!(e.starts_with("unknown estimator \"ukf\" (known: smf, kf"), "{e}");
+        let e = run(MODEL, &ramp(3), "kf", Some("faer-ipm")).unwrap_err().to_string();
+        assert!(e.starts_with("--solver applies to the estimators that solve the SDP (29) (smf, yang-li"), "{e}");
+        let e = run(MODEL, &ramp(3), "smf", Some("mosek")).unwrap_err().to_string();
+        assert!(e.starts_with("unknown solver \"mosek\" (known: two-multiplier, faer-ipm"), "{e}");
+        let bad = MODEL.replace("q = [[1e-4, 0.0], [0.0, 1e-4]]", "q = [[-1.0, 0.0], [0.0, 1e-4]]");
+        let e = run(&bad, &ramp(3), "smf", None).unwrap_err().to_string();
+        assert!(e.starts_with("m.toml:4:5: `q`: "), "{e}");
+    }
+
+    #[test]
+    fn step_errors_name_the_row() {
+        let e = run(MODEL, "k,u1,y1\n0,1,0\n18446744073709551615,1,0\n", "kf", None).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:3:1: k = 18446744073709551615 is too large"), "{e}");
+        let model = format!("{MODEL}u_lower = [-1.0]\nu_upper = [1.0]\n");
+        let e = run(&model, "k,u1,y1\n0,0.5,0\n1, 2.5,0\n", "yang-li", None).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:3:4: step k = 1: input u[0] = 2.5 is outside"), "{e}");
+    }
+}

@@ -1,0 +1,325 @@
+//! `MODEL.toml`: the discrete-time model `x_{k+1} = a x_k + b u_k + w_k`,
+//! `y_{k+1} = c x_{k+1} + v_{k+1}`, its noise descriptions and initial estimate, read with
+//! `serde` and checked against `a`'s dimension, every complaint at the `file:line:column` of
+//! the key's value.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use estimators::EstimatorError;
+use nalgebra::{DMatrix, DVector};
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::error::{Error, Location};
+
+/// The model file, as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    a: Spanned<Vec<Vec<f64>>>,
+    b: Spanned<Vec<Vec<f64>>>,
+    c: Spanned<Vec<Vec<f64>>>,
+    q: Spanned<Vec<Vec<f64>>>,
+    r: Spanned<Vec<Vec<f64>>>,
+    p0: Spanned<Vec<Vec<f64>>>,
+    x0: Spanned<Vec<f64>>,
+    u_lower: Option<Spanned<Vec<f64>>>,
+    u_upper: Option<Spanned<Vec<f64>>>,
+}
+
+/// A validated model: `n = a.nrows()` states, `p = b.ncols()` inputs, `m = c.nrows()` outputs.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// `A` (n×n).
+    pub a: DMatrix<f64>,
+    /// `B` (n×p).
+    pub b: DMatrix<f64>,
+    /// `C` (m×n).
+    pub c: DMatrix<f64>,
+    /// `Q` (n×n): process-noise shape (set-membership) or covariance (Kalman).
+    pub q: DMatrix<f64>,
+    /// `R` (m×m): measurement-noise shape or covariance.
+    pub r: DMatrix<f64>,
+    /// `P₀` (n×n): initial shape or covariance.
+    pub p0: DMatrix<f64>,
+    /// `x₀` (n): initial centre.
+    pub x0: DVector<f64>,
+    /// The known input range `(u_lower, u_upper)`, if given.
+    pub input_range: Option<(DVector<f64>, DVector<f64>)>,
+    /// The file it was read from and where each key's value starts, to report later complaints
+    /// (an estimator rejecting `q`, say) at the right place.
+    source: Source,
+}
+
+/// Where the keys of a model file are.
+#[derive(Debug, Clone, Default)]
+struct Source {
+    path: PathBuf,
+    keys: Vec<(&'static str, u64, u64)>,
+}
+
+impl Model {
+    /// Number of states `n`.
+    #[must_use]
+    pub fn states(&self) -> usize {
+        self.a.nrows()
+    }
+
+    /// Number of inputs `p`.
+    #[must_use]
+    pub fn inputs(&self) -> usize {
+        self.b.ncols()
+    }
+
+    /// Number of outputs `m`.
+    #[must_use]
+    pub fn outputs(&self) -> usize {
+        self.c.nrows()
+    }
+
+    /// The file the model was read from.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.source.path
+    }
+
+    /// Where the value of `key` (`"q"`, `"x0"`, …) starts in the model file, if it was given.
+    #[must_use]
+    pub fn key_location(&self, key: &str) -> Option<Location> {
+        let &(_, line, column) = self.source.keys.iter().find(|(k, ..)| *k == key)?;
+        Some(Location::new(&self.source.path, line, column))
+    }
+
+    /// An estimator's complaint about the model (`Q` not positive definite, say), in the model
+    /// file's terms: at the `file:line:column` of the key it is about when that can be told.
+    #[must_use]
+    pub fn estimator_error(&self, e: EstimatorError) -> Error {
+        let key = match &e {
+            EstimatorError::NotSymmetric { what }
+            | EstimatorError::NotPositiveDefinite { what }
+            | EstimatorError::NonFinite { what, .. }
+            | EstimatorError::DimensionMismatch { what, .. } => key_of(what),
+            EstimatorError::InvalidInputBounds { .. } => Some("u_lower"),
+            _ => None,
+        };
+        match key.and_then(|k| self.key_location(k).map(|at| (k, at))) {
+            Some((k, at)) => Error::At { at, message: format!("`{k}`: {e}") },
+            None => Error::File {
+                path: self.source.path.clone(),
+                message: format!("{e} (Q, R, P0, x0 are the model file's `q`, `r`, `p0`, `x0`)"),
+            },
+        }
+    }
+}
+
+/// The model-file key an estimator's name for a matrix refers to (`"Q"` → `q`, `"rows of A"` →
+/// `a`).
+fn key_of(what: &str) -> Option<&'static str> {
+    let last = what.rsplit(' ').next().unwrap_or(what);
+    Some(match last {
+        "A" => "a",
+        "B" => "b",
+        "C" => "c",
+        "Q" => "q",
+        "R" => "r",
+        "P0" | "P₀" => "p0",
+        "x0" | "x₀" => "x0",
+        _ => return None,
+    })
+}
+
+/// 1-based line and column (in characters) of a byte offset of `text`.
+pub(crate) fn line_col(text: &str, offset: usize) -> (u64, u64) {
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
+    let line = before.matches('\n').count() + 1;
+    let col = before[before.rfind('\n').map_or(0, |i| i + 1)..].chars().count() + 1;
+    (line as u64, col as u64)
+}
+
+/// Reading context: the file's text and name.
+struct Ctx<'t> {
+    text: &'t str,
+    path: &'t Path,
+}
+
+impl Ctx<'_> {
+    fn at(&self, span: Range<usize>) -> Location {
+        let (line, column) = line_col(self.text, span.start);
+        Location::new(self.path, line, column)
+    }
+
+    fn matrix(
+        &self,
+        name: &str,
+        v: &Spanned<Vec<Vec<f64>>>,
+        rows: Option<usize>,
+        cols: Option<usize>,
+    ) -> Result<DMatrix<f64>, Error> {
+        let at = |msg: String| Error::at(self.at(v.span()), format!("`{name}`: {msg}"));
+        let m = v.get_ref();
+        let Some(first) = m.first() else {
+            return Err(at("empty matrix".into()));
+        };
+        if let Some(r) = rows {
+            if m.len() != r {
+                return Err(at(format!("expected {r} rows, found {}", m.len())));
+            }
+        }
+        let width = cols.unwrap_or(first.len());
+        for (i, row) in m.iter().enumerate() {
+            if row.len() != width {
+                return Err(at(format!("row {} has {} entries, expected {width}", i + 1, row.len())));
+            }
+            if let Some(j) = row.iter().position(|x| !x.is_finite()) {
+                return Err(at(format!("entry ({}, {}) is not finite", i + 1, j + 1)));
+            }
+        }
+        if width == 0 && name != "b" {
+            return Err(at("rows are empty".into()));
+        }
+        Ok(DMatrix::from_fn(m.len(), width, |i, j| m[i][j]))
+    }
+
+    fn vector(&self, name: &str, v: &Spanned<Vec<f64>>, len: usize) -> Result<DVector<f64>, Error> {
+        let x = v.get_ref();
+        if x.len() != len {
+            return Err(Error::at(self.at(v.span()), format!("`{name}`: expected {len} entries, found {}", x.len())));
+        }
+        if let Some(j) = x.iter().position(|x| !x.is_finite()) {
+            return Err(Error::at(self.at(v.span()), format!("`{name}`: entry {} is not finite", j + 1)));
+        }
+        Ok(DVector::from_column_slice(x))
+    }
+}
+
+/// Reads and validates a model from its text (dimensions are checked against `a`; every error
+/// gives `path:line:column`). A leading UTF-8 byte-order mark is ignored.
+///
+/// # Errors
+/// [`Error::At`] for a TOML syntax error, an unknown, missing (at `1:1`) or ill-typed key, or a
+/// matrix or vector of the wrong size or with a non-finite entry.
+pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let cx = Ctx { text, path };
+    let f: ModelFile = toml::from_str(text).map_err(|e| {
+        let message = e.message().trim_end().to_owned();
+        match e.span() {
+            // (A missing key is reported over the whole document, at 1:1.)
+            Some(s) => Error::at(cx.at(s), message),
+            None => Error::File { path: path.to_owned(), message },
+        }
+    })?;
+    let a = cx.matrix("a", &f.a, None, None)?;
+    let n = a.nrows();
+    if a.ncols() != n {
+        return Err(Error::at(cx.at(f.a.span()), format!("`a` must be square, is {n}x{}", a.ncols())));
+    }
+    let b = cx.matrix("b", &f.b, Some(n), None)?;
+    let c = cx.matrix("c", &f.c, None, Some(n))?;
+    let m = c.nrows();
+    let q = cx.matrix("q", &f.q, Some(n), Some(n))?;
+    let r = cx.matrix("r", &f.r, Some(m), Some(m))?;
+    let p0 = cx.matrix("p0", &f.p0, Some(n), Some(n))?;
+    let x0 = cx.vector("x0", &f.x0, n)?;
+    let p = b.ncols();
+    let input_range = match (&f.u_lower, &f.u_upper) {
+        (Some(lo), Some(hi)) => Some((cx.vector("u_lower", lo, p)?, cx.vector("u_upper", hi, p)?)),
+        (None, None) => None,
+        (Some(v), None) | (None, Some(v)) => {
+            return Err(Error::at(cx.at(v.span()), "give both `u_lower` and `u_upper`, or neither"));
+        }
+    };
+    let mut keys = Vec::with_capacity(9);
+    for (k, span) in [
+        ("a", f.a.span()),
+        ("b", f.b.span()),
+        ("c", f.c.span()),
+        ("q", f.q.span()),
+        ("r", f.r.span()),
+        ("p0", f.p0.span()),
+        ("x0", f.x0.span()),
+    ]
+    .into_iter()
+    .chain(f.u_lower.as_ref().map(|v| ("u_lower", v.span())))
+    .chain(f.u_upper.as_ref().map(|v| ("u_upper", v.span())))
+    {
+        let (line, column) = line_col(text, span.start);
+        keys.push((k, line, column));
+    }
+    Ok(Model { a, b, c, q, r, p0, x0, input_range, source: Source { path: path.to_owned(), keys } })
+}
+
+/// Reads and validates `MODEL.toml` (see [`parse_model`]).
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read; [`Error::At`] at the first byte that is not UTF-8;
+/// the errors of [`parse_model`].
+pub fn read_model(path: &Path) -> Result<Model, Error> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let good = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let prefix = String::from_utf8_lossy(&bytes[..good]);
+        let prefix = prefix.strip_prefix('\u{feff}').unwrap_or(&prefix);
+        let (line, column) = line_col(prefix, prefix.len());
+        Error::at(Location::new(path, line, column), "not valid UTF-8 (the model file must be UTF-8 TOML)")
+    })?;
+    parse_model(path, &text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MODEL: &str = "a = [[1.0, 0.01], [0.0, 0.99]]\nb = [[0.0], [0.01]]\nc = [[1.0, 0.0]]\nq = [[1e-4, 0.0], [0.0, 1e-4]]\nr = [[1e-2]]\np0 = [[1.0, 0.0], [0.0, 1.0]]\nx0 = [0.0, 0.0]\n";
+
+    fn err(text: &str) -> String {
+        parse_model(Path::new("m.toml"), text).map(|_| ()).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn model_errors_name_line_and_column() {
+        let m = parse_model(Path::new("m.toml"), MODEL).unwrap();
+        assert_eq!((m.states(), m.inputs(), m.outputs()), (2, 1, 1));
+        let e = err(&MODEL.replace("b = [[0.0], [0.01]]", "b = [[0.0]]"));
+        assert!(e.starts_with("m.toml:2:5: `b`: expected 2 rows, found 1"), "{e}");
+        assert!(err(&MODEL.replace("x0 = [0.0, 0.0]", "x0 = [0.0]")).contains("m.toml:7:6: `x0`: expected 2 entries"));
+        assert!(err(&MODEL.replace("r = [[1e-2]]", "r = [[1e-2, 0.0]]")).contains("`r`: row 1 has 2 entries, expected 1"));
+        let e = err(&MODEL.replace("q = ", "qq = "));
+        assert!(e.starts_with("m.toml:4:"), "{e}");
+        let e = err(&format!("{MODEL}u_lower = [0.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: give both `u_lower` and `u_upper`"), "{e}");
+        let e = err(&MODEL.replace("a = [[1.0, 0.01], [0.0, 0.99]]", "a = [[1.0, 0.01]]"));
+        assert!(e.starts_with("m.toml:1:5: `a` must be square, is 1x2"), "{e}");
+        let e = err(&MODEL.replace("r = [[1e-2]]", "r = [[nan]]"));
+        assert!(e.starts_with("m.toml:5:5: `r`: entry (1, 1) is not finite"), "{e}");
+        let e = err(&MODEL.replace("r = [[1e-2]]", "r = [[\"x\"]]"));
+        assert!(e.starts_with("m.toml:5:7: "), "{e}");
+    }
+
+    #[test]
+    fn a_missing_key_names_the_file_and_the_key() {
+        let e = err(&MODEL.replace("x0 = [0.0, 0.0]\n", ""));
+        assert!(e.starts_with("m.toml:1:1: missing field `x0`"), "{e}");
+    }
+
+    #[test]
+    fn a_byte_order_mark_does_not_shift_columns() {
+        let e = err(&format!("\u{feff}{}", MODEL.replace("a = [[1.0, 0.01], [0.0, 0.99]]", "a = [[1.0, 0.01]]")));
+        assert!(e.starts_with("m.toml:1:5: "), "{e}");
+    }
+
+    #[test]
+    fn estimator_complaints_point_at_the_key() {
+        let m = parse_model(Path::new("m.toml"), MODEL).unwrap();
+        let e = m.estimator_error(EstimatorError::NotPositiveDefinite { what: "Q" }).to_string();
+        assert_eq!(e, "m.toml:4:5: `q`: Q is not positive definite");
+        let e = m.estimator_error(EstimatorError::EmptySystem("no outputs")).to_string();
+        assert!(e.starts_with("m.toml: ") && e.contains("the model file's `q`"), "{e}");
+    }
+}

@@ -1,0 +1,234 @@
+//! `--output`, written safely: never one of the input files, the directory checked before any
+//! computation, rows streamed into a temporary file beside the target and renamed over it only
+//! on success, so that a failed run leaves no half-written output (and an older output intact).
+
+use std::ffi::OsString;
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use crate::error::Error;
+
+/// An output file being written. [`OutputFile::commit`] publishes it; dropping it without
+/// committing removes the temporary file.
+#[derive(Debug)]
+pub struct OutputFile {
+    writer: Option<BufWriter<File>>,
+    /// The path as the user gave it (for messages).
+    shown: PathBuf,
+    /// Where the content lands (the canonical target) and, for a regular file, the temporary
+    /// file it is written to first.
+    target: PathBuf,
+    temporary: Option<PathBuf>,
+}
+
+/// The canonical form of `path`, `None` if it cannot be resolved (it does not exist).
+fn canonical(path: &Path) -> Option<PathBuf> {
+    fs::canonicalize(path).ok()
+}
+
+/// Whether two existing paths are the same file (same canonical path, or on Unix the same
+/// device and inode: a hard link).
+fn same_file(a: &Path, b: &Path) -> bool {
+    if canonical(a).is_some_and(|ca| canonical(b).is_some_and(|cb| ca == cb)) {
+        return true;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(ma), Ok(mb)) = (fs::metadata(a), fs::metadata(b)) {
+            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        }
+    }
+    false
+}
+
+impl OutputFile {
+    /// Prepares `output`: refuses it if it is one of `inputs` (`(role, path)`, compared by
+    /// canonical path), a directory, a read-only file or in a directory that does not exist,
+    /// and creates the temporary file beside it (which checks that the directory is writable).
+    /// An existing non-regular file (`/dev/null`, a named pipe) is written in place.
+    ///
+    /// # Errors
+    /// [`Error::SameFile`], [`Error::Output`].
+    pub fn create(output: &Path, inputs: &[(&'static str, &Path)]) -> Result<Self, Error> {
+        let refuse = |message: String| Error::Output { path: output.to_owned(), message };
+        if output.as_os_str().is_empty() {
+            return Err(refuse("empty path".into()));
+        }
+        let existing = match fs::metadata(output) {
+            Ok(meta) => Some(meta),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {
+                if fs::symlink_metadata(output).is_ok() {
+                    return Err(refuse("is a symbolic link to a file that does not exist".into()));
+                }
+                None
+            }
+            Err(e) => return Err(refuse(e.to_string())),
+        };
+        let target = match &existing {
+            Some(meta) if meta.is_dir() => return Err(refuse("is a directory".into())),
+            Some(meta) if meta.is_file() && meta.permissions().readonly() => {
+                return Err(refuse("is read-only".into()));
+            }
+            Some(_) => fs::canonicalize(output).map_err(|e| refuse(e.to_string()))?,
+            None => {
+                let Some(name) = output.file_name() else {
+                    return Err(refuse("does not name a file".into()));
+                };
+                let parent = match output.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => p,
+                    _ => Path::new("."),
+                };
+                let dir = fs::canonicalize(parent)
+                    .map_err(|e| refuse(format!("cannot use directory {}: {e}", parent.display())))?;
+                dir.join(name)
+            }
+        };
+        for (role, path) in inputs {
+            let same = if existing.is_some() { same_file(output, path) } else { canonical(path) == Some(target.clone()) };
+            if same {
+                return Err(Error::SameFile { role, output: output.to_owned(), other: path.to_path_buf() });
+            }
+        }
+        match existing {
+            Some(meta) if !meta.is_file() => {
+                // A device or a pipe: nothing to replace, nothing half-written to clean up.
+                let file = OpenOptions::new().write(true).truncate(true).open(&target).map_err(|e| refuse(e.to_string()))?;
+                Ok(Self { writer: Some(BufWriter::new(file)), shown: output.to_owned(), target, temporary: None })
+            }
+            _ => {
+                let (file, temporary) = Self::temporary_beside(&target).map_err(|(dir, e)| {
+                    refuse(format!("cannot write in directory {}: {e}", dir.display()))
+                })?;
+                if let Some(meta) = fs::metadata(&target).ok().filter(|m| m.is_file()) {
+                    // Keep the replaced file's permissions.
+                    let _ = fs::set_permissions(&temporary, meta.permissions());
+                }
+                Ok(Self {
+                    writer: Some(BufWriter::new(file)),
+                    shown: output.to_owned(),
+                    target,
+                    temporary: Some(temporary),
+                })
+            }
+        }
+    }
+
+    /// Creates `.NAME.port-est-PID-N.tmp` beside `target`.
+    fn temporary_beside(target: &Path) -> Result<(File, PathBuf), (PathBuf, io::Error)> {
+        let dir = target.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        let name = target.file_name().unwrap_or_default();
+        let mut last = io::Error::other("no temporary name left");
+        for n in 0..100u32 {
+            let mut tmp = OsString::from(".");
+            tmp.push(name);
+            tmp.push(format!(".port-est-{}-{n}.tmp", std::process::id()));
+            let path = dir.join(tmp);
+            match OpenOptions::new().write(true).create_new(true).open(&path) {
+                Ok(f) => return Ok((f, path)),
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last = e,
+                Err(e) => return Err((dir, e)),
+            }
+        }
+        Err((dir, last))
+    }
+
+    /// The path as given.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.shown
+    }
+
+    /// Flushes the content to disk and renames the temporary file over the target.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if writing, syncing or renaming fails (the temporary file is removed).
+    pub fn commit(mut self) -> Result<(), Error> {
+        let io = |e| Error::io(&self.shown, e);
+        if let Some(w) = self.writer.take() {
+            let file = w.into_inner().map_err(|e| io(e.into_error()))?;
+            if self.temporary.is_some() {
+                file.sync_all().map_err(io)?;
+            }
+        }
+        if let Some(tmp) = &self.temporary {
+            fs::rename(tmp, &self.target).map_err(io)?;
+            self.temporary = None;
+        }
+        Ok(())
+    }
+}
+
+impl Write for OutputFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match &mut self.writer {
+            Some(w) => w.write(buf),
+            None => Err(io::Error::other("output already committed")),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match &mut self.writer {
+            Some(w) => w.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for OutputFile {
+    fn drop(&mut self) {
+        drop(self.writer.take());
+        if let Some(tmp) = self.temporary.take() {
+            let _ = fs::remove_file(tmp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("port-est-output-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn commit_replaces_and_drop_leaves_nothing() {
+        let d = dir("commit");
+        let out = d.join("out.csv");
+        fs::write(&out, "old\n").unwrap();
+        let mut f = OutputFile::create(&out, &[]).unwrap();
+        writeln!(f, "new").unwrap();
+        assert_eq!(fs::read_to_string(&out).unwrap(), "old\n", "untouched until committed");
+        drop(f);
+        assert_eq!(fs::read_to_string(&out).unwrap(), "old\n");
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 1, "temporary file removed");
+        let mut f = OutputFile::create(&out, &[]).unwrap();
+        writeln!(f, "new").unwrap();
+        f.commit().unwrap();
+        assert_eq!(fs::read_to_string(&out).unwrap(), "new\n");
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 1);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn refuses_inputs_directories_and_missing_directories() {
+        let d = dir("refuse");
+        let input = d.join("in.csv");
+        fs::write(&input, "x").unwrap();
+        let other = d.join("sub").join("..").join("in.csv");
+        fs::create_dir(d.join("sub")).unwrap();
+        let e = OutputFile::create(&other, &[("input", &input)]).unwrap_err();
+        assert!(matches!(e, Error::SameFile { role: "input", .. }), "{e}");
+        let e = OutputFile::create(&d, &[]).unwrap_err().to_string();
+        assert!(e.ends_with("is a directory"), "{e}");
+        let e = OutputFile::create(&d.join("nope").join("out.csv"), &[]).unwrap_err().to_string();
+        assert!(e.contains("cannot use directory"), "{e}");
+        assert_eq!(fs::read_to_string(&input).unwrap(), "x");
+        fs::remove_dir_all(&d).unwrap();
+    }
+}
