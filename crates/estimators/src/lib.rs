@@ -16,6 +16,8 @@
 //! inputs, `m` outputs.
 //!
 //! * [`KalmanFilter`]: `Q`, `R` are covariances; Joseph-form update.
+//! * [`ExtendedKalmanFilter`]: the same over any [`models::DifferentiableModel`] (analytic
+//!   Jacobians), the truck paper's (7)–(11).
 //! * [`SetMembershipFilter`]: unknown-but-bounded noise `w ∈ 𝓔(0, Q)`, `v ∈ 𝓔(0, R)` (8)–(9),
 //!   `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}`; the update (13)–(29) with any
 //!   [`UpdateSolver`]: the exact [`TwoMultiplierSolver`] (module [`smf::two_multiplier`], the
@@ -36,6 +38,7 @@
 //! does an SDP-backed step after the first (which builds the SDP) with the default backend; all
 //! return borrowed views of the filter's estimate.
 
+pub mod ekf;
 pub mod error;
 pub mod kalman;
 pub mod registry;
@@ -44,6 +47,7 @@ pub mod traits;
 mod validate;
 pub mod yang_li;
 
+pub use ekf::ExtendedKalmanFilter;
 pub use error::EstimatorError;
 pub use kalman::{GaussianEstimate, KalmanFilter};
 pub use models::{LinearModel, StepModel};

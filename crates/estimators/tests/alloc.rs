@@ -227,3 +227,29 @@ fn registry_estimators_and_noise_setters_do_not_allocate_after_warm_up() {
     assert_eq!(kf.step(&model, &u, &ys[0]).unwrap(), &before.0, "a rejected R changed the Kalman filter");
     assert_eq!(smf.step(&model, &u, &ys[0]).unwrap().center, before.1.center);
 }
+
+#[test]
+fn ekf_step_on_the_truck_does_not_allocate() {
+    use models::DiscreteModel;
+    use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams};
+    let params = TruckParams::digest_preset();
+    let model = TruckEkfModel::paper(params).unwrap();
+    let v = 70.0 / 3.6;
+    let mut ekf = estimators::ExtendedKalmanFilter::new(
+        DVector::from_vec(vec![v, 0.0, 0.0]),
+        DMatrix::identity(3, 3) * 0.01,
+        DMatrix::identity(3, 3) * 1e-7,
+        DMatrix::identity(3, 3) * 1e-3,
+        model.dims().inputs,
+    )
+    .unwrap();
+    let u = TruckInput::free_rolling(0.01, v, params.rolling_radius).to_dvector();
+    let y = DVector::from_vec(vec![v, 0.1, 0.01]);
+    ekf.step(&model, &u, &y).unwrap();
+    let (_, n) = count(|| {
+        for _ in 0..100 {
+            ekf.step(&model, &u, &y).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "EKF step on the truck allocated");
+}

@@ -1,0 +1,213 @@
+//! The extended Kalman filter over any [`DifferentiableModel`] (truck paper eqs (7)–(11),
+//! `docs/truck-ekf.md`), with a Joseph-form covariance update:
+//!
+//! ```text
+//! predict (7), (8):  x⁻ = f(x̂, u),            F = ∂f/∂x (x̂, u),   P⁻ = F P Fᵀ + Q
+//! gain (9):          H = ∂h/∂x (x⁻, u),       S = H P⁻ Hᵀ + R = G Gᵀ,   K = P⁻ Hᵀ S⁻¹
+//! update (10):       x̂⁺ = x⁻ + K (y − h(x⁻, u))
+//! covariance (11):   P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ      (Joseph form of P = (I − KH) P⁻)
+//! ```
+//!
+//! The measurement `y_{k+1}` is taken after the step and modelled as `h(x_{k+1}, u_k)` (the
+//! `models` convention; the truck paper evaluates `h` with the input of the measurement instant,
+//! which the caller passes as `u` when it differs). On a linear model the filter is the
+//! [`KalmanFilter`](crate::KalmanFilter) (tested to 1e-12). All buffers are allocated in
+//! [`ExtendedKalmanFilter::new`]; a step allocates nothing when the model's evaluations do not.
+
+use nalgebra::{DMatrix, DVector};
+
+use dense_kernels as dense;
+use models::{DifferentiableModel, Dims};
+
+use crate::error::EstimatorError;
+use crate::kalman::GaussianEstimate;
+use crate::traits::{Estimator, NoiseSettings};
+use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
+
+/// An extended Kalman filter; `Q`, `R` are covariances.
+#[derive(Debug, Clone)]
+pub struct ExtendedKalmanFilter {
+    n: usize,
+    p: usize,
+    m: usize,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    est: GaussianEstimate,
+    x_pred: DVector<f64>,
+    f: DMatrix<f64>,
+    h: DMatrix<f64>,
+    y_pred: DVector<f64>,
+    p_pred: DMatrix<f64>,
+    fp: DMatrix<f64>,
+    pht: DMatrix<f64>,
+    s: DMatrix<f64>,
+    k: DMatrix<f64>,
+    ikh: DMatrix<f64>,
+    tmp: DMatrix<f64>,
+    kr: DMatrix<f64>,
+    innov: DVector<f64>,
+    x_new: DVector<f64>,
+    p_new: DMatrix<f64>,
+}
+
+impl ExtendedKalmanFilter {
+    /// A filter with initial mean `x0`, covariance `p0` (`n × n`), process covariance `q`
+    /// (`n × n`), measurement covariance `r` (`m × m`) and `inputs` input components.
+    ///
+    /// # Errors
+    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the argument.
+    pub fn new(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        q: DMatrix<f64>,
+        r: DMatrix<f64>,
+        inputs: usize,
+    ) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
+        let std_dev = p0.diagonal().map(f64::sqrt);
+        let nn = || DMatrix::zeros(n, n);
+        Ok(Self {
+            n,
+            p: inputs,
+            m,
+            q,
+            r,
+            est: GaussianEstimate { mean: x0, covariance: p0, std_dev },
+            x_pred: DVector::zeros(n),
+            f: nn(),
+            h: DMatrix::zeros(m, n),
+            y_pred: DVector::zeros(m),
+            p_pred: nn(),
+            fp: nn(),
+            pht: DMatrix::zeros(n, m),
+            s: DMatrix::zeros(m, m),
+            k: DMatrix::zeros(n, m),
+            ikh: nn(),
+            tmp: nn(),
+            kr: DMatrix::zeros(n, m),
+            innov: DVector::zeros(m),
+            x_new: DVector::zeros(n),
+            p_new: nn(),
+        })
+    }
+
+    /// A filter from [`NoiseSettings`] (covariances).
+    ///
+    /// # Errors
+    /// As [`ExtendedKalmanFilter::new`].
+    pub fn with_noise(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        noise: &NoiseSettings,
+        inputs: usize,
+    ) -> Result<Self, EstimatorError> {
+        Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
+    }
+
+    /// The current estimate.
+    pub fn estimate(&self) -> &GaussianEstimate {
+        &self.est
+    }
+
+    /// Replaces the process covariance in place (no allocation; unchanged on error).
+    ///
+    /// # Errors
+    /// As [`ExtendedKalmanFilter::new`] for `Q`.
+    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        replace_spd("Q", &mut self.q, q, &mut self.tmp)
+    }
+
+    /// Replaces the measurement covariance in place (no allocation; unchanged on error).
+    ///
+    /// # Errors
+    /// As [`ExtendedKalmanFilter::new`] for `R`.
+    pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        replace_spd("R", &mut self.r, r, &mut self.s)
+    }
+
+    /// One step (7)–(11): consumes `u_k` and `y_{k+1}`. On error the state is unchanged.
+    ///
+    /// # Errors
+    /// Wrong dimensions of the model or of `u`, `y`; NaN/∞ in `u`, `y`; a model that cannot
+    /// be evaluated ([`EstimatorError::Model`]); a non-finite Jacobian; an innovation covariance
+    /// that is not positive definite or a non-finite estimate
+    /// ([`EstimatorError::NumericalFailure`]).
+    pub fn step<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let d = model.dims();
+        for (what, expected, found) in [
+            ("model states", self.n, d.states),
+            ("model inputs", self.p, d.inputs),
+            ("model outputs", self.m, d.outputs),
+        ] {
+            if expected != found {
+                return Err(EstimatorError::DimensionMismatch { what, expected, found });
+            }
+        }
+        check_vec("u", u, self.p)?;
+        check_vec("y", y, self.m)?;
+        // Predict (7), (8).
+        model.f(&self.est.mean, u, &mut self.x_pred)?;
+        model.f_jacobian(&self.est.mean, u, &mut self.f)?;
+        if self.x_pred.iter().chain(self.f.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the model's prediction or its Jacobian is not finite"));
+        }
+        dense::mul_nn(1.0, &self.f, &self.est.covariance, 0.0, &mut self.fp);
+        self.p_pred.copy_from(&self.q);
+        dense::mul_nt(1.0, &self.fp, &self.f, 1.0, &mut self.p_pred);
+        dense::symmetrize(&mut self.p_pred);
+        // Gain (9).
+        model.h(&self.x_pred, u, &mut self.y_pred)?;
+        model.h_jacobian(&self.x_pred, u, &mut self.h)?;
+        if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
+        }
+        dense::mul_nt(1.0, &self.p_pred, &self.h, 0.0, &mut self.pht);
+        self.s.copy_from(&self.r);
+        dense::mul_nn(1.0, &self.h, &self.pht, 1.0, &mut self.s);
+        if !dense::cholesky_in_place(&mut self.s) {
+            return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
+        }
+        self.k.copy_from(&self.pht);
+        dense::solve_right_lower_t(&mut self.k, &self.s);
+        dense::solve_right_lower(&mut self.k, &self.s);
+        // Update (10).
+        self.innov.copy_from(y);
+        self.innov -= &self.y_pred;
+        self.x_new.copy_from(&self.x_pred);
+        dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
+        // Covariance (11), Joseph form.
+        dense::i_minus_lc(&self.k, &self.h, &mut self.ikh);
+        dense::mul_nn(1.0, &self.ikh, &self.p_pred, 0.0, &mut self.tmp);
+        dense::mul_nt(1.0, &self.tmp, &self.ikh, 0.0, &mut self.p_new);
+        dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
+        dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
+        dense::symmetrize(&mut self.p_new);
+        if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
+        }
+        std::mem::swap(&mut self.est.mean, &mut self.x_new);
+        std::mem::swap(&mut self.est.covariance, &mut self.p_new);
+        for i in 0..self.n {
+            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
+        }
+        Ok(&self.est)
+    }
+}
+
+impl<M: DifferentiableModel + ?Sized> Estimator<M> for ExtendedKalmanFilter {
+    type Estimate = GaussianEstimate;
+    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        ExtendedKalmanFilter::step(self, model, u, y)
+    }
+    fn estimate(&self) -> &GaussianEstimate {
+        &self.est
+    }
+    fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
+    }
+}
