@@ -2,6 +2,11 @@
 //! exact two-multiplier solver, and with each SDP backend compiled in, for (n, m) = (4, 3) (no
 //! sideslip sensor) and (4, 4) (the paper's C = I), on the Table 1 carrier at 6 m/s, T_s = 1 ms.
 //! `cargo bench --bench estimators` (add `--features clarabel` for Clarabel).
+//!
+//! Also the truck paper's EKF step (3 states, 6 tyre positions, 7 inputs, 3 measurements) beside a
+//! Kalman step of the same size, and the truck model's evaluations alone (f, ∂f/∂x, h, ∂h/∂x: the
+//! tyre forces and their derivatives), so that the EKF's time splits into tyre evaluations and
+//! linear algebra.
 
 use std::hint::black_box;
 
@@ -75,5 +80,63 @@ fn steps(crit: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, steps);
+fn truck(crit: &mut Criterion) {
+    use estimators::ExtendedKalmanFilter;
+    use models::{DifferentiableModel, DiscreteModel};
+    use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams};
+    let params = TruckParams::digest_preset();
+    let model = TruckEkfModel::paper(params).unwrap();
+    let v = 70.0 / 3.6;
+    let x0 = DVector::from_vec(vec![v, 0.05, 0.02]);
+    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-7, 1e-7, 1e-9]));
+    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![2.5e-3, 2.5e-3, 4e-6]));
+    let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-2, 1e-2, 1e-4]));
+    let inputs: Vec<DVector<f64>> = (0..64)
+        .map(|k| {
+            let mut u = TruckInput::free_rolling(0.02 * ((k as f64) * 0.3).sin(), v, params.rolling_radius);
+            u.omega[3] *= 1.002;
+            u.to_dvector()
+        })
+        .collect();
+    let ys: Vec<DVector<f64>> =
+        (0..64).map(|k| DVector::from_vec(vec![v + 0.01 * (k % 5) as f64, 0.3, 0.02])).collect();
+    let mut group = crit.benchmark_group("truck_step");
+    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 7).unwrap();
+    let mut k = 0;
+    group.bench_function("ekf", |b| {
+        b.iter(|| {
+            k = (k + 1) % ys.len();
+            black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
+        })
+    });
+    // The tyre part: the four model evaluations one EKF step makes.
+    let (mut f, mut fj, mut h, mut hj) =
+        (DVector::zeros(3), DMatrix::zeros(3, 3), DVector::zeros(3), DMatrix::zeros(3, 3));
+    group.bench_function("model-evaluations", |b| {
+        b.iter(|| {
+            k = (k + 1) % ys.len();
+            let u = &inputs[k];
+            model.f(&x0, u, &mut f).unwrap();
+            model.f_jacobian(&x0, u, &mut fj).unwrap();
+            model.h(&f, u, &mut h).unwrap();
+            model.h_jacobian(&f, u, &mut hj).unwrap();
+            black_box(h[1] + hj[(1, 1)])
+        })
+    });
+    // A linear Kalman step of the same size (3 states, 7 inputs, 3 outputs).
+    let a = DMatrix::identity(3, 3) * 0.999;
+    let bm = DMatrix::from_element(3, 7, 1e-4);
+    let c = DMatrix::identity(3, 3);
+    let mut kf = KalmanFilter::new(x0, p0, q, r, 7).unwrap();
+    let lin = StepModel::new(&a, &bm, &c);
+    group.bench_function("kalman-same-size", |b| {
+        b.iter(|| {
+            k = (k + 1) % ys.len();
+            black_box(kf.step(&lin, &inputs[k], &ys[k]).unwrap().mean[0])
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, steps, truck);
 criterion_main!(benches);
