@@ -86,6 +86,19 @@ pub enum EstimatorError {
         /// What is missing.
         what: &'static str,
     },
+    /// The measurement of this step is provably incompatible with the predicted set and the noise
+    /// bounds (module [`smf::consistency`](crate::smf::consistency)): a measurement outlier, a
+    /// biased sensor, noise beyond its bound or a wrong model. The filter is unchanged.
+    #[error(
+        "data inconsistent with the noise bounds at step {step}: the measurement lies outside every set the \
+         model and the bounds allow (beyond the set's reach by {excess:.3e} of it)"
+    )]
+    InconsistentData {
+        /// The step (1 for the first step of the filter).
+        step: u64,
+        /// How far outside, relative to the set's extent in the separating direction.
+        excess: f64,
+    },
     /// The model could not be evaluated.
     #[error("model: {0}")]
     Model(#[from] ModelError),

@@ -53,8 +53,9 @@ pub use kalman::{GaussianEstimate, KalmanFilter};
 pub use models::{LinearModel, StepModel};
 pub use registry::{EstimatorInfo, LINEAR_ESTIMATORS, LinearSetup};
 pub use smf::{
-    FallbackReason, Inflation, InputModel, SdpUpdateSolver, SetEstimate, SetMembershipFilter, StepReport, TAU_FLOOR,
-    TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus,
+    Consistency, FallbackReason, InconsistencyPolicy, Inflation, InputModel, SdpUpdateSolver, SetEstimate,
+    SetMembershipFilter, StepReport, TAU_FLOOR, TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver,
+    UpdateStatus,
 };
 pub use traits::{DynEstimator, Estimate, EstimateKind, Estimator, NoiseSettings};
 pub use validate::SYMMETRY_TOLERANCE;

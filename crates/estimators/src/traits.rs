@@ -55,6 +55,16 @@ pub trait Estimate {
     fn fallback_used(&self) -> bool {
         false
     }
+    /// For guaranteed estimators: whether the step's data were consistent with the noise bounds
+    /// (`None` for estimators that cannot tell).
+    fn consistent(&self) -> Option<bool> {
+        None
+    }
+    /// For guaranteed estimators: whether the published set is still guaranteed (`false` once
+    /// inconsistent data were accepted); `None` for Gaussian estimates.
+    fn guaranteed(&self) -> Option<bool> {
+        None
+    }
 }
 
 /// One recursive estimator over models of type `M` (a capability trait such as

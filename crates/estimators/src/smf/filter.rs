@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use models::{Dims, LinearModel, StepModel};
 
 use super::certify::{CertWork, Inflation, U, certify};
+use super::consistency::{self, Consistency, ConsistencyWork, InconsistencyPolicy};
 use super::fallback::{FallbackReason, GainCtx, clamp_tau, near_simplex};
 use super::gain::GainWork;
 use super::input::{InputModel, check_in_box, effective_noise};
@@ -33,6 +34,12 @@ pub struct StepReport {
     pub inflation: Inflation,
     /// Wall-clock time of the solver call.
     pub solve_time: Duration,
+    /// Whether the step's measurement was consistent with the predicted set and the noise bounds
+    /// (module [`consistency`](super::consistency)).
+    pub consistency: Consistency,
+    /// Whether the published set is guaranteed: `false` from the first inconsistent step on
+    /// (with [`InconsistencyPolicy::FlagAndContinue`]; the default policy refuses such a step).
+    pub guaranteed: bool,
 }
 
 impl StepReport {
@@ -87,6 +94,7 @@ struct Workspace {
     gain: GainWork,
     /// `m × m` scratch for validating a new `R` in place.
     gain_r: DMatrix<f64>,
+    cons: ConsistencyWork,
 }
 
 /// The improved set-membership filter, generic over the solver of (29).
@@ -100,6 +108,11 @@ pub struct SetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
     input: InputModel,
     solver: S,
     time_budget: Option<Duration>,
+    policy: InconsistencyPolicy,
+    /// Steps taken so far.
+    steps: u64,
+    /// Whether an inconsistent step was published (policy `FlagAndContinue`).
+    guarantee_lost: bool,
     est: SetEstimate,
     sol: UpdateSolution,
     ws: Workspace,
@@ -153,6 +166,8 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 fallback: None,
                 inflation: Inflation::default(),
                 solve_time: Duration::ZERO,
+                consistency: Consistency::Consistent,
+                guaranteed: true,
             },
         };
         est.set_bounds();
@@ -166,6 +181,9 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             input: InputModel::Predictor,
             solver,
             time_budget: None,
+            policy: InconsistencyPolicy::default(),
+            steps: 0,
+            guarantee_lost: false,
             est,
             sol: UpdateSolution::new(n, m),
             ws: Workspace {
@@ -176,6 +194,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 cert: CertWork::new(n, m),
                 gain: GainWork::new(n, m),
                 gain_r: DMatrix::zeros(m, m),
+                cons: ConsistencyWork::new(n, m),
             },
         })
     }
@@ -226,6 +245,17 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         crate::validate::replace_spd("R", &mut self.r, r, &mut self.ws.gain_r)
     }
 
+    /// What a step does when its data are provably inconsistent with the noise bounds (default:
+    /// [`InconsistencyPolicy::Error`]).
+    pub fn set_inconsistency_policy(&mut self, policy: InconsistencyPolicy) {
+        self.policy = policy;
+    }
+
+    /// Steps taken so far (the next step is number `steps() + 1`).
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
     /// Per-step wall-clock budget for the solver; a step exceeding it falls back.
     pub fn set_time_budget(&mut self, budget: Option<Duration>) {
         self.time_budget = budget;
@@ -273,7 +303,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
             check_in_box(u, lower, upper)?;
         }
-        let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, .. } = self;
+        let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, .. } = self;
         let (n, m) = (*n, *m);
         // X₁ = A P_k Aᵀ.
         dense_kernels::mul_nn(1.0, model.a, &est.shape, 0.0, &mut ws.ap);
@@ -286,9 +316,18 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 (&ws.q_eff, mid)
             }
         };
+        let warm = est.report.tau;
+        // Consistency of y with the predicted set and the noise bounds, before anything changes.
+        dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
+        dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
+        let consistency = consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm);
+        if let Consistency::Inconsistent { excess } = consistency
+            && *policy == InconsistencyPolicy::Error
+        {
+            return Err(EstimatorError::InconsistentData { step: *steps + 1, excess });
+        }
         let problem =
             UpdateProblem { a: model.a, c: model.c, q: q_used, r, p: &est.shape, x_hat: &est.center, x1: &ws.x1 };
-        let warm = est.report.tau;
         let t0 = Instant::now();
         let result = solver.solve(&problem, warm, sol);
         let solve_time = t0.elapsed();
@@ -353,8 +392,19 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         std::mem::swap(&mut est.center, &mut ws.cert.x_new);
         std::mem::swap(&mut est.shape, &mut ws.cert.p_new);
         est.set_bounds();
-        est.report =
-            StepReport { tau, status: sol.status, iterations: sol.iterations, fallback: reason, inflation, solve_time };
+        let guaranteed = !*guarantee_lost && consistency.is_consistent();
+        *guarantee_lost = !guaranteed;
+        *steps += 1;
+        est.report = StepReport {
+            tau,
+            status: sol.status,
+            iterations: sol.iterations,
+            fallback: reason,
+            inflation,
+            solve_time,
+            consistency,
+            guaranteed,
+        };
         Ok(est)
     }
 }
@@ -377,6 +427,12 @@ impl Estimate for SetEstimate {
     }
     fn fallback_used(&self) -> bool {
         self.report.fallback_used()
+    }
+    fn consistent(&self) -> Option<bool> {
+        Some(self.report.consistency.is_consistent())
+    }
+    fn guaranteed(&self) -> Option<bool> {
+        Some(self.report.guaranteed)
     }
 }
 

@@ -93,6 +93,7 @@
 //! changes.
 
 pub mod certify;
+pub mod consistency;
 pub mod fallback;
 pub mod filter;
 pub(crate) mod gain;
@@ -103,6 +104,7 @@ pub mod two_multiplier;
 pub mod update;
 
 pub use certify::Inflation;
+pub use consistency::{Consistency, InconsistencyPolicy};
 pub use fallback::FallbackReason;
 pub use filter::{SetEstimate, SetMembershipFilter, StepReport};
 pub use input::InputModel;
