@@ -95,7 +95,8 @@ mod tests {
 
     #[test]
     fn filter_arguments_parse_with_defaults() {
-        let cli = Cli::try_parse_from(["port-est", "filter", "-m", "m.toml", "--input", "d.csv", "-o", "o.csv"]).unwrap();
+        let cli =
+            Cli::try_parse_from(["port-est", "filter", "-m", "m.toml", "--input", "d.csv", "-o", "o.csv"]).unwrap();
         let Command::Filter(a) = cli.command else { panic!("not filter") };
         assert_eq!((a.estimator.as_str(), a.solver), ("smf", None));
         let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d", "-o", "o", "-e", "ukf"]).unwrap_err();

@@ -4,12 +4,13 @@
 //! a bad cell is reported at its `file:line:column`.
 //!
 //! The `csv` crate gives the byte offset of each record; to name the column of a bad cell the
-//! reader re-reads that record's raw bytes (only when there is an error) and finds the cell's
-//! first non-blank character, so positions are exact with padding, quotes, CRLF line ends and a
-//! byte-order mark.
+//! reader keeps the raw bytes of the current record (and of `csv`'s read-ahead) as they stream
+//! past, and on an error finds the cell's first non-blank character in them. Positions are
+//! exact with padding, quotes, CRLF line ends and a byte-order mark, and the input may be a
+//! pipe: nothing is read twice.
 
 use std::fs::File;
-use std::io::{self, Cursor, Read, Seek, SeekFrom};
+use std::io::{self, Cursor, Read};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -20,45 +21,42 @@ use crate::error::{Error, Location, echo};
 
 const BOM: &[u8] = b"\xEF\xBB\xBF";
 
-/// Where a data reader's bytes come from: a stream that can also give back the raw bytes of a
-/// byte range (used only to locate a bad cell).
-pub trait Source: Read {
-    /// The raw bytes at `range` of the stream (offsets from the stream's start).
-    ///
-    /// # Errors
-    /// When the bytes cannot be read again.
-    fn raw(&self, range: Range<u64>) -> io::Result<Vec<u8>>;
-}
+/// Forgotten bytes are dropped from the front of the kept buffer in chunks of at least this
+/// size (amortised: no copy per row).
+const FORGET_CHUNK: usize = 64 * 1024;
 
-/// A data file on disk.
+/// A stream that keeps the bytes read from it since a given offset, so that the raw text of the
+/// current record can be looked at after `csv` has parsed it.
 #[derive(Debug)]
-pub struct FileSource {
-    file: File,
-    path: PathBuf,
+struct Recording<R> {
+    inner: R,
+    kept: Vec<u8>,
+    /// Stream offset of `kept[0]`.
+    kept_from: u64,
 }
 
-impl Read for FileSource {
+impl<R: Read> Read for Recording<R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        self.file.read(buf)
+        let n = self.inner.read(buf)?;
+        self.kept.extend_from_slice(&buf[..n]);
+        Ok(n)
     }
 }
 
-impl Source for FileSource {
-    fn raw(&self, range: Range<u64>) -> io::Result<Vec<u8>> {
-        // A second handle, so that the reader's own position is untouched.
-        let mut f = File::open(&self.path)?;
-        f.seek(SeekFrom::Start(range.start))?;
-        let mut out = Vec::new();
-        f.take(range.end.saturating_sub(range.start)).read_to_end(&mut out)?;
-        Ok(out)
+impl<R> Recording<R> {
+    /// The bytes before stream offset `offset` are no longer needed.
+    fn forget_before(&mut self, offset: u64) {
+        let drop = usize::try_from(offset.saturating_sub(self.kept_from)).unwrap_or(usize::MAX).min(self.kept.len());
+        if drop >= FORGET_CHUNK || drop == self.kept.len() {
+            self.kept.drain(..drop);
+            self.kept_from += drop as u64;
+        }
     }
-}
 
-impl<T: AsRef<[u8]>> Source for Cursor<T> {
-    fn raw(&self, range: Range<u64>) -> io::Result<Vec<u8>> {
-        let bytes = self.get_ref().as_ref();
-        let clamp = |x: u64| usize::try_from(x).unwrap_or(usize::MAX).min(bytes.len());
-        Ok(bytes[clamp(range.start)..clamp(range.end.max(range.start))].to_vec())
+    /// The kept bytes of `range` (stream offsets), as far as they are kept.
+    fn raw(&self, range: Range<u64>) -> &[u8] {
+        let at = |x: u64| usize::try_from(x.saturating_sub(self.kept_from)).unwrap_or(usize::MAX).min(self.kept.len());
+        &self.kept[at(range.start)..at(range.end.max(range.start))]
     }
 }
 
@@ -81,13 +79,12 @@ impl DataRow {
     }
 }
 
-/// Reads `DATA.csv` row by row for a model with `p` inputs and `m` outputs.
+/// Reads `DATA.csv` row by row for a model with `p` inputs and `m` outputs, from any stream
+/// (a file, a pipe, memory).
 #[derive(Debug)]
-pub struct DataReader<R: Source> {
-    csv: csv::Reader<R>,
+pub struct DataReader<R: Read> {
+    csv: csv::Reader<Recording<io::Chain<Cursor<Vec<u8>>, R>>>,
     path: PathBuf,
-    /// Bytes skipped before the `csv` reader's offset 0 (a byte-order mark).
-    skipped: u64,
     /// `k`, `u1`…, `y1`….
     names: Vec<String>,
     p: usize,
@@ -99,46 +96,50 @@ pub struct DataReader<R: Source> {
     rows: u64,
 }
 
-impl DataReader<FileSource> {
+impl DataReader<File> {
     /// Opens `path` and checks its header against the model's `p` inputs and `m` outputs.
     ///
     /// # Errors
     /// [`Error::Io`] if the file cannot be read; [`Error::At`] for an empty file or a header
     /// that is not `k,u1,…,up,y1,…,ym`.
     pub fn open(path: &Path, p: usize, m: usize) -> Result<Self, Error> {
-        let io = |e| Error::io(path, e);
-        let mut file = File::open(path).map_err(io)?;
-        let mut head = [0u8; 3];
-        let mut got = 0;
-        while got < 3 {
-            match file.read(&mut head[got..]) {
-                Ok(0) => break,
-                Ok(k) => got += k,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(io(e)),
-            }
-        }
-        let skipped = if head[..got] == *BOM { 3 } else { 0 };
-        file.seek(SeekFrom::Start(skipped)).map_err(io)?;
-        Self::new(FileSource { file, path: path.to_owned() }, path, skipped, p, m)
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
+        Self::from_reader(path, file, p, m)
     }
 }
 
-impl DataReader<Cursor<Vec<u8>>> {
+impl<'a> DataReader<&'a [u8]> {
     /// Reads data from memory (`path` names it in errors); see [`DataReader::open`].
     ///
     /// # Errors
     /// As [`DataReader::open`].
-    pub fn from_text(path: &Path, text: &str, p: usize, m: usize) -> Result<Self, Error> {
-        let mut cursor = Cursor::new(text.as_bytes().to_vec());
-        let skipped = if text.as_bytes().starts_with(BOM) { 3 } else { 0 };
-        cursor.set_position(skipped);
-        Self::new(cursor, path, skipped, p, m)
+    pub fn from_text(path: &Path, text: &'a str, p: usize, m: usize) -> Result<Self, Error> {
+        Self::from_reader(path, text.as_bytes(), p, m)
     }
 }
 
-impl<R: Source> DataReader<R> {
-    fn new(source: R, path: &Path, skipped: u64, p: usize, m: usize) -> Result<Self, Error> {
+impl<R: Read> DataReader<R> {
+    /// Reads data from `reader` (`path` names it in errors); see [`DataReader::open`].
+    ///
+    /// # Errors
+    /// As [`DataReader::open`].
+    pub fn from_reader(path: &Path, mut reader: R, p: usize, m: usize) -> Result<Self, Error> {
+        // A byte-order mark is dropped before `csv` sees the stream (offsets start after it).
+        let mut head = vec![0u8; BOM.len()];
+        let mut got = 0;
+        while got < head.len() {
+            match reader.read(&mut head[got..]) {
+                Ok(0) => break,
+                Ok(k) => got += k,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(Error::io(path, e)),
+            }
+        }
+        head.truncate(got);
+        if head == BOM {
+            head.clear();
+        }
+        let source = Recording { inner: Cursor::new(head).chain(reader), kept: Vec::new(), kept_from: 0 };
         let csv = csv::ReaderBuilder::new()
             .has_headers(false) // checked here, to say which cell is wrong
             .flexible(true) // the field count is checked here too
@@ -151,7 +152,6 @@ impl<R: Source> DataReader<R> {
         let mut r = Self {
             csv,
             path: path.to_owned(),
-            skipped,
             names,
             p,
             record: StringRecord::new(),
@@ -185,6 +185,7 @@ impl<R: Source> DataReader<R> {
     /// Reads the next non-blank record; `false` at the end of the file.
     fn next_record(&mut self) -> Result<bool, Error> {
         loop {
+            self.csv.get_mut().forget_before(self.end);
             match self.csv.read_record(&mut self.record) {
                 Ok(false) => return Ok(false),
                 Ok(true) => {
@@ -298,12 +299,10 @@ impl<R: Source> DataReader<R> {
     /// Where the last record read starts (`column = None`: its line, column 1) or where its
     /// cell `column` (0 = `k`, then `u1`…, `y1`…) starts, at the cell's first non-blank
     /// character. A missing cell is placed where it would start after one more comma.
-    pub fn locate(&mut self, column: Option<usize>) -> Location {
-        let range = self.skipped + self.start.byte()..self.skipped + self.end;
-        let (line, col) = match self.csv.get_ref().raw(range) {
-            Ok(bytes) => locate_in(&String::from_utf8_lossy(&bytes), self.start.line(), column),
-            Err(_) => (self.start.line(), 1),
-        };
+    #[must_use]
+    pub fn locate(&self, column: Option<usize>) -> Location {
+        let raw = self.csv.get_ref().raw(self.start.byte()..self.end);
+        let (line, col) = locate_in(&String::from_utf8_lossy(raw), self.start.line(), column);
         Location::new(&self.path, line, col)
     }
 }
@@ -438,11 +437,23 @@ mod tests {
     }
 
     #[test]
+    fn positions_stay_exact_deep_into_a_long_file() {
+        let mut text = String::from("k,u1,y1\n");
+        for k in 0..20_000 {
+            text.push_str(&format!("{k},  0.125,\"{}\"\r\n", k % 7));
+        }
+        assert_eq!(rows(&text).len(), 20_000);
+        text.push_str("20000,1,\"two\nlines\"\n20001,  x,1\n");
+        let e = err(&text);
+        assert!(e.starts_with("d.csv:20002:9: y1 = \"two\\nlines\" is not a number"), "{e}");
+        let e = err(&text.replace("\"two\nlines\"", "2"));
+        assert!(e.starts_with("d.csv:20003:9: u1 = \"x\" is not a number"), "{e}");
+    }
+
+    #[test]
     fn invalid_utf8_is_located() {
         let p = Path::new("d.csv");
-        let mut c = Cursor::new(b"k,u1,y1\n0,1,\xff\n".to_vec());
-        c.set_position(0);
-        let mut r = DataReader::new(c, p, 0, 1, 1).unwrap();
+        let mut r = DataReader::from_reader(p, &b"k,u1,y1\n0,1,\xff\n"[..], 1, 1).unwrap();
         let e = r.read_row(&mut DataRow::zeros(1, 1)).unwrap_err().to_string();
         assert!(e.starts_with("d.csv:2:5: y1 is not valid UTF-8"), "{e}");
     }

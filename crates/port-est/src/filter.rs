@@ -5,14 +5,14 @@
 //! filters); the row of step `k` is labelled `k + 1` (it estimates `x_{k+1}`). Numbers are
 //! written in Rust's `{:e}` notation, exact to the last bit.
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use estimators::registry::{self, EstimatorInfo, LinearSetup, TWO_MULTIPLIER};
 use estimators::{EstimatorError, NoiseSettings};
 use models::StepModel;
 
-use crate::data::{DataReader, DataRow, Source};
+use crate::data::{DataReader, DataRow};
 use crate::error::{Error, echo};
 use crate::model::{Model, read_model};
 use crate::output::OutputFile;
@@ -101,10 +101,7 @@ fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::
     if info.needs_input_bounds && model.input_range.is_none() {
         return Err(Error::File {
             path: model.path().to_owned(),
-            message: format!(
-                "--estimator {} needs the input range `u_lower`, `u_upper` in the model file",
-                info.name
-            ),
+            message: format!("--estimator {} needs the input range `u_lower`, `u_upper` in the model file", info.name),
         });
     }
     let noise = NoiseSettings::new(model.q.clone(), model.r.clone());
@@ -124,7 +121,7 @@ fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::
 ///
 /// # Errors
 /// As [`filter`], except for the checks of the output path.
-pub fn run_filter<R: Source, W: Write>(
+pub fn run_filter<R: Read, W: Write>(
     model: &Model,
     data: &mut DataReader<R>,
     info: &EstimatorInfo,

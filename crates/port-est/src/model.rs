@@ -289,7 +289,9 @@ mod tests {
         let e = err(&MODEL.replace("b = [[0.0], [0.01]]", "b = [[0.0]]"));
         assert!(e.starts_with("m.toml:2:5: `b`: expected 2 rows, found 1"), "{e}");
         assert!(err(&MODEL.replace("x0 = [0.0, 0.0]", "x0 = [0.0]")).contains("m.toml:7:6: `x0`: expected 2 entries"));
-        assert!(err(&MODEL.replace("r = [[1e-2]]", "r = [[1e-2, 0.0]]")).contains("`r`: row 1 has 2 entries, expected 1"));
+        assert!(
+            err(&MODEL.replace("r = [[1e-2]]", "r = [[1e-2, 0.0]]")).contains("`r`: row 1 has 2 entries, expected 1")
+        );
         let e = err(&MODEL.replace("q = ", "qq = "));
         assert!(e.starts_with("m.toml:4:"), "{e}");
         let e = err(&format!("{MODEL}u_lower = [0.0]\n"));

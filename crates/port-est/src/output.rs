@@ -86,7 +86,8 @@ impl OutputFile {
             }
         };
         for (role, path) in inputs {
-            let same = if existing.is_some() { same_file(output, path) } else { canonical(path) == Some(target.clone()) };
+            let same =
+                if existing.is_some() { same_file(output, path) } else { canonical(path) == Some(target.clone()) };
             if same {
                 return Err(Error::SameFile { role, output: output.to_owned(), other: path.to_path_buf() });
             }
@@ -94,13 +95,13 @@ impl OutputFile {
         match existing {
             Some(meta) if !meta.is_file() => {
                 // A device or a pipe: nothing to replace, nothing half-written to clean up.
-                let file = OpenOptions::new().write(true).truncate(true).open(&target).map_err(|e| refuse(e.to_string()))?;
+                let file =
+                    OpenOptions::new().write(true).truncate(true).open(&target).map_err(|e| refuse(e.to_string()))?;
                 Ok(Self { writer: Some(BufWriter::new(file)), shown: output.to_owned(), target, temporary: None })
             }
             _ => {
-                let (file, temporary) = Self::temporary_beside(&target).map_err(|(dir, e)| {
-                    refuse(format!("cannot write in directory {}: {e}", dir.display()))
-                })?;
+                let (file, temporary) = Self::temporary_beside(&target)
+                    .map_err(|(dir, e)| refuse(format!("cannot write in directory {}: {e}", dir.display())))?;
                 if let Some(meta) = fs::metadata(&target).ok().filter(|m| m.is_file()) {
                     // Keep the replaced file's permissions.
                     let _ = fs::set_permissions(&temporary, meta.permissions());

@@ -1,0 +1,120 @@
+//! The `port-est` binary as a user runs it: clap's help, the registry listing, exit codes and
+//! `error: file:line:column: …` on stderr.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn port_est(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_port-est")).args(args).output().unwrap()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8(bytes.to_vec()).unwrap()
+}
+
+#[test]
+fn help_of_the_binary_and_of_filter() {
+    let out = port_est(&["--help"]);
+    assert!(out.status.success());
+    let help = text(&out.stdout);
+    assert!(help.contains("Usage: port-est <COMMAND>") && help.contains("filter") && help.contains("estimators"));
+
+    let out = port_est(&["filter", "--help"]);
+    assert!(out.status.success());
+    let help = text(&out.stdout);
+    for s in ["--model <MODEL.toml>", "--input <DATA.csv>", "--output <OUT.csv>", "--estimator <NAME>", "yang-li"] {
+        assert!(help.contains(s), "{s} in\n{help}");
+    }
+    assert!(port_est(&["help", "filter"]).status.success());
+    assert!(port_est(&["--version"]).status.success());
+}
+
+#[test]
+fn estimators_lists_the_registry_and_the_solvers() {
+    let out = port_est(&["estimators"]);
+    assert!(out.status.success());
+    let list = text(&out.stdout);
+    for e in estimators::registry::LINEAR_ESTIMATORS {
+        assert!(list.contains(e.name) && list.contains(e.summary), "{}", e.name);
+    }
+    for s in estimators::registry::solver_names() {
+        assert!(list.contains(s), "{s}");
+    }
+}
+
+#[test]
+fn usage_errors_exit_2_and_run_errors_exit_1() {
+    let out = port_est(&[]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = port_est(&["filter", "--model", "m.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("--input <DATA.csv>"));
+    let out = port_est(&["filter", "-m", "m", "-i", "d", "-o", "o", "--estimator", "ukf"]);
+    assert_eq!(out.status.code(), Some(2));
+
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter");
+    let (model, data) = (examples.join("model.toml"), examples.join("data.csv"));
+    let (model, data) = (model.to_str().unwrap(), data.to_str().unwrap());
+    let out = port_est(&["filter", "--model", model, "--input", data, "--output", data]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(err.starts_with("error: refusing to overwrite the input file"), "{err}");
+
+    // A model file given as the data: the header is wrong at line 1.
+    let out_file = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-out.csv");
+    let out = port_est(&["filter", "-m", model, "-i", model, "-o", out_file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(err.starts_with(&format!("error: {model}:1:1: header column 1 is")), "{err}");
+    assert!(!out_file.exists());
+}
+
+#[test]
+fn the_example_runs_through_the_binary() {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter");
+    let out_file = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-example.csv");
+    let out = Command::new(env!("CARGO_BIN_EXE_port-est"))
+        .arg("filter")
+        .arg("--model")
+        .arg(examples.join("model.toml"))
+        .arg("--input")
+        .arg(examples.join("data.csv"))
+        .arg("--output")
+        .arg(&out_file)
+        .args(["--estimator", "kf"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).starts_with("40 steps of kf written to "));
+    assert_eq!(std::fs::read_to_string(&out_file).unwrap().lines().count(), 41);
+}
+
+#[cfg(unix)]
+#[test]
+fn the_data_may_come_from_a_pipe() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter");
+    let out_file = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-pipe.csv");
+    let run = |data: &str| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_port-est"))
+            .arg("filter")
+            .arg("--model")
+            .arg(examples.join("model.toml"))
+            .args(["--input", "/dev/stdin", "--output"])
+            .arg(&out_file)
+            .stdin(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        child.stdin.take().unwrap().write_all(data.as_bytes()).unwrap();
+        child.wait_with_output().unwrap()
+    };
+    let out = run("k,u1,y1\n0,0.1,0.3\n1,0.2,0.29\n");
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read_to_string(&out_file).unwrap().lines().count(), 3);
+    let out = run("k,u1,y1\n0,0.1,0.3\n1,0.2, bad\n");
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(err.starts_with("error: /dev/stdin:3:8: y1 = \"bad\" is not a number"), "{err}");
+}

@@ -1,0 +1,72 @@
+//! The example of the crate's README (`examples/filter/` of the workspace), run for every
+//! registered estimator.
+
+use std::path::{Path, PathBuf};
+
+use estimators::EstimateKind;
+use estimators::registry::{LINEAR_ESTIMATORS, TWO_MULTIPLIER, solver_names};
+use port_est::{FilterOptions, filter};
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est").join(name);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn the_readme_documents_the_example() {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    assert!(readme.contains(
+        "port-est filter --model examples/filter/model.toml --input examples/filter/data.csv --output out.csv"
+    ));
+}
+
+#[test]
+fn readme_filter_example_runs_for_every_estimator() {
+    let root = workspace();
+    let dir = out_dir("readme");
+    let smf = LINEAR_ESTIMATORS.iter().find(|e| e.name == "smf").unwrap();
+    let sdp_solvers = solver_names().into_iter().filter(|s| *s != TWO_MULTIPLIER);
+    // Every estimator with its default solver, and the set-membership filter through every SDP
+    // backend of this build.
+    let runs = LINEAR_ESTIMATORS.iter().map(|e| (e, None)).chain(sdp_solvers.map(|s| (smf, Some(s))));
+    for (info, solver) in runs {
+        let label = format!("{}{}", info.name, solver.map_or(String::new(), |s| format!("-{s}")));
+        let output = dir.join(format!("{label}.csv"));
+        let summary = filter(&FilterOptions {
+            model: root.join("examples/filter/model.toml"),
+            input: root.join("examples/filter/data.csv"),
+            output: output.clone(),
+            estimator: info.name.to_owned(),
+            solver: solver.map(str::to_owned),
+        })
+        .unwrap_or_else(|e| panic!("{label}: {e}"));
+        assert_eq!(summary.steps, 40, "{label}");
+
+        let text = std::fs::read_to_string(&output).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 41, "{label}: header and 40 steps");
+        let guaranteed = info.kind == EstimateKind::GuaranteedEllipsoid;
+        let header_end = if guaranteed { ",trace,tau1,tau2,tau3" } else { ",trace" };
+        assert_eq!(lines[0], format!("k,xhat1,xhat2,lo1,lo2,hi1,hi2{header_end}"), "{label}");
+        for (i, line) in lines[1..].iter().enumerate() {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            assert_eq!(v.len(), lines[0].split(',').count(), "{label}: row {i}");
+            assert!(v.iter().all(|x| x.is_finite()), "{label}: row {i} is finite");
+            assert_eq!(v[0], (i + 1) as f64, "{label}: rows are labelled k + 1");
+            assert!(v[7] > 0.0, "{label}: trace");
+            for s in 0..2 {
+                assert!(v[3 + s] <= v[1 + s] && v[1 + s] <= v[5 + s], "{label}: lo <= xhat <= hi at row {i}");
+            }
+            if guaranteed {
+                assert!(v[8..11].iter().all(|t| *t >= 0.0), "{label}: multipliers are nonnegative");
+            }
+        }
+    }
+    // Nothing but the outputs is left behind (no temporary files).
+    assert!(std::fs::read_dir(&dir).unwrap().flatten().all(|e| !e.file_name().to_string_lossy().ends_with(".tmp")));
+}
