@@ -1,14 +1,16 @@
 //! Estimators by name, so that the CLI, the reproduction and user interfaces choose one at run
 //! time and adding a filter touches one place (this table and its constructor).
 //!
-//! Estimators are grouped by the model capability they need; today every registered estimator
-//! runs on linear (time-varying) models, `Box<dyn DynEstimator<dyn LinearModel>>`.
+//! Estimators are grouped by the model capability they need: [`LINEAR_ESTIMATORS`] run on linear
+//! (time-varying) models ([`linear`], `Box<dyn DynEstimator<dyn LinearModel>>`),
+//! [`DIFFERENTIABLE_ESTIMATORS`] on models with Jacobians ([`differentiable`]).
 
 use nalgebra::{DMatrix, DVector};
 
 use lmi::SolverSettings;
-use models::LinearModel;
+use models::{DifferentiableModel, LinearModel};
 
+use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
 use crate::smf::{SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver};
@@ -156,4 +158,46 @@ pub fn linear(name: &str, setup: &LinearSetup) -> Result<BoxedLinearEstimator, E
 #[must_use]
 pub fn info(name: &str) -> Option<&'static EstimatorInfo> {
     LINEAR_ESTIMATORS.iter().find(|e| e.name == name)
+}
+
+/// The estimators for differentiable (nonlinear) models, in display order.
+pub const DIFFERENTIABLE_ESTIMATORS: &[EstimatorInfo] = &[EstimatorInfo {
+    name: "ekf",
+    kind: EstimateKind::Gaussian,
+    summary: "extended Kalman filter, Joseph form (truck paper (7)-(11)); Q, R, P0 as covariances",
+    uses_solver: false,
+    needs_input_bounds: false,
+}];
+
+/// Everything a Gaussian estimator of a nonlinear model is built from.
+#[derive(Debug, Clone)]
+pub struct GaussianSetup {
+    /// Initial mean `x̂₀`.
+    pub x0: DVector<f64>,
+    /// Initial covariance `P₀`.
+    pub p0: DMatrix<f64>,
+    /// Process and measurement covariances.
+    pub noise: NoiseSettings,
+    /// Number of inputs `p`.
+    pub inputs: usize,
+}
+
+/// An estimator of differentiable models.
+pub type BoxedDifferentiableEstimator = Box<dyn for<'m> DynEstimator<dyn DifferentiableModel + 'm>>;
+
+/// Builds the registered estimator `name` for differentiable models from `setup`.
+///
+/// # Errors
+/// [`EstimatorError::UnknownEstimator`]; the constructors' validation errors.
+pub fn differentiable(name: &str, setup: &GaussianSetup) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
+    let GaussianSetup { x0, p0, noise, inputs } = setup;
+    match name {
+        "ekf" => {
+            Ok(Box::new(ExtendedKalmanFilter::new(x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone(), *inputs)?))
+        }
+        _ => Err(EstimatorError::UnknownEstimator {
+            name: name.to_owned(),
+            known: DIFFERENTIABLE_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
+        }),
+    }
 }

@@ -22,8 +22,42 @@ pub struct Cli {
 pub enum Command {
     /// Run an estimator over logged inputs and measurements, one estimate per step
     Filter(FilterArgs),
+    /// Run the truck paper's extended Kalman filter over logged data of a 3-axle port truck
+    Truck(TruckArgs),
     /// List the estimators (--estimator) and the solvers of the set-membership filters (--solver)
     Estimators,
+}
+
+const TRUCK_FORMATS: &str = "\
+Files:
+  DATA.csv    header `k,u1,…,u7,y1,y2,y3`: u1 = front road-wheel steering angle δ [rad];
+              u2…u7 = wheel speeds ω [rad/s] of front-left, front-right, middle-left, middle-right,
+              rear-left, rear-right; y1, y2, y3 = measured Vx [m/s], a_y [m/s²], γ [rad/s] after the step.
+  OUT.csv     header `k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma` (β = atan(Vy/Vx) [rad], one standard
+              deviation per state), one row per step labelled k+1; written atomically.
+  CONFIG.toml optional: `ts` (s), `x0` (3), `p0`, `q`, `r` (3×3 covariances, arrays of rows). Defaults:
+              the digest's vehicle and settings (T = 1 ms, Q = T·diag(1e-4, 1e-4, 1e-6),
+              R = diag(0.05², 0.05², 0.002²), P0 = diag(0.1², 0.1², 0.01²)); x0 from the first row.";
+
+/// The arguments of `port-est truck`.
+#[derive(Debug, Args)]
+#[command(after_long_help = TRUCK_FORMATS)]
+pub struct TruckArgs {
+    /// The logged data: header `k,u1,…,u7,y1,y2,y3` (δ, six wheel speeds; Vx, a_y, γ)
+    #[arg(short, long, value_name = "DATA.csv")]
+    pub input: PathBuf,
+    /// Where to write the estimates (CSV; replaced only if the run succeeds)
+    #[arg(short, long, value_name = "OUT.csv")]
+    pub output: PathBuf,
+    /// Settings overriding the digest's defaults: ts, x0, p0, q, r (TOML)
+    #[arg(short, long, value_name = "CONFIG.toml")]
+    pub config: Option<PathBuf>,
+}
+
+impl From<TruckArgs> for crate::truck::TruckOptions {
+    fn from(a: TruckArgs) -> Self {
+        Self { input: a.input, output: a.output, config: a.config }
+    }
 }
 
 const FILE_FORMATS: &str = "\

@@ -18,6 +18,7 @@ pub mod error;
 pub mod filter;
 pub mod model;
 pub mod output;
+pub mod truck;
 
 use std::io::{self, Write};
 
@@ -52,6 +53,12 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
             );
             Ok(())
         }
+        Command::Truck(args) => {
+            let options = truck::TruckOptions::from(args);
+            let steps = truck::truck(&options)?;
+            let _ = writeln!(stderr, "{steps} steps of ekf written to {}", options.output.display());
+            Ok(())
+        }
         Command::Estimators => match write_estimators(stdout) {
             Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>".as_ref(), e)),
             _ => Ok(()),
@@ -75,6 +82,11 @@ pub fn write_estimators(w: &mut dyn Write) -> io::Result<()> {
             notes.push("needs u_lower, u_upper");
         }
         writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, notes.join("; "))?;
+    }
+    writeln!(w)?;
+    writeln!(w, "Estimators of nonlinear vehicle models (port-est truck):")?;
+    for e in registry::DIFFERENTIABLE_ESTIMATORS {
+        writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, e.kind.label())?;
     }
     writeln!(w)?;
     writeln!(w, "Solvers (--solver NAME, default {}):", registry::TWO_MULTIPLIER)?;

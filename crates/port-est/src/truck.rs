@@ -1,0 +1,257 @@
+//! `port-est truck`: the extended Kalman filter of the truck paper (`docs/truck-ekf.md`) over
+//! logged data of a 3-axle port truck, with the truck model of `truck-dynamics` (the digest's
+//! vehicle, `TruckParams::digest_preset`, Euler at the sample period).
+//!
+//! `DATA.csv` has the general layout of `port-est filter` with `p = 7` inputs and `m = 3`
+//! outputs — header `k,u1,…,u7,y1,y2,y3`:
+//!
+//! | column | quantity | unit |
+//! |---|---|---|
+//! | `u1` | road-wheel steering angle `δ` of the front axle | rad |
+//! | `u2`…`u7` | wheel speeds `ω` of the positions front-left, front-right, middle-left, middle-right, rear-left, rear-right (the `truck_dynamics::WHEEL_NAMES` order) | rad/s |
+//! | `y1`, `y2`, `y3` | measured `V_x`, lateral acceleration `a_y`, yaw rate `γ` after the step | m/s, m/s², rad/s |
+//!
+//! `OUT.csv`: `k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma`, one row per step labelled `k+1`, with
+//! the sideslip angle `β = atan(V_y/V_x)` [rad] and one standard deviation of each state.
+//!
+//! `--config FILE.toml` (optional) overrides the digest's settings: `ts` (sample period, s),
+//! `x0` (3), `p0`, `q`, `r` (3 × 3, arrays of rows; covariances). Without `x0` the filter starts
+//! from the first row's measurement (`V_x = y1`, `V_y = 0`, `γ = y3`).
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use estimators::registry::{self, GaussianSetup};
+use estimators::NoiseSettings;
+use models::DiscreteModel;
+use nalgebra::{DMatrix, DVector};
+use serde::Deserialize;
+use truck_dynamics::{TruckEkfModel, TruckParams};
+
+use crate::data::{DataReader, DataRow};
+use crate::error::Error;
+use crate::output::OutputFile;
+
+/// What `port-est truck` needs.
+#[derive(Debug, Clone)]
+pub struct TruckOptions {
+    /// The logged data.
+    pub input: PathBuf,
+    /// Where to write the estimates.
+    pub output: PathBuf,
+    /// Optional settings file.
+    pub config: Option<PathBuf>,
+}
+
+/// The settings file, as written.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConfigFile {
+    ts: Option<f64>,
+    x0: Option<Vec<f64>>,
+    p0: Option<Vec<Vec<f64>>>,
+    q: Option<Vec<Vec<f64>>>,
+    r: Option<Vec<Vec<f64>>>,
+}
+
+/// The validated settings.
+#[derive(Debug, Clone)]
+struct Settings {
+    ts: f64,
+    x0: Option<DVector<f64>>,
+    p0: DMatrix<f64>,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+}
+
+fn matrix3(path: &Path, key: &str, rows: Vec<Vec<f64>>) -> Result<DMatrix<f64>, Error> {
+    if rows.len() != 3 || rows.iter().any(|r| r.len() != 3) {
+        return Err(Error::File { path: path.to_owned(), message: format!("`{key}` must be 3 rows of 3 numbers") });
+    }
+    Ok(DMatrix::from_fn(3, 3, |i, j| rows[i][j]))
+}
+
+fn read_config(path: Option<&Path>) -> Result<Settings, Error> {
+    let file = match path {
+        None => ConfigFile::default(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+            let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+            toml::from_str(text).map_err(|e| {
+                let message = e.message().to_owned();
+                match e.span() {
+                    Some(span) => {
+                        let (line, column) = line_column(text, span.start);
+                        Error::At { at: crate::error::Location::new(p, line, column), message }
+                    }
+                    None => Error::File { path: p.to_owned(), message },
+                }
+            })?
+        }
+    };
+    let p = path.unwrap_or(Path::new("<defaults>"));
+    let ts = file.ts.unwrap_or(truck_dynamics::PAPER_SAMPLE_PERIOD);
+    // The digest's §4 settings (assumed there, not the paper's): Q = T diag(qc), R = diag(σ²).
+    let q = match file.q {
+        Some(rows) => matrix3(p, "q", rows)?,
+        None => DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4 * ts, 1e-4 * ts, 1e-6 * ts])),
+    };
+    let r = match file.r {
+        Some(rows) => matrix3(p, "r", rows)?,
+        None => DMatrix::from_diagonal(&DVector::from_vec(vec![0.05f64.powi(2), 0.05f64.powi(2), 0.002f64.powi(2)])),
+    };
+    let p0 = match file.p0 {
+        Some(rows) => matrix3(p, "p0", rows)?,
+        None => DMatrix::from_diagonal(&DVector::from_vec(vec![0.01, 0.01, 1e-4])),
+    };
+    let x0 = match file.x0 {
+        Some(v) if v.len() == 3 => Some(DVector::from_vec(v)),
+        Some(_) => return Err(Error::File { path: p.to_owned(), message: "`x0` must have 3 entries".into() }),
+        None => None,
+    };
+    Ok(Settings { ts, x0, p0, q, r })
+}
+
+fn line_column(text: &str, offset: usize) -> (u64, u64) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() as u64 + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) as u64 + 1;
+    (line, column)
+}
+
+/// Runs the EKF over `options.input` and writes `options.output` (atomically); returns the steps.
+///
+/// # Errors
+/// Every [`Error`]: the output checks, a malformed settings or data file (at its
+/// `file:line:column`), a step the filter or the model rejects (at its data row).
+pub fn truck(options: &TruckOptions) -> Result<u64, Error> {
+    let mut inputs: Vec<(&'static str, &Path)> = vec![("input", &options.input)];
+    if let Some(c) = &options.config {
+        inputs.push(("config", c));
+    }
+    let mut out = OutputFile::create(&options.output, &inputs)?;
+    let settings = read_config(options.config.as_deref())?;
+    let mut data = DataReader::open(&options.input, 7, 3)?;
+    let steps = run_truck(&settings_model(&settings)?, &settings, &mut data, &mut out, &options.output)?;
+    out.commit()?;
+    Ok(steps)
+}
+
+fn settings_model(s: &Settings) -> Result<TruckEkfModel, Error> {
+    TruckEkfModel::new(TruckParams::digest_preset(), s.ts).map_err(|e| Error::Usage(format!("truck model: {e}")))
+}
+
+fn run_truck<R: Read, W: Write>(
+    model: &TruckEkfModel,
+    s: &Settings,
+    data: &mut DataReader<R>,
+    out: &mut W,
+    out_path: &Path,
+) -> Result<u64, Error> {
+    let wio = |e| Error::io(out_path, e);
+    writeln!(out, "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma").map_err(wio)?;
+    let mut row = DataRow::zeros(7, 3);
+    let mut est: Option<registry::BoxedDifferentiableEstimator> = None;
+    let mut steps = 0;
+    while data.read_row(&mut row)? {
+        if est.is_none() {
+            let x0 = s.x0.clone().unwrap_or_else(|| DVector::from_vec(vec![row.y[0], 0.0, row.y[2]]));
+            let setup = GaussianSetup {
+                x0,
+                p0: s.p0.clone(),
+                noise: NoiseSettings::new(s.q.clone(), s.r.clone()),
+                inputs: model.dims().inputs,
+            };
+            est = Some(registry::differentiable("ekf", &setup).map_err(Error::Estimator)?);
+        }
+        let Some(f) = est.as_mut() else { break };
+        let e = f.step_dyn(model, &row.u, &row.y).map_err(|source| Error::Step {
+            at: data.locate(Some(0)),
+            k: row.k,
+            source,
+        })?;
+        let Some(label) = row.k.checked_add(1) else {
+            return Err(Error::at(data.locate(Some(0)), format!("k = {} is too large", row.k)));
+        };
+        let c = e.center();
+        let beta = (c[1] / c[0]).atan();
+        let sd = |i: usize| e.shape()[(i, i)].max(0.0).sqrt();
+        writeln!(out, "{label},{:e},{:e},{:e},{beta:e},{:e},{:e},{:e}", c[0], c[1], c[2], sd(0), sd(1), sd(2))
+            .map_err(wio)?;
+        steps += 1;
+    }
+    Ok(steps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use truck_dynamics::{Slalom, TruthConfig, simulate_truth};
+
+    /// A short slalom logged in the documented layout.
+    fn log(seconds: f64) -> (String, Vec<f64>) {
+        let params = TruckParams::digest_preset();
+        let config = TruthConfig { duration: seconds, ..TruthConfig::digest() };
+        let slalom = Slalom::digest();
+        let truth = simulate_truth(&params, &config, |t| slalom.angle(t)).unwrap();
+        let mut text = String::from("k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n");
+        let mut betas = Vec::new();
+        for k in 0..truth.len() - 1 {
+            let u = truth.estimator_input(k).unwrap();
+            let y = truth.measurement(k + 1).unwrap();
+            text.push_str(&format!("{k},{}", u.delta));
+            for w in u.omega {
+                text.push_str(&format!(",{w}"));
+            }
+            text.push_str(&format!(",{},{},{}\n", y[0], y[1], y[2]));
+            let x = truth.body_state(k + 1).unwrap();
+            betas.push((x[1] / x[0]).atan());
+        }
+        (text, betas)
+    }
+
+    #[test]
+    fn the_ekf_tracks_a_logged_slalom() {
+        let (text, betas) = log(3.0);
+        let settings = read_config(None).unwrap();
+        let model = settings_model(&settings).unwrap();
+        let mut data = DataReader::from_text(Path::new("truck.csv"), &text, 7, 3).unwrap();
+        let mut out = Vec::new();
+        let steps = run_truck(&model, &settings, &mut data, &mut out, Path::new("o.csv")).unwrap();
+        assert_eq!(steps as usize, betas.len());
+        let out = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = out.lines().collect();
+        assert_eq!(lines[0], "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma");
+        let mut sq = 0.0;
+        for (line, beta) in lines[1..].iter().zip(&betas).skip(1000) {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            sq += (v[4] - beta).powi(2);
+        }
+        let rmse = (sq / (betas.len() - 1000) as f64).sqrt().to_degrees();
+        assert!(rmse < 0.1, "β RMSE {rmse}°");
+    }
+
+    #[test]
+    fn bad_rows_and_settings_are_located() {
+        let settings = read_config(None).unwrap();
+        let model = settings_model(&settings).unwrap();
+        // V_x = 0 in the first measurement: the model divides by it.
+        let text = "k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n0,0,0,0,0,0,0,0,0,0,0\n";
+        let mut data = DataReader::from_text(Path::new("t.csv"), text, 7, 3).unwrap();
+        let e = run_truck(&model, &settings, &mut data, &mut Vec::new(), Path::new("o.csv")).unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:2:1: step k = 0: model: "), "{e}");
+        // A wrong header names the expected column.
+        let e = DataReader::from_text(Path::new("t.csv"), "k,delta\n", 7, 3).unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:1:"), "{e}");
+        let dir = std::env::temp_dir().join(format!("port-est-truck-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let cfg = dir.join("c.toml");
+        std::fs::write(&cfg, "ts = 0.001\nq = [[1.0, 0.0], [0.0, 1.0]]\n").unwrap();
+        let e = read_config(Some(&cfg)).unwrap_err().to_string();
+        assert!(e.contains("`q` must be 3 rows of 3 numbers"), "{e}");
+        std::fs::write(&cfg, "ts = \"fast\"\n").unwrap();
+        let e = read_config(Some(&cfg)).unwrap_err().to_string();
+        assert!(e.contains("c.toml:1:6"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
