@@ -21,8 +21,8 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimators::registry::{self, GaussianSetup};
 use estimators::NoiseSettings;
+use estimators::registry::{self, GaussianSetup};
 use models::DiscreteModel;
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
