@@ -9,6 +9,7 @@
 pub mod carrier;
 pub mod outputs;
 pub mod runner;
+pub mod truck;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -50,7 +51,7 @@ pub trait Paper {
 
 /// Every paper, in the order of the index.
 pub fn papers() -> Vec<Box<dyn Paper>> {
-    vec![Box::new(carrier::CarrierPaper)]
+    vec![Box::new(carrier::CarrierPaper), Box::new(truck::TruckPaper)]
 }
 
 /// Default base seed of the reproduction.
