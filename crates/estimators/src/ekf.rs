@@ -151,8 +151,7 @@ impl ExtendedKalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         // Predict (7), (8).
-        model.f(&self.est.mean, u, &mut self.x_pred)?;
-        model.f_jacobian(&self.est.mean, u, &mut self.f)?;
+        model.f_with_jacobian(&self.est.mean, u, &mut self.x_pred, &mut self.f)?;
         if self.x_pred.iter().chain(self.f.iter()).any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's prediction or its Jacobian is not finite"));
         }
@@ -161,8 +160,7 @@ impl ExtendedKalmanFilter {
         dense::mul_nt(1.0, &self.fp, &self.f, 1.0, &mut self.p_pred);
         dense::symmetrize(&mut self.p_pred);
         // Gain (9).
-        model.h(&self.x_pred, u, &mut self.y_pred)?;
-        model.h_jacobian(&self.x_pred, u, &mut self.h)?;
+        model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
         if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
         }

@@ -65,6 +65,38 @@ pub trait DifferentiableModel: DiscreteModel {
     /// # Errors
     /// As [`DiscreteModel::f`].
     fn h_jacobian(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError>;
+
+    /// `f(x, u)` and `∂f/∂x` at the same point, as an EKF prediction needs them. The default
+    /// calls [`DiscreteModel::f`] and [`DifferentiableModel::f_jacobian`]; models whose
+    /// evaluation is expensive (tyre forces) override it to share the work.
+    ///
+    /// # Errors
+    /// As [`DiscreteModel::f`].
+    fn f_with_jacobian(
+        &self,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        out: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<(), ModelError> {
+        self.f(x, u, out)?;
+        self.f_jacobian(x, u, jacobian)
+    }
+
+    /// `h(x, u)` and `∂h/∂x` at the same point (see [`DifferentiableModel::f_with_jacobian`]).
+    ///
+    /// # Errors
+    /// As [`DiscreteModel::f`].
+    fn h_with_jacobian(
+        &self,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        out: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<(), ModelError> {
+        self.h(x, u, out)?;
+        self.h_jacobian(x, u, jacobian)
+    }
 }
 
 /// A linear step `x_{k+1} = A x_k + B u_k`, `y_{k+1} = C x_{k+1}`: `A` is `n × n`, `B` is

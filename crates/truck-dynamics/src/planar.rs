@@ -426,6 +426,43 @@ impl DifferentiableModel for TruckEkfModel {
         let (x, input) = read(x, u)?;
         write_mat("H", out, &self.planar.measurement_jacobian(&x, &input)?)
     }
+
+    /// One evaluation of the tyre forces and their slopes for both `f` and `F` (the EKF's
+    /// prediction).
+    fn f_with_jacobian(
+        &self,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        out: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<(), ModelError> {
+        let (x, input) = read(x, u)?;
+        let forces = self.planar.body_forces([x[0], x[1], x[2]], &input, true)?;
+        let next = x + self.planar.derivative_from(&x, &forces) * self.ts;
+        let jac = Matrix3::identity() + self.planar.jacobian_from(&x, &forces) * self.ts;
+        check_dims("F", jacobian, 3, 3)?;
+        write_vec("f(x, u)", out, &next)?;
+        jacobian.copy_from(&jac);
+        Ok(())
+    }
+
+    /// One evaluation of the tyre forces and their slopes for both `h` and `H` (the EKF's update).
+    fn h_with_jacobian(
+        &self,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        out: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<(), ModelError> {
+        let (x, input) = read(x, u)?;
+        let forces = self.planar.body_forces([x[0], x[1], x[2]], &input, true)?;
+        let y = Vector3::new(x[0], forces.fy / self.planar.params.mass, x[2]);
+        let h = self.planar.measurement_jacobian_from(&forces);
+        check_dims("H", jacobian, 3, 3)?;
+        write_vec("h(x, u)", out, &y)?;
+        jacobian.copy_from(&h);
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -604,5 +641,23 @@ mod tests {
         let d =
             p.planar().derivative(&Vector3::new(19.44, 0.0, 0.0), &TruckInput::free_rolling(0.0, 19.44, 0.52)).unwrap();
         assert!(d.amax() < 1e-9, "{d}");
+    }
+
+    #[test]
+    fn combined_evaluations_equal_the_separate_ones() {
+        let m = model();
+        for (x, input) in cases() {
+            let (xv, uv) = (DVector::from_column_slice(x.as_slice()), input.to_dvector());
+            let (mut f1, mut f2) = (DVector::zeros(3), DVector::zeros(3));
+            let (mut j1, mut j2) = (DMatrix::zeros(3, 3), DMatrix::zeros(3, 3));
+            m.f(&xv, &uv, &mut f1).unwrap();
+            m.f_jacobian(&xv, &uv, &mut j1).unwrap();
+            m.f_with_jacobian(&xv, &uv, &mut f2, &mut j2).unwrap();
+            assert_eq!((&f1, &j1), (&f2, &j2));
+            m.h(&xv, &uv, &mut f1).unwrap();
+            m.h_jacobian(&xv, &uv, &mut j1).unwrap();
+            m.h_with_jacobian(&xv, &uv, &mut f2, &mut j2).unwrap();
+            assert_eq!((&f1, &j1), (&f2, &j2));
+        }
     }
 }

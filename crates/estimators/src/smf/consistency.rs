@@ -17,9 +17,10 @@
 //! The search: `𝓢` is the intersection of its outer ellipsoids `𝓔(0, S(τ))`,
 //! `S(τ) = Σ Mᵢ/τᵢ`, `τ` on the simplex, and `δ(τ) = eᵀ S(τ)⁻¹ e` is concave in `τ`; its
 //! maximiser satisfies `τᵢ ∝ √(dᵀ Mᵢ d)` with `d = S(τ)⁻¹ e`, the fixed point iterated here
-//! (from the filter's `τ`), each iterate's `d` tested as a separating direction. A cheap gate
-//! skips the search: `δ(τ) ≤ τᵢ eᵀ Mᵢ⁻¹ e` for every `i`, so `max δ ≤ 1/Σᵢ (eᵀ Mᵢ⁻¹ e)⁻¹`; when
-//! that bound is at most 1 the data are consistent.
+//! (from the filter's `τ`), each iterate's `d` tested as a separating direction. The same iterate
+//! proves consistency when `eᵢ = (Mᵢ/τᵢ) d` (which sum to `e`) each lie in their ellipsoid,
+//! `dᵀ Mᵢ d ≤ τᵢ²`: usually at the first iterate, so a consistent step costs one `m × m`
+//! factorisation.
 //!
 //! Inconsistency is declared only when `g(d) > 10⁻⁷ (dᵀe + Σ √(dᵀ Mᵢ d))`: a relative margin far
 //! above the rounding errors of these few products, so a declared inconsistency is a proof for
@@ -135,20 +136,6 @@ fn solve_chol(g: &DMatrix<f64>, b: &DVector<f64>, x: &mut DVector<f64>) {
     }
 }
 
-/// `eᵀ M⁻¹ e` through a Cholesky factor in `w.s`, or `∞` if `M` is not positive definite.
-fn inverse_form(w: &mut ConsistencyWork, which: usize, r: &DMatrix<f64>) -> f64 {
-    w.s.copy_from(match which {
-        0 => &w.m1,
-        1 => &w.m2,
-        _ => r,
-    });
-    if !dense_kernels::cholesky_in_place(&mut w.s) {
-        return f64::INFINITY;
-    }
-    solve_chol(&w.s, &w.e, &mut w.d);
-    dense_kernels::dot(w.e.as_slice(), w.d.as_slice())
-}
-
 /// Checks the measurement `y` against the prediction `w.z = A x̂ + B u` (set by the caller), the
 /// predicted shape `x1 = A P Aᵀ`, the noise shapes `q`, `r` and the output matrix `c`, starting
 /// the search from `tau` (module documentation).
@@ -173,12 +160,9 @@ pub(crate) fn check(
     if w.e.iter().any(|v| !v.is_finite()) {
         return Consistency::Consistent;
     }
-    // Gate: max δ ≤ 1/Σ (eᵀ Mᵢ⁻¹ e)⁻¹.
-    let inv_sum: f64 = (0..3).map(|i| 1.0 / inverse_form(w, i, r)).sum();
-    if inv_sum >= 1.0 {
-        return Consistency::Consistent;
-    }
-    // Fixed-point search from the filter's τ (kept inside the simplex).
+    // Fixed-point search from the filter's τ (kept inside the simplex). Each iterate gives two
+    // certificates: d separates e from 𝓢 (inconsistent), or eᵢ = (Mᵢ/τᵢ) d decomposes
+    // e = Σ eᵢ with eᵢᵀ Mᵢ⁻¹ eᵢ = dᵀMᵢd/τᵢ² ≤ 1 for every i (consistent).
     let mut t = tau.map(|v| v.max(1e-6));
     let sum = t[0] + t[1] + t[2];
     t = t.map(|v| v / sum);
@@ -198,8 +182,8 @@ pub(crate) fn check(
         if g > MARGIN * (delta.abs() + support) {
             return Consistency::Inconsistent { excess: g / support.max(f64::MIN_POSITIVE) };
         }
-        if (delta - previous).abs() <= 1e-12 * delta.abs() || support <= 0.0 {
-            break;
+        if (0..3).all(|i| h[i] <= t[i]) || (delta - previous).abs() <= 1e-12 * delta.abs() || support <= 0.0 {
+            return Consistency::Consistent;
         }
         previous = delta;
         // τᵢ ∝ √(dᵀ Mᵢ d), kept off the faces.
