@@ -20,7 +20,7 @@ use dense_kernels as dense;
 use models::{DifferentiableModel, Dims};
 
 use crate::error::EstimatorError;
-use crate::kalman::GaussianEstimate;
+use crate::kalman::{GaussianEstimate, GaussianUpdate};
 use crate::traits::{Estimator, NoiseSettings};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
 
@@ -39,15 +39,8 @@ pub struct ExtendedKalmanFilter {
     y_pred: DVector<f64>,
     p_pred: DMatrix<f64>,
     fp: DMatrix<f64>,
-    pht: DMatrix<f64>,
-    s: DMatrix<f64>,
-    k: DMatrix<f64>,
-    ikh: DMatrix<f64>,
-    tmp: DMatrix<f64>,
-    kr: DMatrix<f64>,
     innov: DVector<f64>,
-    x_new: DVector<f64>,
-    p_new: DMatrix<f64>,
+    upd: GaussianUpdate,
 }
 
 impl ExtendedKalmanFilter {
@@ -79,15 +72,8 @@ impl ExtendedKalmanFilter {
             y_pred: DVector::zeros(m),
             p_pred: nn(),
             fp: nn(),
-            pht: DMatrix::zeros(n, m),
-            s: DMatrix::zeros(m, m),
-            k: DMatrix::zeros(n, m),
-            ikh: nn(),
-            tmp: nn(),
-            kr: DMatrix::zeros(n, m),
             innov: DVector::zeros(m),
-            x_new: DVector::zeros(n),
-            p_new: nn(),
+            upd: GaussianUpdate::new(n, m),
         })
     }
 
@@ -114,7 +100,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// As [`ExtendedKalmanFilter::new`] for `Q`.
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        replace_spd("Q", &mut self.q, q, &mut self.tmp)
+        replace_spd("Q", &mut self.q, q, &mut self.upd.tmp)
     }
 
     /// Replaces the measurement covariance in place (no allocation; unchanged on error).
@@ -122,7 +108,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// As [`ExtendedKalmanFilter::new`] for `R`.
     pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        replace_spd("R", &mut self.r, r, &mut self.s)
+        replace_spd("R", &mut self.r, r, &mut self.upd.s)
     }
 
     /// One step (7)–(11): consumes `u_k` and `y_{k+1}`. On error the state is unchanged.
@@ -164,35 +150,11 @@ impl ExtendedKalmanFilter {
         if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
         }
-        dense::mul_nt(1.0, &self.p_pred, &self.h, 0.0, &mut self.pht);
-        self.s.copy_from(&self.r);
-        dense::mul_nn(1.0, &self.h, &self.pht, 1.0, &mut self.s);
-        if !dense::cholesky_in_place(&mut self.s) {
-            return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
-        }
-        self.k.copy_from(&self.pht);
-        dense::solve_right_lower_t(&mut self.k, &self.s);
-        dense::solve_right_lower(&mut self.k, &self.s);
-        // Update (10).
+        // Gain (9), update (10), covariance (11) in Joseph form.
         self.innov.copy_from(y);
         self.innov -= &self.y_pred;
-        self.x_new.copy_from(&self.x_pred);
-        dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
-        // Covariance (11), Joseph form.
-        dense::i_minus_lc(&self.k, &self.h, &mut self.ikh);
-        dense::mul_nn(1.0, &self.ikh, &self.p_pred, 0.0, &mut self.tmp);
-        dense::mul_nt(1.0, &self.tmp, &self.ikh, 0.0, &mut self.p_new);
-        dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
-        dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
-        dense::symmetrize(&mut self.p_new);
-        if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
-        }
-        std::mem::swap(&mut self.est.mean, &mut self.x_new);
-        std::mem::swap(&mut self.est.covariance, &mut self.p_new);
-        for i in 0..self.n {
-            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
-        }
+        self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov)?;
+        self.upd.commit(&mut self.est);
         Ok(&self.est)
     }
 }

@@ -43,15 +43,88 @@ pub struct KalmanFilter {
     x_pred: DVector<f64>,
     p_pred: DMatrix<f64>,
     ap: DMatrix<f64>,
-    pct: DMatrix<f64>,
-    s: DMatrix<f64>,
-    k: DMatrix<f64>,
-    ikc: DMatrix<f64>,
-    tmp: DMatrix<f64>,
-    kr: DMatrix<f64>,
     innov: DVector<f64>,
+    upd: GaussianUpdate,
+}
+
+/// The measurement update shared by the Kalman and the extended Kalman filter, with its buffers:
+///
+/// ```text
+/// S = H P⁻ Hᵀ + R = G Gᵀ,   K = P⁻ Hᵀ S⁻¹  (two triangular solves with G)
+/// x⁺ = x⁻ + K ν,            P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ   (Joseph form)
+/// ```
+///
+/// for an innovation `ν` computed by the caller (`y − C x⁻` or `y − h(x⁻)`). Allocation-free.
+#[derive(Debug, Clone)]
+pub(crate) struct GaussianUpdate {
+    pht: DMatrix<f64>,
+    /// `S`, then its factor; also `m × m` scratch for the noise setters.
+    pub(crate) s: DMatrix<f64>,
+    k: DMatrix<f64>,
+    ikh: DMatrix<f64>,
+    /// `n × n` scratch, also for the noise setters.
+    pub(crate) tmp: DMatrix<f64>,
+    kr: DMatrix<f64>,
     x_new: DVector<f64>,
     p_new: DMatrix<f64>,
+}
+
+impl GaussianUpdate {
+    /// Buffers for `n` states and `m` outputs.
+    pub(crate) fn new(n: usize, m: usize) -> Self {
+        Self {
+            pht: DMatrix::zeros(n, m),
+            s: DMatrix::zeros(m, m),
+            k: DMatrix::zeros(n, m),
+            ikh: DMatrix::zeros(n, n),
+            tmp: DMatrix::zeros(n, n),
+            kr: DMatrix::zeros(n, m),
+            x_new: DVector::zeros(n),
+            p_new: DMatrix::zeros(n, n),
+        }
+    }
+
+    /// Computes `x⁺`, `P⁺` from `x⁻`, `P⁻`, `H`, `R` and `ν` into the buffers; nothing else
+    /// changes, so a failure leaves the filter as it was.
+    pub(crate) fn compute(
+        &mut self,
+        x_pred: &DVector<f64>,
+        p_pred: &DMatrix<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+        innov: &DVector<f64>,
+    ) -> Result<(), EstimatorError> {
+        dense::mul_nt(1.0, p_pred, h, 0.0, &mut self.pht);
+        self.s.copy_from(r);
+        dense::mul_nn(1.0, h, &self.pht, 1.0, &mut self.s);
+        if !dense::cholesky_in_place(&mut self.s) {
+            return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
+        }
+        self.k.copy_from(&self.pht);
+        dense::solve_right_lower_t(&mut self.k, &self.s);
+        dense::solve_right_lower(&mut self.k, &self.s);
+        self.x_new.copy_from(x_pred);
+        dense::gemv(1.0, &self.k, innov, 1.0, &mut self.x_new);
+        dense::i_minus_lc(&self.k, h, &mut self.ikh);
+        dense::mul_nn(1.0, &self.ikh, p_pred, 0.0, &mut self.tmp);
+        dense::mul_nt(1.0, &self.tmp, &self.ikh, 0.0, &mut self.p_new);
+        dense::mul_nn(1.0, &self.k, r, 0.0, &mut self.kr);
+        dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
+        dense::symmetrize(&mut self.p_new);
+        if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
+        }
+        Ok(())
+    }
+
+    /// Publishes the computed `x⁺`, `P⁺` into `est` (swaps buffers).
+    pub(crate) fn commit(&mut self, est: &mut GaussianEstimate) {
+        std::mem::swap(&mut est.mean, &mut self.x_new);
+        std::mem::swap(&mut est.covariance, &mut self.p_new);
+        for i in 0..est.mean.len() {
+            est.std_dev[i] = est.covariance[(i, i)].max(0.0).sqrt();
+        }
+    }
 }
 
 impl KalmanFilter {
@@ -76,15 +149,8 @@ impl KalmanFilter {
             x_pred: DVector::zeros(n),
             p_pred: DMatrix::zeros(n, n),
             ap: DMatrix::zeros(n, n),
-            pct: DMatrix::zeros(n, m),
-            s: DMatrix::zeros(m, m),
-            k: DMatrix::zeros(n, m),
-            ikc: DMatrix::zeros(n, n),
-            tmp: DMatrix::zeros(n, n),
-            kr: DMatrix::zeros(n, m),
             innov: DVector::zeros(m),
-            x_new: DVector::zeros(n),
-            p_new: DMatrix::zeros(n, n),
+            upd: GaussianUpdate::new(n, m),
         })
     }
 
@@ -111,7 +177,7 @@ impl KalmanFilter {
     /// Replaces both noise matrices in place (each validated first; if either is rejected
     /// nothing changes; no allocation).
     pub fn set_noise(&mut self, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.s)?;
+        crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.upd.s)?;
         self.set_process_noise(q)?;
         self.set_measurement_noise(r)
     }
@@ -119,13 +185,13 @@ impl KalmanFilter {
     /// Replaces the process-noise covariance `Q` in place (symmetric positive definite, `n × n`;
     /// no allocation; unchanged on error).
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::replace_spd("Q", &mut self.q, q, &mut self.tmp)
+        crate::validate::replace_spd("Q", &mut self.q, q, &mut self.upd.tmp)
     }
 
     /// Replaces the measurement-noise covariance `R` in place (symmetric positive definite, `m × m`;
     /// no allocation; unchanged on error).
     pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::replace_spd("R", &mut self.r, r, &mut self.s)
+        crate::validate::replace_spd("R", &mut self.r, r, &mut self.upd.s)
     }
 
     /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
@@ -147,36 +213,11 @@ impl KalmanFilter {
         self.p_pred.copy_from(&self.q);
         dense::mul_nt(1.0, &self.ap, a, 1.0, &mut self.p_pred);
         dense::symmetrize(&mut self.p_pred);
-        // Gain K = P⁻Cᵀ S⁻¹, S = C P⁻ Cᵀ + R.
-        dense::mul_nt(1.0, &self.p_pred, c, 0.0, &mut self.pct);
-        self.s.copy_from(&self.r);
-        dense::mul_nn(1.0, c, &self.pct, 1.0, &mut self.s);
-        if !dense::cholesky_in_place(&mut self.s) {
-            return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
-        }
-        self.k.copy_from(&self.pct);
-        dense::solve_right_lower_t(&mut self.k, &self.s);
-        dense::solve_right_lower(&mut self.k, &self.s);
-        // Mean.
+        // Gain, mean and Joseph-form covariance.
         self.innov.copy_from(y);
         dense::gemv(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
-        self.x_new.copy_from(&self.x_pred);
-        dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
-        // Joseph form.
-        dense::i_minus_lc(&self.k, c, &mut self.ikc);
-        dense::mul_nn(1.0, &self.ikc, &self.p_pred, 0.0, &mut self.tmp);
-        dense::mul_nt(1.0, &self.tmp, &self.ikc, 0.0, &mut self.p_new);
-        dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
-        dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
-        dense::symmetrize(&mut self.p_new);
-        if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
-        }
-        std::mem::swap(&mut self.est.mean, &mut self.x_new);
-        std::mem::swap(&mut self.est.covariance, &mut self.p_new);
-        for i in 0..self.n {
-            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
-        }
+        self.upd.compute(&self.x_pred, &self.p_pred, c, &self.r, &self.innov)?;
+        self.upd.commit(&mut self.est);
         Ok(&self.est)
     }
 }

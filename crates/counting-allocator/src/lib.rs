@@ -1,0 +1,94 @@
+//! A global allocator that forwards to the system allocator and counts the allocations
+//! (`alloc`, `alloc_zeroed`, `realloc`) made by the current thread while [`count`] runs: the
+//! workspace's tests that hot paths (a filter step, an SDP solve) allocate nothing after setup.
+//!
+//! ```ignore
+//! #[global_allocator]
+//! static GLOBAL: counting_allocator::Counting = counting_allocator::Counting;
+//!
+//! let (result, allocations) = counting_allocator::count(|| filter.step(&model, &u, &y));
+//! assert_eq!(allocations, 0);
+//! ```
+//!
+//! Only allocations of the calling thread inside [`count`] are counted, so other test threads
+//! do not disturb a measurement.
+#![allow(unsafe_code)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The counting allocator; install it with `#[global_allocator]` in a test binary.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+
+fn note() {
+    // `try_with`: the thread-local may be gone while a thread shuts down.
+    if COUNTING.try_with(|c| c.get()).unwrap_or(false) {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note();
+        // SAFETY: same contract as ours.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as ours.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note();
+        // SAFETY: same contract as ours.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note();
+        // SAFETY: same contract as ours.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+/// Runs `f` and returns its result with the number of allocations the current thread made
+/// meanwhile (0 unless [`Counting`] is the global allocator).
+pub fn count<R>(f: impl FnOnce() -> R) -> (R, usize) {
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    COUNTING.with(|c| c.set(true));
+    let r = f();
+    COUNTING.with(|c| c.set(false));
+    (r, ALLOCATIONS.load(Ordering::Relaxed) - before)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[global_allocator]
+    static GLOBAL: Counting = Counting;
+
+    #[test]
+    fn counts_this_threads_allocations_only_inside_count() {
+        let (v, n) = count(|| vec![1u8; 100]);
+        assert_eq!(n, 1);
+        let (_, n) = count(|| {
+            let mut w = Vec::with_capacity(1);
+            w.extend_from_slice(&v);
+            w
+        });
+        assert_eq!(n, 2, "allocation and one growth");
+        let (x, n) = count(|| v.iter().map(|&b| u32::from(b)).sum::<u32>());
+        assert_eq!((x, n), (100, 0));
+        // Another thread's allocations are not counted.
+        let (_, n) = count(|| std::thread::scope(|s| s.spawn(|| vec![0u8; 10].len()).join().unwrap_or(0)));
+        assert!(n <= 4, "spawning allocates on this thread; the vector does not ({n})");
+    }
+}
