@@ -29,7 +29,6 @@ use nalgebra::{DMatrix, DVector};
 
 use lmi::LmiError;
 use lmi::SdpProblem;
-use lmi::builder::{AffineMatrix, LmiBuilder, Var, VariableMap};
 
 /// The data of one filter step.
 #[derive(Debug, Clone, Copy)]
@@ -69,8 +68,6 @@ pub struct FilterSdp {
     n: usize,
     m: usize,
     problem: SdpProblem,
-    map: VariableMap,
-    vars: FilterVars,
     ws: Workspace,
 }
 
@@ -167,14 +164,6 @@ fn spd_inverse(l: &DMatrix<f64>, inv: &mut DMatrix<f64>) {
     }
 }
 
-#[derive(Debug, Clone, Copy)]
-struct FilterVars {
-    p: Var,
-    l: Var,
-    g: Var,
-    tau: [Var; 3],
-}
-
 fn check_dims(d: &FilterSdpData<'_>) -> Result<(usize, usize), LmiError> {
     let n = d.a.nrows();
     let m = d.c.nrows();
@@ -204,73 +193,16 @@ fn check_dims(d: &FilterSdpData<'_>) -> Result<(usize, usize), LmiError> {
     Ok((n, m))
 }
 
-/// Cholesky factor of a symmetric positive definite matrix (symmetry within `1e-10` relative).
-fn spd_factor(m: &DMatrix<f64>, name: &'static str) -> Result<nalgebra::Cholesky<f64, nalgebra::Dyn>, LmiError> {
-    let scale = m.amax().max(f64::MIN_POSITIVE);
-    if (m - m.transpose()).amax() > 1e-10 * scale {
-        return Err(LmiError::NotPositiveDefinite(name));
-    }
-    let sym = (m + m.transpose()) * 0.5;
-    nalgebra::Cholesky::new(sym).ok_or(LmiError::NotPositiveDefinite(name))
-}
-
-/// Builds (28)/(29) with the builder; the same code path is used at setup and at each update,
-/// with structural zeros kept so that the structure depends on `(n, m)` only.
-fn build(d: &FilterSdpData<'_>) -> Result<(SdpProblem, VariableMap, FilterVars), LmiError> {
-    let (n, m) = check_dims(d)?;
-    let e = spd_factor(d.p, "P")?.l();
-    let q_inv = spd_factor(d.q, "Q")?.inverse();
-    let r_inv = spd_factor(d.r, "R")?.inverse();
-    let mut b = LmiBuilder::new().keep_structural_zeros(true);
-    let p = b.symmetric("P", n)?;
-    let l = b.matrix("L", n, m)?; // m outputs
-    let g = b.matrix("g", n, 1)?;
-    let tau = [b.scalar("tau1")?, b.scalar("tau2")?, b.scalar("tau3")?];
-    let pm = b.matrix_expr(p)?;
-    let lm = b.matrix_expr(l)?;
-    let gm = b.matrix_expr(g)?;
-    let t = [b.expr(tau[0])?, b.expr(tau[1])?, b.expr(tau[2])?];
-
-    let ae = d.a * &e;
-    // (19): Π = [g, (I − LC) A E, (I − LC), −L]
-    let col_z = AffineMatrix::constant(&ae).sub(&lm.mul_right(&(d.c * &ae))?)?;
-    let col_w = AffineMatrix::constant(&DMatrix::identity(n, n)).sub(&lm.mul_right(d.c)?)?;
-    let col_v = lm.scale(-1.0);
-    let pi = AffineMatrix::block(&[&[&gm, &col_z, &col_w, &col_v]])?;
-    // (26): Θ(τ) = diag(1 − τ₁ − τ₂ − τ₃, τ₁ I, τ₂ Q⁻¹, τ₃ R⁻¹)
-    let one = DMatrix::from_element(1, 1, 1.0);
-    let theta0 = AffineMatrix::constant(&one).sub(&AffineMatrix::constant_times(&one, &t[0].add(&t[1]).add(&t[2])))?;
-    let theta = AffineMatrix::diag(&[
-        &theta0,
-        &AffineMatrix::constant_times(&DMatrix::identity(n, n), &t[0]),
-        &AffineMatrix::constant_times(&q_inv, &t[1]),
-        &AffineMatrix::constant_times(&r_inv, &t[2]),
-    ]);
-    // (28) as [[P, Π], [Πᵀ, Θ]] ⪰ 0, (29): minimise tr P.
-    b.psd(AffineMatrix::block(&[&[&pm, &pi], &[&pi.transpose(), &theta]])?)?;
-    b.minimize(pm.trace());
-    let (problem, map) = b.build()?;
-    Ok((problem, map, FilterVars { p, l, g, tau }))
-}
-
 impl FilterSdp {
     /// Builds (28)/(29) for the given data. Errors name a wrong dimension, a non-finite entry or
     /// a `Q`, `R`, `P` that is not symmetric positive definite.
     pub fn new(data: &FilterSdpData<'_>) -> Result<Self, LmiError> {
-        let (problem, map, vars) = build(data)?;
-        let (n, m) = (data.a.nrows(), data.c.nrows());
+        let (n, m) = check_dims(data)?;
+        let layout = Layout { n, m };
+        let problem = layout.structure()?;
         let ws = Workspace::new(n, m, problem.entries().len(), problem.num_vars());
-        let mut sdp = Self { n, m, problem, map, vars, ws };
-        // The closed-form writer must reproduce the builder's numbers (checked here once).
-        let built = sdp.problem.clone();
+        let mut sdp = Self { n, m, problem, ws };
         sdp.update(data)?;
-        debug_assert!(
-            built
-                .entries()
-                .iter()
-                .zip(sdp.problem.entries())
-                .all(|(a, b)| { (a.value - b.value).abs() <= 1e-12 * (1.0 + a.value.abs()) })
-        );
         Ok(sdp)
     }
 
@@ -345,28 +277,24 @@ impl FilterSdp {
                 found: l.ncols(),
             });
         }
+        let layout = Layout { n: self.n, m: self.m };
         for j in 0..self.m {
             for i in 0..self.n {
-                // tidy: invariant — (i, j) ranges over L's own shape.
-                l[(i, j)] = x[self.vars.l.scalar_index(i, j).expect("inside L")];
+                l[(i, j)] = x[layout.index(Var28::L(i, j))];
             }
         }
-        // tidy: invariant — τ₁, τ₂, τ₃ are scalar variables.
-        let t = |k: usize| x[self.vars.tau[k].scalar_index(0, 0).expect("scalar")];
+        let t = |k: usize| x[layout.index(Var28::Tau(k))];
         Ok([t(0), t(1), t(2)])
     }
 
     /// Reads `P_{k+1}`, `L`, `g`, `G x̂` and `τ` from a decision vector `x` (allocates).
     pub fn read(&self, x: &[f64], data: &FilterSdpData<'_>) -> Result<FilterSdpSolution, LmiError> {
         check_dims(data)?;
-        let p_next = self.map.matrix(x, self.vars.p)?;
-        let l = self.map.matrix(x, self.vars.l)?;
-        let g = DVector::from_column_slice(self.map.matrix(x, self.vars.g)?.as_slice());
-        let tau = [
-            self.map.scalar(x, self.vars.tau[0])?,
-            self.map.scalar(x, self.vars.tau[1])?,
-            self.map.scalar(x, self.vars.tau[2])?,
-        ];
+        let mut l = DMatrix::zeros(self.n, self.m);
+        let tau = self.read_gain(x, &mut l)?;
+        let layout = Layout { n: self.n, m: self.m };
+        let p_next = DMatrix::from_fn(self.n, self.n, |i, j| x[layout.index(Var28::P(i.min(j), i.max(j)))]);
+        let g = DVector::from_fn(self.n, |i, _| x[layout.index(Var28::G(i))]);
         let k = DMatrix::identity(self.n, self.n) - &l * data.c;
         let g_x_hat = &k * (data.a * data.x_hat) - &g;
         Ok(FilterSdpSolution { p_next, l, g, g_x_hat, tau })
@@ -400,6 +328,50 @@ struct Layout {
 }
 
 impl Layout {
+    /// Scalar unknowns: `P` (packed upper triangle), `L`, `g`, `τ`.
+    fn num_vars(&self) -> usize {
+        self.n * (self.n + 1) / 2 + self.n * self.m + self.n + 3
+    }
+
+    /// Order of the block `[[P, Π], [Πᵀ, Θ]]`.
+    fn order(&self) -> usize {
+        3 * self.n + 1 + self.m
+    }
+
+    /// The index of an unknown (the inverse of [`Layout::var`]).
+    fn index(&self, v: Var28) -> usize {
+        let np = self.n * (self.n + 1) / 2;
+        let nl = self.n * self.m;
+        match v {
+            Var28::P(i, j) => j * (j + 1) / 2 + i,
+            Var28::L(i, j) => np + j * self.n + i,
+            Var28::G(i) => np + nl + i,
+            Var28::Tau(t) => np + nl + self.n + t,
+        }
+    }
+
+    /// The structure of (28)/(29) for `(n, m)`: every entry that can be non-zero for some data
+    /// (found by evaluating [`Layout::value`] with all data entries 1, so no cancellation hides
+    /// one), values to be set by [`FilterSdp::update`].
+    fn structure(&self) -> Result<SdpProblem, LmiError> {
+        let (n, m) = (self.n, self.m);
+        let ones = |r: usize, c: usize| DMatrix::from_element(r, c, 1.0);
+        let (ae, cae, c, q_inv, r_inv) = (ones(n, n), ones(m, n), ones(m, n), ones(n, n), ones(m, m));
+        let src = Sources { ae: &ae, cae: &cae, c: &c, q_inv: &q_inv, r_inv: &r_inv };
+        let mut entries = Vec::new();
+        for mat in 0..=self.num_vars() {
+            for col in 0..self.order() {
+                for row in 0..=col {
+                    let value = self.value(mat, row, col, &src);
+                    if value != 0.0 {
+                        entries.push(lmi::Entry { mat, block: 0, row, col, value });
+                    }
+                }
+            }
+        }
+        SdpProblem::new(vec![lmi::Block::Psd(self.order())], vec![0.0; self.num_vars()], entries)
+    }
+
     fn var(&self, k: usize) -> Var28 {
         let np = self.n * (self.n + 1) / 2;
         let nl = self.n * self.m;
@@ -420,7 +392,10 @@ impl Layout {
     }
 
     /// The SDPA value of entry `(row, col)` (`row ≤ col`) of matrix `mat`: `−(constant)` for
-    /// `F₀`, the coefficient of the unknown `mat − 1` otherwise. Mirrors `build` term by term.
+    /// `F₀`, the coefficient of the unknown `mat − 1` otherwise. This is the one statement of
+    /// (28) in the library: (19) `Π = [g, (I − LC) A E, (I − LC), −L]` and (26)
+    /// `Θ(τ) = diag(1 − τ₁ − τ₂ − τ₃, τ₁ I, τ₂ Q⁻¹, τ₃ R⁻¹)` in `[[P, Π], [Πᵀ, Θ]] ⪰ 0`; the
+    /// tests check it against an independent statement with the `lmi` builder.
     fn value(&self, mat: usize, row: usize, col: usize, ws: &Sources<'_>) -> f64 {
         let n = self.n;
         // Π's column blocks, relative to column n: g (0), z (1..=n), w (n+1..=2n), v (2n+1..).
@@ -484,6 +459,57 @@ impl Layout {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lmi::builder::{AffineMatrix, LmiBuilder};
+
+    /// Cholesky factor of a symmetric positive definite matrix (symmetry within `1e-10` relative).
+    fn spd_factor(m: &DMatrix<f64>, name: &'static str) -> Result<nalgebra::Cholesky<f64, nalgebra::Dyn>, LmiError> {
+        let scale = m.amax().max(f64::MIN_POSITIVE);
+        if (m - m.transpose()).amax() > 1e-10 * scale {
+            return Err(LmiError::NotPositiveDefinite(name));
+        }
+        let sym = (m + m.transpose()) * 0.5;
+        nalgebra::Cholesky::new(sym).ok_or(LmiError::NotPositiveDefinite(name))
+    }
+
+    /// The independent reference: (28)/(29) stated with the `lmi` builder, term by term as in the
+    /// paper.
+    fn build(d: &FilterSdpData<'_>) -> Result<SdpProblem, LmiError> {
+        let (n, m) = check_dims(d)?;
+        let e = spd_factor(d.p, "P")?.l();
+        let q_inv = spd_factor(d.q, "Q")?.inverse();
+        let r_inv = spd_factor(d.r, "R")?.inverse();
+        let mut b = LmiBuilder::new().keep_structural_zeros(true);
+        let p = b.symmetric("P", n)?;
+        let l = b.matrix("L", n, m)?; // m outputs
+        let g = b.matrix("g", n, 1)?;
+        let tau = [b.scalar("tau1")?, b.scalar("tau2")?, b.scalar("tau3")?];
+        let pm = b.matrix_expr(p)?;
+        let lm = b.matrix_expr(l)?;
+        let gm = b.matrix_expr(g)?;
+        let t = [b.expr(tau[0])?, b.expr(tau[1])?, b.expr(tau[2])?];
+
+        let ae = d.a * &e;
+        // (19): Π = [g, (I − LC) A E, (I − LC), −L]
+        let col_z = AffineMatrix::constant(&ae).sub(&lm.mul_right(&(d.c * &ae))?)?;
+        let col_w = AffineMatrix::constant(&DMatrix::identity(n, n)).sub(&lm.mul_right(d.c)?)?;
+        let col_v = lm.scale(-1.0);
+        let pi = AffineMatrix::block(&[&[&gm, &col_z, &col_w, &col_v]])?;
+        // (26): Θ(τ) = diag(1 − τ₁ − τ₂ − τ₃, τ₁ I, τ₂ Q⁻¹, τ₃ R⁻¹)
+        let one = DMatrix::from_element(1, 1, 1.0);
+        let theta0 =
+            AffineMatrix::constant(&one).sub(&AffineMatrix::constant_times(&one, &t[0].add(&t[1]).add(&t[2])))?;
+        let theta = AffineMatrix::diag(&[
+            &theta0,
+            &AffineMatrix::constant_times(&DMatrix::identity(n, n), &t[0]),
+            &AffineMatrix::constant_times(&q_inv, &t[1]),
+            &AffineMatrix::constant_times(&r_inv, &t[2]),
+        ]);
+        // (28) as [[P, Π], [Πᵀ, Θ]] ⪰ 0, (29): minimise tr P.
+        b.psd(AffineMatrix::block(&[&[&pm, &pi], &[&pi.transpose(), &theta]])?)?;
+        b.minimize(pm.trace());
+        let (problem, _) = b.build()?;
+        Ok(problem)
+    }
 
     type Case = (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DVector<f64>);
 
@@ -552,15 +578,20 @@ mod tests {
             let (q, r, p) = (spd(n, &mut rnd), spd(m, &mut rnd), spd(n, &mut rnd));
             let x = DVector::from_fn(n, |_, _| rnd());
             let d = FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x };
-            let (reference, _, _) = build(&d).unwrap();
+            let reference = build(&d).unwrap();
             // Build for other data first, then update to `d`.
             let a0 = DMatrix::identity(n, n);
             let mut sdp = FilterSdp::new(&FilterSdpData { a: &a0, ..d }).unwrap();
             sdp.update(&d).unwrap();
-            assert!(sdp.problem().same_structure(&reference));
             assert_eq!(sdp.problem().c(), reference.c());
-            for (x, y) in sdp.problem().entries().iter().zip(reference.entries()) {
-                assert!((x.value - y.value).abs() <= 1e-12 * (1.0 + y.value.abs()), "n {n} m {m}: {x:?} vs {y:?}");
+            assert_eq!(sdp.problem().blocks(), reference.blocks());
+            // Same LMI: equal slack matrices F(x) = Σ xᵢFᵢ − F₀ at random points (which also
+            // fixes every Fᵢ, i.e. the variable order).
+            for _ in 0..5 {
+                let x: Vec<f64> = (0..reference.num_vars()).map(|_| rnd()).collect();
+                let (s1, s2) = (sdp.problem().slack(&x).unwrap(), reference.slack(&x).unwrap());
+                let diff = (&s1[0] - &s2[0]).amax();
+                assert!(diff <= 1e-12 * (1.0 + s2[0].amax()), "n {n} m {m}: {diff:e}");
             }
         }
     }
