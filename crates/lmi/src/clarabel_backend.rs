@@ -9,7 +9,25 @@
 //! [`SdpBackend::setup`] builds the sparse pattern of `A` once, with presolve, chordal
 //! decomposition and zero-dropping off so that later solves only overwrite values
 //! (`update_A`, `update_b`, `update_q`). Clarabel allocates inside its own solve.
+//!
+//! **Scaling.** The values handed to Clarabel are those of the problem scaled as described under
+//! "Equilibration" in [`SolverSettings`] (Clarabel's own equilibration then works on a problem of
+//! moderate size); `x`, `Y` and the objectives are mapped back to the caller's problem.
+//!
+//! **Memory.** `setup` first estimates what Clarabel will need, dominated per PSD block of order
+//! `n` by its dense `s × s` block (`s = n(n+1)/2`) in the scaling matrix, the KKT matrix and its
+//! factor (about `24 s²` bytes), and returns [`LmiError::MemoryLimit`] beyond
+//! [`SolverSettings::memory_limit_bytes`].
+//!
+//! **Panics.** Clarabel 0.11 panics on some inputs (`"Eigval error"`, `"SVD error"` from LAPACK
+//! in its PSD cone when an iterate is no longer finite). Setup and solve run under
+//! [`std::panic::catch_unwind`]: a panic in `setup` is [`LmiError::BackendPanic`]; a panic in
+//! `solve` ends that solve with [`SolveStatus::NumericalTrouble`] (the message is kept, see
+//! [`ClarabelBackend::last_panic`]) and the next solve rebuilds Clarabel's solver from the stored
+//! structure, since the panicked one may be inconsistent. The default panic hook still prints the
+//! message to standard error (silencing it would change process-wide state).
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::Instant;
 
 use clarabel::algebra::CscMatrix;
@@ -18,8 +36,9 @@ use clarabel::solver::{
     SupportedConeT,
 };
 
-use crate::error::LmiError;
+use crate::error::{LmiError, saturate_bytes};
 use crate::problem::{Block, SdpProblem};
+use crate::scaling::Equilibration;
 use crate::solver::{SdpBackend, SdpSolution, SolveStatus, SolverSettings};
 use crate::svec::{smat_into, svec_index, svec_len, svec_scale};
 
@@ -34,10 +53,21 @@ enum Slot {
     A(usize, f64),
 }
 
-/// Clarabel as an [`SdpBackend`].
+/// Clarabel as an [`SdpBackend`] (see the [module documentation](self)).
 pub struct ClarabelBackend {
     settings: SolverSettings,
     state: Option<State>,
+    last_panic: Option<String>,
+}
+
+impl std::fmt::Debug for ClarabelBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ClarabelBackend")
+            .field("settings", &self.settings)
+            .field("set_up", &self.state.is_some())
+            .field("last_panic", &self.last_panic)
+            .finish_non_exhaustive()
+    }
 }
 
 struct State {
@@ -45,15 +75,62 @@ struct State {
     slots: Vec<Slot>,
     a_values: Vec<f64>,
     b: Vec<f64>,
+    q: Vec<f64>,
     row_offsets: Vec<usize>,
-    solver: DefaultSolver<f64>,
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    cones: Vec<SupportedConeT<f64>>,
+    /// `None` after a panic inside Clarabel: the next solve builds a new solver.
+    solver: Option<DefaultSolver<f64>>,
+}
+
+/// Runs `f`, containing a panic: `Err` holds the panic message. The default hook has already
+/// printed it to standard error.
+pub(crate) fn contain<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(|payload| {
+        if let Some(s) = payload.downcast_ref::<&str>() {
+            (*s).to_owned()
+        } else if let Some(s) = payload.downcast_ref::<String>() {
+            s.clone()
+        } else {
+            "panic with a non-string payload".to_owned()
+        }
+    })
+}
+
+/// Bytes Clarabel needs for `problem`, estimated from its sizes (and the solution's): per PSD
+/// block with `s = n(n+1)/2`, the dense `s × s` block of the NT scaling (`8 s²`) and its upper
+/// triangle in the KKT matrix and in the factor (values and row indices, `2 · 16 s²/2`); per
+/// nonzero of `A` its copies in `A`, the KKT matrix and the factor; about twenty vectors of the
+/// KKT dimension.
+pub(crate) fn required_bytes(problem: &SdpProblem) -> u64 {
+    let mut dense: u128 = 0;
+    let mut rows: u128 = 0;
+    for blk in problem.blocks() {
+        let s = match *blk {
+            Block::Psd(n) => svec_len(n) as u128,
+            Block::Nonneg(n) => n as u128,
+        };
+        rows += s;
+        if matches!(blk, Block::Psd(_)) {
+            dense += 24 * s * s;
+        }
+    }
+    let nnz = problem.entries().len() as u128;
+    let vectors = 8 * 20 * (rows + problem.num_vars() as u128);
+    saturate_bytes(dense + 3 * 16 * nnz + vectors + u128::from(SdpSolution::required_bytes(problem)))
 }
 
 impl ClarabelBackend {
     /// A backend with validated settings.
     pub fn new(settings: SolverSettings) -> Result<Self, LmiError> {
         settings.validate()?;
-        Ok(Self { settings, state: None })
+        Ok(Self { settings, state: None, last_panic: None })
+    }
+
+    /// The message of the last panic contained in `setup` or `solve`, if any.
+    pub fn last_panic(&self) -> Option<&str> {
+        self.last_panic.as_deref()
     }
 
     fn clarabel_settings(&self) -> Result<DefaultSettings<f64>, LmiError> {
@@ -80,15 +157,36 @@ impl ClarabelBackend {
             .map_err(|e| LmiError::Backend { backend: NAME, message: format!("settings: {e:?}") })
     }
 
-    /// Writes the problem's values into `a_values`, `b`, `q`.
-    fn fill(slots: &[Slot], problem: &SdpProblem, a_values: &mut [f64], b: &mut [f64]) {
+    /// Writes the problem's values, scaled by `scale`, into `a_values`, `b`, `q`.
+    fn fill(
+        slots: &[Slot],
+        problem: &SdpProblem,
+        scale: &Equilibration,
+        a_values: &mut [f64],
+        b: &mut [f64],
+        q: &mut [f64],
+    ) {
         b.iter_mut().for_each(|v| *v = 0.0);
         for (slot, e) in slots.iter().zip(problem.entries()) {
             match *slot {
-                Slot::B(i, f) => b[i] = f * e.value,
-                Slot::A(k, f) => a_values[k] = f * e.value,
+                Slot::B(i, f) => b[i] = f * scale.entry(e),
+                Slot::A(k, f) => a_values[k] = f * scale.entry(e),
             }
         }
+        for (q, &c) in q.iter_mut().zip(problem.c()) {
+            *q = scale.cost(c);
+        }
+    }
+
+    /// A Clarabel solver for the state's pattern and current values; a panic is contained.
+    fn build(&self, st: &State) -> Result<DefaultSolver<f64>, LmiError> {
+        let nvars = st.q.len();
+        let a = CscMatrix::new(st.b.len(), nvars, st.colptr.clone(), st.rowval.clone(), st.a_values.clone());
+        let p = CscMatrix::<f64>::zeros((nvars, nvars));
+        let settings = self.clarabel_settings()?;
+        contain(|| DefaultSolver::new(&p, &st.q, &a, &st.b, &st.cones, settings))
+            .map_err(|message| LmiError::BackendPanic { backend: NAME, message })?
+            .map_err(|e| LmiError::Backend { backend: NAME, message: format!("setup: {e:?}") })
     }
 }
 
@@ -115,6 +213,15 @@ impl SdpBackend for ClarabelBackend {
     }
 
     fn setup(&mut self, problem: &SdpProblem) -> Result<(), LmiError> {
+        self.state = None;
+        let required = required_bytes(problem);
+        if required > self.settings.memory_limit_bytes {
+            return Err(LmiError::MemoryLimit {
+                backend: NAME,
+                required_bytes: required,
+                limit_bytes: self.settings.memory_limit_bytes,
+            });
+        }
         let mut row_offsets = Vec::with_capacity(problem.blocks().len() + 1);
         let mut rows = 0;
         let mut cones: Vec<SupportedConeT<f64>> = Vec::with_capacity(problem.blocks().len());
@@ -154,21 +261,42 @@ impl SdpBackend for ClarabelBackend {
         for j in 0..nvars {
             colptr[j + 1] += colptr[j];
         }
-        let mut a_values = vec![0.0; rowval.len()];
-        let mut b = vec![0.0; rows];
-        Self::fill(&slots, problem, &mut a_values, &mut b);
-        let a = CscMatrix::new(rows, nvars, colptr, rowval, a_values.clone());
-        let p = CscMatrix::<f64>::zeros((nvars, nvars));
-        let solver = DefaultSolver::new(&p, problem.c(), &a, &b, &cones, self.clarabel_settings()?)
-            .map_err(|e| LmiError::Backend { backend: NAME, message: format!("setup: {e:?}") })?;
-        self.state = Some(State { structure: problem.clone(), slots, a_values, b, row_offsets, solver });
+        let mut st = State {
+            structure: problem.clone(),
+            a_values: vec![0.0; rowval.len()],
+            b: vec![0.0; rows],
+            q: vec![0.0; nvars],
+            slots,
+            row_offsets,
+            colptr,
+            rowval,
+            cones,
+            solver: None,
+        };
+        let scale = Equilibration::compute(problem, self.settings.equilibrate);
+        Self::fill(&st.slots, problem, &scale, &mut st.a_values, &mut st.b, &mut st.q);
+        let solver = self.build(&st).inspect_err(|e| {
+            if let LmiError::BackendPanic { message, .. } = e {
+                self.last_panic = Some(message.clone());
+            }
+        })?;
+        st.solver = Some(solver);
+        self.state = Some(st);
         Ok(())
     }
 
     fn solve(&mut self, problem: &SdpProblem, solution: &mut SdpSolution) -> Result<(), LmiError> {
-        let Some(st) = self.state.as_mut() else {
+        let Some(mut st) = self.state.take() else {
             return Err(LmiError::StructureMismatch("solve called before setup".into()));
         };
+        let result = self.solve_with(&mut st, problem, solution);
+        self.state = Some(st);
+        result
+    }
+}
+
+impl ClarabelBackend {
+    fn solve_with(&mut self, st: &mut State, problem: &SdpProblem, solution: &mut SdpSolution) -> Result<(), LmiError> {
         if !st.structure.same_structure(problem) {
             return Err(LmiError::StructureMismatch("problem differs from the one given to setup".into()));
         }
@@ -176,13 +304,33 @@ impl SdpBackend for ClarabelBackend {
             return Err(LmiError::StructureMismatch("solution is not sized for this problem".into()));
         }
         let start = Instant::now();
-        Self::fill(&st.slots, problem, &mut st.a_values, &mut st.b);
-        let upd = |e| LmiError::Backend { backend: NAME, message: format!("data update: {e:?}") };
-        st.solver.update_A(&st.a_values).map_err(upd)?;
-        st.solver.update_b(&st.b).map_err(upd)?;
-        st.solver.update_q(&problem.c().to_vec()).map_err(upd)?;
-        st.solver.solve();
-        let sol = &st.solver.solution;
+        let scale = Equilibration::compute(problem, self.settings.equilibrate);
+        Self::fill(&st.slots, problem, &scale, &mut st.a_values, &mut st.b, &mut st.q);
+        let solver = match st.solver.take() {
+            Some(mut solver) => {
+                let upd = |e| LmiError::Backend { backend: NAME, message: format!("data update: {e:?}") };
+                solver.update_A(&st.a_values).map_err(upd)?;
+                solver.update_b(&st.b).map_err(upd)?;
+                solver.update_q(&st.q).map_err(upd)?;
+                Ok(solver)
+            }
+            // The previous solve panicked: start from a fresh solver with the current values.
+            None => self.build(st),
+        };
+        let mut solver = match solver {
+            Ok(solver) => solver,
+            Err(LmiError::BackendPanic { message, .. }) => {
+                self.panicked(message, start, solution);
+                return Ok(());
+            }
+            Err(e) => return Err(e),
+        };
+        if let Err(message) = contain(|| solver.solve()) {
+            // The solver may be inconsistent: dropped, rebuilt by the next solve.
+            self.panicked(message, start, solution);
+            return Ok(());
+        }
+        let sol = &solver.solution;
         solution.status = map_status(sol.status);
         solution.x.copy_from_slice(&sol.x);
         for (b, blk) in problem.blocks().iter().enumerate() {
@@ -198,12 +346,65 @@ impl SdpBackend for ClarabelBackend {
                 }
             }
         }
-        solution.primal_objective = problem.c().iter().zip(&sol.x).map(|(c, x)| c * x).sum();
-        solution.dual_objective = -st.b.iter().zip(&sol.z).map(|(b, z)| b * z).sum::<f64>();
         solution.iterations = sol.iterations;
         solution.primal_residual = sol.r_prim;
         solution.dual_residual = sol.r_dual;
+        st.solver = Some(solver);
+        // Back to the caller's problem; objectives from its data.
+        scale.unscale(solution);
+        solution.primal_objective = problem.c().iter().zip(&solution.x).map(|(c, x)| c * x).sum();
+        solution.dual_objective = f0_trace(problem, &solution.dual);
         solution.solve_time = start.elapsed();
         Ok(())
+    }
+
+    /// Records a contained panic of Clarabel's solve as the outcome of this solve.
+    fn panicked(&mut self, message: String, start: Instant, solution: &mut SdpSolution) {
+        if self.settings.verbose {
+            eprintln!("clarabel: panic contained: {message}");
+        }
+        self.last_panic = Some(message);
+        solution.status = SolveStatus::NumericalTrouble;
+        solution.x.fill(0.0);
+        solution.dual.iter_mut().for_each(|y| y.fill(0.0));
+        solution.primal_objective = f64::NAN;
+        solution.dual_objective = f64::NAN;
+        solution.iterations = 0;
+        solution.primal_residual = f64::NAN;
+        solution.dual_residual = f64::NAN;
+        solution.solve_time = start.elapsed();
+    }
+}
+
+/// `tr(F₀ Y)` over the entries of `F₀` (the first entries: they are sorted by matrix).
+fn f0_trace(problem: &SdpProblem, y: &[nalgebra::DMatrix<f64>]) -> f64 {
+    problem
+        .entries()
+        .iter()
+        .take_while(|e| e.mat == 0)
+        .map(|e| {
+            let yb = &y[e.block];
+            if e.row == e.col {
+                e.value * yb[(e.row, e.row)]
+            } else {
+                e.value * (yb[(e.row, e.col)] + yb[(e.col, e.row)])
+            }
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The containment wrapper turns a panic (with a `&str` or a `String` payload) into its
+    /// message and lets values through.
+    #[test]
+    fn contain_turns_panics_into_messages() {
+        assert_eq!(contain(|| 7), Ok(7));
+        assert_eq!(contain(|| -> u8 { panic!("Eigval error") }), Err("Eigval error".to_owned()));
+        let code = -4;
+        assert_eq!(contain(|| -> u8 { panic!("SVD error: SVD({code})") }), Err("SVD error: SVD(-4)".to_owned()));
+        assert!(contain(|| std::panic::panic_any(3u8)).unwrap_err().contains("non-string"));
     }
 }

@@ -12,6 +12,7 @@ pub mod error;
 pub mod ipm;
 pub mod problem;
 pub mod registry;
+mod scaling;
 pub mod sdpa;
 
 pub mod solver;
@@ -27,4 +28,4 @@ pub use ipm::FaerIpm;
 pub use problem::{Block, Entry, SdpProblem};
 pub use registry::{DEFAULT_BACKEND, backend_by_name, backend_names};
 pub use sdpa::{read_sdpa, read_sdpa_file, write_sdpa};
-pub use solver::{SdpBackend, SdpSolution, SolveStatus, SolverSettings, SolverSettingsBuilder};
+pub use solver::{DEFAULT_MEMORY_LIMIT, SdpBackend, SdpSolution, SolveStatus, SolverSettings, SolverSettingsBuilder};

@@ -46,6 +46,13 @@
 //!   over diagonal blocks, is at most [`MAX_TOTAL_ENTRIES`] (10⁷, i.e. 80 MB per dense copy; a
 //!   solver holds several). A single PSD block is therefore of order at most 4 471.
 //!
+//! Everything else the reader allocates (the coefficients, the block list, the entries and the
+//! table of positions seen) grows with the numbers actually present in the input. What a
+//! *solver* needs for the problem read (for example the `m²` Schur matrix of an interior-point
+//! method, 320 GB for a file of under a megabyte declaring m = 200 000) is not limited here:
+//! each backend checks it in `setup` against
+//! [`SolverSettings::memory_limit_bytes`](crate::SolverSettings::memory_limit_bytes).
+//!
 //! # Errors
 //!
 //! Malformed input gives [`LmiError::Sdpa`] with the 1-based line number where the problem was

@@ -31,7 +31,8 @@ pub enum SolveStatus {
     IterationLimit,
     /// The time limit was reached before convergence.
     TimeLimit,
-    /// The method stalled or broke down numerically (for example a factorisation failed).
+    /// The method stalled or broke down numerically (for example a factorisation failed, or a
+    /// third-party solver panicked and the backend contained the panic).
     NumericalTrouble,
 }
 
@@ -105,6 +106,13 @@ impl SdpSolution {
         }
     }
 
+    /// Bytes [`SdpSolution::new`] allocates for `problem` (`x` and a dense `n × n` matrix per
+    /// block), saturating; backends count it against [`SolverSettings::memory_limit_bytes`].
+    pub fn required_bytes(problem: &SdpProblem) -> u64 {
+        let dual: u128 = problem.blocks().iter().map(|b| (b.size() as u128) * (b.size() as u128)).sum();
+        crate::error::saturate_bytes(8 * (dual + problem.num_vars() as u128))
+    }
+
     /// Whether this solution is sized for `problem`.
     pub fn fits(&self, problem: &SdpProblem) -> bool {
         self.x.len() == problem.num_vars()
@@ -125,7 +133,25 @@ impl SdpSolution {
 
 /// Settings shared by all backends. Build with [`SolverSettings::builder`] (validated) or use
 /// [`SolverSettings::default`] (tolerances `1e-8`, as Clarabel's defaults; relaxed by
-/// `reduced_tol_factor` for the `Almost…` outcomes).
+/// `reduced_tol_factor` for the `Almost…` outcomes; equilibration on; memory limit
+/// [`DEFAULT_MEMORY_LIMIT`]).
+///
+/// # Equilibration
+///
+/// With `equilibrate` (the default) every backend solves a scaled copy of the problem and maps
+/// the answer back. Three factors, each a power of two (so the scaling is exact), are computed
+/// from the values of each solve: `d` for every `Fᵢ` (`i ≥ 1`), `s₀` for `F₀` and `s_c` for the
+/// objective, applied as `Fᵢ → d Fᵢ`, `F₀ → s₀ F₀`, `cᵢ → s_c d cᵢ`. Each brings the geometric
+/// mean of the magnitudes of its nonzero data to about 1; a factor within `2^±8` of 1 is not
+/// applied, so that moderately scaled problems (such as SDPLIB's and the filter's LMIs) are
+/// solved exactly as given. The answer maps back as `x = d x'/s₀`, `Y = Y'/s_c` and objectives
+/// divided by `s₀ s_c`; infeasibility certificates keep their normalisation (`Y = s₀ Y'`,
+/// `x = s_c d x'`). The tolerances, and hence the status, apply to the scaled problem, so a
+/// problem and a rescaling of its objective, of its constraint matrices or of all its data are
+/// judged alike; the residuals a backend reports are those of the scaled problem. (One factor
+/// per variable or per block is deliberately not used: the relative residuals are normalised by
+/// `‖x‖` and `‖Y‖`, and such factors would loosen the accuracy of well-scaled problems in their
+/// own units.)
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSettings {
     /// Maximum number of interior-point iterations.
@@ -144,7 +170,19 @@ pub struct SolverSettings {
     pub time_limit: Option<Duration>,
     /// Print iteration logs to standard error.
     pub verbose: bool,
+    /// Scale the problem before solving (exact power-of-two factors for `c`, the `Fᵢ` and `F₀`;
+    /// see [Equilibration](SolverSettings#equilibration)). On by default; turning it off judges
+    /// the tolerances in the units of the data, so badly scaled problems can end with wrong
+    /// statuses.
+    pub equilibrate: bool,
+    /// Largest amount of memory, in bytes, a backend may allocate for one problem (its setup
+    /// workspace and the solution). `setup` computes the requirement first and returns
+    /// [`LmiError::MemoryLimit`] instead of allocating beyond it.
+    pub memory_limit_bytes: u64,
 }
+
+/// Default of [`SolverSettings::memory_limit_bytes`]: 2 GiB.
+pub const DEFAULT_MEMORY_LIMIT: u64 = 2 << 30;
 
 impl Default for SolverSettings {
     fn default() -> Self {
@@ -157,6 +195,8 @@ impl Default for SolverSettings {
             reduced_tol_factor: 1e3,
             time_limit: None,
             verbose: false,
+            equilibrate: true,
+            memory_limit_bytes: DEFAULT_MEMORY_LIMIT,
         }
     }
 }
@@ -193,6 +233,9 @@ impl SolverSettings {
             if t.is_zero() {
                 return Err(LmiError::InvalidSetting { name: "time_limit", reason: "must be positive".into() });
             }
+        }
+        if self.memory_limit_bytes == 0 {
+            return Err(LmiError::InvalidSetting { name: "memory_limit_bytes", reason: "must be positive".into() });
         }
         Ok(())
     }
@@ -232,6 +275,17 @@ impl SolverSettingsBuilder {
         self.settings.verbose = verbose;
         self
     }
+    /// Whether to equilibrate the problem before solving (default `true`).
+    pub fn equilibrate(mut self, equilibrate: bool) -> Self {
+        self.settings.equilibrate = equilibrate;
+        self
+    }
+    /// Largest memory, in bytes, a backend may allocate for one problem (default
+    /// [`DEFAULT_MEMORY_LIMIT`]; must be positive).
+    pub fn memory_limit_bytes(mut self, bytes: u64) -> Self {
+        self.settings.memory_limit_bytes = bytes;
+        self
+    }
     /// Validates and returns the settings.
     pub fn build(self) -> Result<SolverSettings, LmiError> {
         self.settings.validate()?;
@@ -244,7 +298,11 @@ impl SolverSettingsBuilder {
 /// Implementations hold their settings and every buffer a solve needs. `setup` analyses the
 /// structure (sizes, which entries of which `Fᵢ` are nonzero); `solve` reads only values. A
 /// problem that is infeasible, or a solve that stalls, ends with an [`SolveStatus`]; `Err` is
-/// only for bad input (a structure that differs from the one set up, NaN data).
+/// only for bad input (a structure that differs from the one set up, NaN data), for a problem
+/// whose setup would need more memory than [`SolverSettings::memory_limit_bytes`]
+/// ([`LmiError::MemoryLimit`], checked before allocating), and for a failure of the backend's
+/// own setup. Backends scale the problem before solving (see "Equilibration" in
+/// [`SolverSettings`]) and never let a panic of a third-party solver unwind into the caller.
 pub trait SdpBackend {
     /// Short name used in tables and on the command line.
     fn name(&self) -> &'static str;
@@ -282,5 +340,7 @@ mod tests {
         assert!(err.contains("time_limit"), "{err}");
         let s = SolverSettings { reduced_tol_factor: 0.5, ..SolverSettings::default() };
         assert!(s.validate().unwrap_err().to_string().contains("reduced_tol_factor"));
+        let err = SolverSettings::builder().memory_limit_bytes(0).build().unwrap_err().to_string();
+        assert!(err.contains("memory_limit_bytes"), "{err}");
     }
 }

@@ -73,10 +73,19 @@ fn problem() -> SdpProblem {
     SdpProblem::new(vec![Block::Psd(n), Block::Psd(2), Block::Nonneg(2)], c, entries).unwrap()
 }
 
+/// `p` with every value (objective and matrices) multiplied by `s`.
+fn scaled(mut p: SdpProblem, s: f64) -> SdpProblem {
+    let c: Vec<f64> = p.c().iter().map(|v| v * s).collect();
+    let values: Vec<f64> = p.entries().iter().map(|e| e.value * s).collect();
+    p.set_values(&c, &values).unwrap();
+    p
+}
+
 #[test]
 fn solves_after_setup_do_not_allocate() {
-    // The second problem (the filter LMI) ends in the QR-based precision mode.
-    for p in [problem(), ipm_common::filter_lmi()] {
+    // The second problem (the filter LMI) ends in the QR-based precision mode; the third is
+    // badly scaled, so that the solve scales it and maps the answer back.
+    for p in [problem(), ipm_common::filter_lmi(), scaled(ipm_common::filter_lmi(), 1e-12)] {
         let mut ipm =
             FaerIpm::new(SolverSettings::builder().verbose(std::env::var_os("IPM_VERBOSE").is_some()).build().unwrap())
                 .unwrap();

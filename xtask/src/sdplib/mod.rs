@@ -6,7 +6,7 @@ use std::time::Instant;
 pub mod suite;
 
 use lmi::{backend_by_name, backend_names, read_sdpa_file};
-use suite::{Expected, Verdict, sdplib_dir, suite, suite_settings, verdict};
+use suite::{Expected, Verdict, objective_tolerance, sdplib_dir, suite, suite_settings, verdict};
 
 use crate::args::Args;
 
@@ -17,6 +17,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         Some(d) => PathBuf::from(d),
         None => sdplib_dir().ok_or("SDPLIB directory not found: pass --dir or set SDPLIB_DIR")?,
     };
+    // A missing directory is named as such (`SuiteError::MissingDir`).
     let problems = suite(&dir).map_err(|e| e.to_string())?;
     let backends: Vec<String> = match args.value("backend") {
         Some(b) => vec![b.to_owned()],
@@ -45,7 +46,10 @@ pub fn run(args: &[String]) -> Result<(), String> {
             }
             let (reference, err) = match p.expected {
                 Expected::Optimal { value, .. } => {
-                    (format!("{value:.6e}"), format!("{:.1e}", (sol.primal_objective - value).abs() / value.abs()))
+                    let err = (sol.primal_objective - value).abs();
+                    // Relative to the reference, or to the tolerance's floor for a reference of 0.
+                    let scale = value.abs().max(objective_tolerance(&p.expected, &problem, &sol));
+                    (format!("{value:.6e}"), format!("{:.1e}", err / scale))
                 }
                 Expected::Infeasible(side) => (
                     side.label().to_owned(),
@@ -80,4 +84,19 @@ pub fn run(args: &[String]) -> Result<(), String> {
         return Err(format!("{failures} problem(s) did not match their reference"));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression (issue 10): `cargo xtask sdplib --dir D` with a directory that does not exist
+    /// said "SDPA format error at line 0"; now the error names the directory.
+    #[test]
+    fn a_missing_dir_is_reported_as_such() {
+        let dir = std::env::temp_dir().join("xtask-sdplib-no-such-dir");
+        let err = run(&["--dir".to_owned(), dir.display().to_string()]).unwrap_err();
+        assert!(err.contains(&format!("SDPLIB directory {} does not exist", dir.display())), "{err}");
+        assert!(!err.contains("SDPA format error"), "{err}");
+    }
 }

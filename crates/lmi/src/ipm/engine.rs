@@ -1140,8 +1140,9 @@ mod tests {
             }
         }
         let p = SdpProblem::new(vec![Block::Psd(n)], vec![1.0; m], entries).unwrap();
-        let mut ws = Workspace::new(&p);
-        ws.load_values(&p);
+        let mut ws = Workspace::new(&p, u128::MAX).unwrap();
+        let unit = crate::scaling::Equilibration::IDENTITY;
+        ws.load_values(&p, &unit);
         // A symmetric positive definite D.
         let blk = &mut ws.blocks[0];
         for j in 0..n {
@@ -1174,7 +1175,7 @@ mod tests {
         blk.ag_ent = Vec::with_capacity(ng + 1);
         blk.ag_idx = Vec::with_capacity(blk.grp_ents.len());
         blk.ag_val = Vec::with_capacity(blk.grp_ents.len());
-        ws.load_values(&p);
+        ws.load_values(&p, &unit);
         ws.assemble_schur();
         results.push(ws.mhat.clone());
         for r in &results[1..] {

@@ -109,7 +109,17 @@
 //! `(Σ n(n+1)/2) × m` matrix of precision mode, the vectors of length `m`, and the faer scratch
 //! ([`StackReq`] → [`MemBuffer`], the largest of the Cholesky and QR requirements).
 //! [`SdpBackend::solve`] allocates nothing (it writes into the caller's [`SdpSolution`]),
-//! except when it returns an error, whose message is a `String`.
+//! except when it returns an error, whose message is a `String`; the scaling of the problem
+//! (see "Equilibration" in [`SolverSettings`]) is three factors computed per solve and applied
+//! while the values are copied into the workspace, the answer mapped back in place.
+//!
+//! Before allocating anything, `setup` computes from the problem's sizes what all this (and the
+//! caller's [`SdpSolution`]) will take (dominated by `8 (m+1)²` for the Schur matrix, `8 m²` for
+//! its factor, `8 m Σ n(n+1)/2` for precision mode, about `200 n²` per dense block and
+//! `40 (m + 2)` per block for the per-variable bookkeeping) and returns
+//! [`LmiError::MemoryLimit`] if it exceeds [`SolverSettings::memory_limit_bytes`]; the buffers
+//! of the low-rank Schur strategy, whose size depends on the analysis, are checked the same way
+//! once the analysis has sized them.
 //!
 //! # Statuses
 //!
@@ -118,7 +128,9 @@
 //!   Clarabel) both `≤ tol_feas`, and the gap `|cᵀx − tr(F₀Y)|` is `≤ tol_gap_abs` or the
 //!   relative gap [`SdpSolution::relative_gap`] `|cᵀx − tr(F₀Y)| / (1 + |cᵀx| + |tr(F₀Y)|)` is
 //!   `≤ tol_gap_rel`. These are checked on the point that is returned
-//!   (`x/τ`, `X/τ`, `Y/τ`), and reported in `primal_residual` / `dual_residual`.
+//!   (`x/τ`, `X/τ`, `Y/τ`) of the scaled problem (see "Equilibration" in [`SolverSettings`]),
+//!   and reported in `primal_residual` / `dual_residual`; `x`, `Y` and the objectives are mapped
+//!   back to the caller's problem.
 //! * `PrimalInfeasible` / `DualInfeasible`: the certificate tests above with `tol_infeas`. The
 //!   certificate is returned normalised (`tr(F₀Y) = 1` in `dual`, resp. `cᵀx = −1` in `x`); the
 //!   other part of the solution is zero (every entry stays finite), both objectives are `+∞` (primal infeasible: the dual is
@@ -140,8 +152,9 @@ use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 
-use crate::error::LmiError;
+use crate::error::{LmiError, saturate_bytes};
 use crate::problem::SdpProblem;
+use crate::scaling::Equilibration;
 use crate::solver::{SdpBackend, SdpSolution, SolverSettings};
 
 use workspace::Workspace;
@@ -199,9 +212,30 @@ impl SdpBackend for FaerIpm {
     }
 
     fn setup(&mut self, problem: &SdpProblem) -> Result<(), LmiError> {
+        // Release the previous structure's buffers first: a failed setup leaves the backend not
+        // set up, and the limit is not shared with buffers about to be dropped.
+        self.ws = None;
+        self.buf = None;
+        let limit = self.settings.memory_limit_bytes;
+        let too_large = |required: u128| LmiError::MemoryLimit {
+            backend: "faer-ipm",
+            required_bytes: saturate_bytes(required),
+            limit_bytes: limit,
+        };
+        // Sizes first (nothing allocated), then faer's scratch (only computed for moderate sizes),
+        // then the grouping-dependent buffers inside `Workspace::new`.
+        let mut required = workspace::base_bytes(problem) + u128::from(SdpSolution::required_bytes(problem));
+        if required > u128::from(limit) {
+            return Err(too_large(required));
+        }
+        required += workspace::workspace_tail_bytes(problem);
+        if required > u128::from(limit) {
+            return Err(too_large(required));
+        }
+        let ws = Workspace::new(problem, u128::from(limit) - required).map_err(|extra| too_large(required + extra))?;
         let req: StackReq = workspace::scratch(problem);
-        self.ws = Some(Workspace::new(problem));
         self.buf = Some(MemBuffer::new(req));
+        self.ws = Some(ws);
         Ok(())
     }
 
@@ -222,11 +256,18 @@ impl SdpBackend for FaerIpm {
                 found: solution.x.len(),
             });
         }
-        ws.load_values(problem);
         let settings = &self.settings;
+        let scale = Equilibration::compute(problem, settings.equilibrate);
+        ws.load_values(problem, &scale);
         // The whole iteration is compiled for the best instruction set available (AVX2/FMA or
         // AVX-512 on x86-64), so that the hand-written kernels vectorise as well as faer's.
         faer::traits::pulp::Arch::new().dispatch(Run { ws, settings, start, solution, stack: MemStack::new(buf) });
+        // Back to the caller's problem (statuses were judged on the equilibrated one).
+        scale.unscale(solution);
+        let f = scale.objective_factor();
+        solution.primal_objective *= f;
+        solution.dual_objective *= f;
+        solution.solve_time = start.elapsed();
         Ok(())
     }
 }

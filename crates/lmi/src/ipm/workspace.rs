@@ -3,8 +3,50 @@
 use faer::dyn_stack::StackReq;
 
 use crate::problem::{Block, SdpProblem};
+use crate::scaling::Equilibration;
 
 use super::dense;
+
+/// Bytes [`Workspace::new`] allocates for `problem`, except what depends on the grouping of the
+/// entries (checked by `Workspace::new` itself before it allocates it), the QR coefficients and
+/// faer's scratch (both bounded by [`workspace_tail_bytes`] once this is known to be moderate).
+/// Computed in `u128` from the sizes alone, in `O(blocks)`: it allocates nothing.
+///
+/// Per block: five index vectors of length `m + 2`, one row `m + 1` of the entry counts and
+/// about 25 dense matrices of its order (`n²`, or `n` for a diagonal block); per entry about
+/// 120 bytes of analysis (positions, values, groups); globally the `(m+1)²` Schur matrix, its
+/// `m²` factor, the `ls_rows × m` matrix of precision mode, the dense scatter buffer and the
+/// copy of the problem.
+pub(crate) fn base_bytes(problem: &SdpProblem) -> u128 {
+    let m = problem.num_vars() as u128;
+    let nb = problem.blocks().len() as u128;
+    let ne = problem.entries().len() as u128;
+    let mut dense_blocks: u128 = 0;
+    let mut nmax: u128 = 0;
+    for b in problem.blocks() {
+        let n = b.size() as u128;
+        nmax = nmax.max(n);
+        let len = if matches!(b, Block::Psd(_)) { n * n } else { n };
+        dense_blocks += 8 * (25 * len + 5 * n);
+    }
+    let rows = (ls_rows(problem) as u128).max(m);
+    let per_block_index = nb * (8 * (5 * (m + 2)) + (m + 1) + 8);
+    let per_entry = 120 * ne;
+    let analysis = 48 * (m + 1);
+    let global = 8 * ((m + 1) * (m + 1) + m * m + 12 * (m + 1) + nmax * nmax + rows * m);
+    let structure = 40 * ne + 8 * m + 16 * nb;
+    dense_blocks + per_block_index + per_entry + analysis + global + structure
+}
+
+/// Bytes of the QR coefficients and of faer's scratch; call only once [`base_bytes`] is within
+/// the limit (the sizes are then moderate).
+pub(crate) fn workspace_tail_bytes(problem: &SdpProblem) -> u128 {
+    let m = problem.num_vars().max(1);
+    let rows = ls_rows(problem).max(m);
+    let qcoef = 8 * (dense::qr_block_size(rows, m) as u128) * (m as u128);
+    // `usize::MAX` if faer's computation overflowed.
+    qcoef + scratch(problem).unaligned_bytes_required() as u128
+}
 
 /// faer scratch for a problem of this structure (Cholesky of the Schur matrix and of the blocks).
 pub(crate) fn scratch(problem: &SdpProblem) -> StackReq {
@@ -306,7 +348,11 @@ fn group_entries(ents: &[Ent], n: usize) -> Vec<(usize, Vec<usize>)> {
 }
 
 impl Workspace {
-    pub fn new(problem: &SdpProblem) -> Self {
+    /// Analyses `problem` and allocates every buffer. The buffers whose size depends on the
+    /// grouping of the entries (the low-rank Schur strategy: `G·n` per block, `G²` for whole-block
+    /// assembly) are counted once the groups are known and, if they exceed `budget` bytes, not
+    /// allocated: `Err` then holds the bytes they would need.
+    pub fn new(problem: &SdpProblem, budget: u128) -> Result<Self, u128> {
         let m = problem.num_vars();
         let mut blocks: Vec<BlockWs> = problem.blocks().iter().map(|b| BlockWs::new(*b, m)).collect();
         // Entries are sorted by (mat, block, col, row): per block they come out sorted by mat.
@@ -387,6 +433,21 @@ impl Workspace {
                 }
                 blk.grp_start[j + 1] = blk.grp_row.len();
             }
+        }
+        // What the groups need: checked against the budget before it is allocated.
+        let grouped_bytes: u128 = blocks
+            .iter()
+            .map(|blk| {
+                let (g, n, e) = (blk.grp_row.len() as u128, blk.n as u128, blk.grp_ents.len() as u128);
+                let always = 8 * (e + g * n);
+                let grouped = if blk.grouped { 8 * (g + g * n + g * g + 3 * g + 1 + 2 * e) } else { 0 };
+                always + grouped
+            })
+            .sum();
+        if grouped_bytes > budget {
+            return Err(grouped_bytes);
+        }
+        for blk in &mut blocks {
             blk.gw_val = vec![0.0; blk.grp_ents.len()];
             blk.gy = vec![0.0; blk.grp_row.len() * blk.n];
             if blk.grouped {
@@ -406,7 +467,7 @@ impl Workspace {
         let nu = problem.blocks().iter().map(|b| b.size() as f64).sum();
         let rows = ls_rows(problem).max(m);
         let qr_bs = dense::qr_block_size(rows, m.max(1));
-        Self {
+        Ok(Self {
             structure: problem.clone(),
             m,
             nu,
@@ -433,15 +494,16 @@ impl Workspace {
             qcoef: vec![0.0; qr_bs * m],
             qr_bs,
             loss: 0.0,
-        }
+        })
     }
 
-    /// Copies the numeric values of `problem` (same structure) into the workspace.
-    pub fn load_values(&mut self, problem: &SdpProblem) {
+    /// Copies the numeric values of `problem` (same structure), equilibrated by `scale`, into the
+    /// workspace.
+    pub fn load_values(&mut self, problem: &SdpProblem, scale: &Equilibration) {
         let entries = problem.entries();
         for blk in &mut self.blocks {
             for (k, &s) in blk.src.iter().enumerate() {
-                let v = entries[s].value;
+                let v = scale.entry(&entries[s]);
                 blk.val[k] = v;
                 let ent = blk.ents[k];
                 blk.sval[k] =
@@ -499,6 +561,8 @@ impl Workspace {
                 blk.ag_start[last] = blk.ag_row.len();
             }
         }
-        self.c.copy_from_slice(problem.c());
+        for (dst, &c) in self.c.iter_mut().zip(problem.c()) {
+            *dst = scale.cost(c);
+        }
     }
 }
