@@ -1,39 +1,8 @@
 //! `FaerIpm::solve` performs no heap allocation once set up (after one warm-up solve).
-#![allow(unsafe_code)]
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
+use counting_allocator::{Counting, count};
 mod ipm_common;
-
 use lmi::{Block, Entry, FaerIpm, SdpBackend, SdpProblem, SdpSolution, SolverSettings};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -94,12 +63,12 @@ fn solves_after_setup_do_not_allocate() {
         ipm.solve(&p, &mut sol).unwrap();
         assert!(sol.status.is_optimal(), "{}", sol.status);
         let first = sol.primal_objective;
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
-        for _ in 0..10 {
-            ipm.solve(&p, &mut sol).unwrap();
-        }
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
-        assert_eq!(after - before, 0, "solve allocated {} times in 10 solves", after - before);
+        let ((), allocations) = count(|| {
+            for _ in 0..10 {
+                ipm.solve(&p, &mut sol).unwrap();
+            }
+        });
+        assert_eq!(allocations, 0, "solve allocated {allocations} times in 10 solves");
         assert!(sol.status.is_optimal(), "{}", sol.status);
         assert_eq!(sol.primal_objective, first);
     }

@@ -94,6 +94,8 @@ pub struct DataReader<R: Read> {
     end: u64,
     header_line: u64,
     rows: u64,
+    /// `k` of the previous data row.
+    last_k: Option<u64>,
 }
 
 impl DataReader<File> {
@@ -159,6 +161,7 @@ impl<R: Read> DataReader<R> {
             end: 0,
             header_line: 1,
             rows: 0,
+            last_k: None,
         };
         r.read_header()?;
         Ok(r)
@@ -249,7 +252,8 @@ impl<R: Read> DataReader<R> {
     ///
     /// # Errors
     /// [`Error::At`] for a row with the wrong number of cells, a `k` that is not a nonnegative
-    /// integer, a value that is not a finite number, or a file without data rows;
+    /// integer or does not follow the previous row's `k` by one (a gap, a repeated or a decreasing
+    /// `k`), a value that is not a finite number, or a file without data rows;
     /// [`Error::Io`] if reading fails.
     pub fn read_row(&mut self, row: &mut DataRow) -> Result<bool, Error> {
         if !self.next_record()? {
@@ -269,6 +273,27 @@ impl<R: Read> DataReader<R> {
             let message = format!("k = {} is not a nonnegative integer", echo(ks));
             return Err(Error::at(self.locate(Some(0)), message));
         };
+        // One step per row: `k` increases by exactly one. A repeated, decreasing or skipping `k`
+        // (duplicated blocks, shuffled rows, concatenated logs, dropped rows) would otherwise be
+        // taken as one step each, and a guaranteed set would silently stop being one.
+        if let Some(prev) = self.last_k {
+            if k <= prev {
+                let message = format!(
+                    "k = {k} after k = {prev}: k must increase by one from row to row (a repeated or out-of-order row)"
+                );
+                return Err(Error::at(self.locate(Some(0)), message));
+            }
+            if k != prev + 1 {
+                let message = format!(
+                    "k jumps from {prev} to {k}: the rows k = {}..={} are missing (dropped rows or concatenated logs); \
+                     k must increase by one from row to row",
+                    prev + 1,
+                    k - 1
+                );
+                return Err(Error::at(self.locate(Some(0)), message));
+            }
+        }
+        self.last_k = Some(k);
         if row.u.len() != self.p || row.y.len() != n - 1 - self.p {
             *row = DataRow::zeros(self.p, n - 1 - self.p);
         }
@@ -456,5 +481,25 @@ mod tests {
         let mut r = DataReader::from_reader(p, &b"k,u1,y1\n0,1,\xff\n"[..], 1, 1).unwrap();
         let e = r.read_row(&mut DataRow::zeros(1, 1)).unwrap_err().to_string();
         assert!(e.starts_with("d.csv:2:5: y1 is not valid UTF-8"), "{e}");
+    }
+
+    #[test]
+    fn k_must_increase_by_one() {
+        let read_all = |text: &str| -> Result<u64, Error> {
+            let mut r = DataReader::from_text(Path::new("d.csv"), text, 1, 1)?;
+            let mut row = DataRow::zeros(1, 1);
+            let mut n = 0;
+            while r.read_row(&mut row)? {
+                n += 1;
+            }
+            Ok(n)
+        };
+        assert_eq!(read_all("k,u1,y1\n7,0,0\n8,0,0\n9,0,0\n").unwrap(), 3);
+        let e = read_all("k,u1,y1\n0,0,0\n1,0,0\n4,0,0\n").unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:4:1: k jumps from 1 to 4: the rows k = 2..=3 are missing"), "{e}");
+        let e = read_all("k,u1,y1\n0,0,0\n1,0,0\n1,0,0\n").unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:4:1: k = 1 after k = 1: k must increase by one"), "{e}");
+        let e = read_all("k,u1,y1\n5,0,0\n6,0,0\n0,0,0\n1,0,0\n").unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:4:1: k = 0 after k = 6"), "{e}");
     }
 }

@@ -242,10 +242,20 @@ mod tests {
 
     #[test]
     fn step_errors_name_the_row() {
-        let e = run(MODEL, "k,u1,y1\n0,1,0\n18446744073709551615,1,0\n", "kf", None).unwrap_err().to_string();
-        assert!(e.starts_with("d.csv:3:1: k = 18446744073709551615 is too large"), "{e}");
+        let e = run(MODEL, "k,u1,y1\n18446744073709551615,1,0\n", "kf", None).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:2:1: k = 18446744073709551615 is too large"), "{e}");
         let model = format!("{MODEL}u_lower = [-1.0]\nu_upper = [1.0]\n");
         let e = run(&model, "k,u1,y1\n0,0.5,0\n1, 2.5,0\n", "yang-li", None).unwrap_err().to_string();
         assert!(e.starts_with("d.csv:3:4: step k = 1: input u[0] = 2.5 is outside"), "{e}");
+    }
+
+    #[test]
+    fn data_that_contradict_the_bounds_stop_the_set_membership_filter_at_their_row() {
+        let mut data = ramp(10);
+        data = data.replace("\n5,1.0,0.05\n", "\n5,1.0,1000\n");
+        let e = run(MODEL, &data, "smf", None).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:7:1: step k = 5: data inconsistent with the noise bounds at step 6"), "{e}");
+        // The Kalman filter has no bounds to contradict.
+        assert!(run(MODEL, &data, "kf", None).is_ok());
     }
 }
