@@ -35,8 +35,18 @@ struct Recording<R> {
     kept_from: u64,
 }
 
+/// The longest record (line) accepted: the kept bytes of one record beyond this are an error, so
+/// that an endless line (`--input /dev/zero`) cannot grow memory without bound.
+pub const MAX_RECORD_BYTES: usize = 1 << 20;
+
 impl<R: Read> Read for Recording<R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        if self.kept.len() > MAX_RECORD_BYTES + FORGET_CHUNK {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("a line longer than {} MiB: not a data file of this format", MAX_RECORD_BYTES >> 20),
+            ));
+        }
         let n = self.inner.read(buf)?;
         self.kept.extend_from_slice(&buf[..n]);
         Ok(n)
@@ -501,5 +511,12 @@ mod tests {
         assert!(e.starts_with("d.csv:4:1: k = 1 after k = 1: k must increase by one"), "{e}");
         let e = read_all("k,u1,y1\n5,0,0\n6,0,0\n0,0,0\n1,0,0\n").unwrap_err().to_string();
         assert!(e.starts_with("d.csv:4:1: k = 0 after k = 6"), "{e}");
+    }
+
+    #[test]
+    fn an_endless_line_is_refused_with_bounded_memory() {
+        let endless = std::io::repeat(b'0').take(64 << 20);
+        let e = DataReader::from_reader(Path::new("/dev/zero"), endless, 1, 1).unwrap_err().to_string();
+        assert!(e.contains("a line longer than 1 MiB"), "{e}");
     }
 }

@@ -228,7 +228,16 @@ pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
     let x0 = cx.vector("x0", &f.x0, n)?;
     let p = b.ncols();
     let input_range = match (&f.u_lower, &f.u_upper) {
-        (Some(lo), Some(hi)) => Some((cx.vector("u_lower", lo, p)?, cx.vector("u_upper", hi, p)?)),
+        (Some(lo), Some(hi)) => {
+            let (l, u) = (cx.vector("u_lower", lo, p)?, cx.vector("u_upper", hi, p)?);
+            // Checked for every estimator, not only those that use the range: an empty box is a
+            // mistake in the file whatever runs on it.
+            if let Some(i) = (0..p).find(|&i| l[i] > u[i]) {
+                let message = format!("u_lower[{i}] = {} > u_upper[{i}] = {}: the input range is empty", l[i], u[i]);
+                return Err(Error::at(cx.at(lo.span()), message));
+            }
+            Some((l, u))
+        }
         (None, None) => None,
         (Some(v), None) | (None, Some(v)) => {
             return Err(Error::at(cx.at(v.span()), "give both `u_lower` and `u_upper`, or neither"));
@@ -323,5 +332,11 @@ mod tests {
         assert_eq!(e, "m.toml:4:5: `q`: Q is not positive definite");
         let e = m.estimator_error(EstimatorError::EmptySystem("no outputs")).to_string();
         assert!(e.starts_with("m.toml: ") && e.contains("the model file's `q`"), "{e}");
+    }
+
+    #[test]
+    fn an_empty_input_range_is_refused_for_every_estimator() {
+        let e = err(&format!("{MODEL}u_lower = [1.0]\nu_upper = [0.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: u_lower[0] = 1 > u_upper[0] = 0: the input range is empty"), "{e}");
     }
 }

@@ -56,6 +56,13 @@ impl OutputFile {
         if output.as_os_str().is_empty() {
             return Err(refuse("empty path".into()));
         }
+        if output.as_os_str() == "-" {
+            return Err(refuse(
+                "`-` is not read as standard output (the output is written atomically to a file): give a file \
+                 path, or /dev/stdout to stream it"
+                    .into(),
+            ));
+        }
         let existing = match fs::metadata(output) {
             Ok(meta) => Some(meta),
             Err(e) if e.kind() == io::ErrorKind::NotFound => {
@@ -231,5 +238,12 @@ mod tests {
         assert!(e.contains("cannot use directory"), "{e}");
         assert_eq!(fs::read_to_string(&input).unwrap(), "x");
         fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_dash_is_not_a_file_name() {
+        let e = OutputFile::create(Path::new("-"), &[]).unwrap_err().to_string();
+        assert!(e.starts_with("--output -: `-` is not read as standard output"), "{e}");
+        assert!(!Path::new("-").exists());
     }
 }
