@@ -2,16 +2,18 @@
 //!
 //! * Symmetric: `|M_ij − M_ji| ≤` [`SYMMETRY_TOLERANCE`]` · max_kl |M_kl|` (scale invariant).
 //! * Positive definite: every Cholesky pivot `s_j` (the square of the `j`-th diagonal entry of
-//!   the factor) is finite and `s_j >` [`PD_RELATIVE_TOLERANCE`]` · n · max_i M_ii`, i.e. the
-//!   matrix is not numerically singular at working precision.
+//!   the factor) is finite and `s_j >` [`PD_RELATIVE_TOLERANCE`]` · n · M_jj`: each pivot keeps
+//!   more than the rounding error of its own diagonal entry, i.e. the matrix is positive definite
+//!   to working precision. The test is invariant under diagonal scaling `D M D`, so a matrix such
+//!   as `diag(1e-12, 1e4)` is accepted (a floor relative to `max_i M_ii` would reject it).
 
 use nalgebra::DMatrix;
 
 /// Relative symmetry tolerance: `|M_ij − M_ji| ≤ SYMMETRY_TOLERANCE · max_kl |M_kl|`.
 pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
 
-/// Relative positive-definiteness tolerance: every Cholesky pivot must exceed
-/// `PD_RELATIVE_TOLERANCE · n · max_i M_ii`.
+/// Relative positive-definiteness tolerance: every Cholesky pivot `s_j` must exceed
+/// `PD_RELATIVE_TOLERANCE · n · M_jj`.
 pub const PD_RELATIVE_TOLERANCE: f64 = 4.0 * f64::EPSILON;
 
 /// A rejected Cholesky pivot: its index, value and the threshold it had to exceed.
@@ -21,7 +23,7 @@ pub struct PivotFailure {
     pub pivot: usize,
     /// The pivot `s_j` (NaN or ∞ if the factorisation overflowed).
     pub value: f64,
-    /// The threshold `rel_tol · n · max_i M_ii` it had to exceed.
+    /// The threshold `rel_tol · n · M_jj` it had to exceed.
     pub threshold: f64,
 }
 
@@ -33,16 +35,17 @@ fn max_diag(a: &DMatrix<f64>) -> f64 {
 /// Lower Cholesky factor `L` with `a = L Lᵀ`, reading the lower triangle of the square `a`
 /// (allocates the factor).
 ///
-/// A pivot `s_j` is accepted when it is finite and `s_j > max(0, rel_tol · n · max_i a_ii)`;
-/// every entry of `L` must be finite. A non-square `a` fails at pivot 0.
+/// A pivot `s_j` is accepted when it is finite and `s_j > max(0, rel_tol · n · a_jj)` (scale
+/// invariant: see the module documentation); every entry of `L` must be finite. A non-square `a`
+/// fails at pivot 0.
 pub fn cholesky_checked(a: &DMatrix<f64>, rel_tol: f64) -> Result<DMatrix<f64>, PivotFailure> {
     let n = a.nrows();
-    let threshold = rel_tol * n as f64 * max_diag(a);
     if a.ncols() != n {
-        return Err(PivotFailure { pivot: 0, value: f64::NAN, threshold });
+        return Err(PivotFailure { pivot: 0, value: f64::NAN, threshold: rel_tol * n as f64 * max_diag(a) });
     }
     let mut l = DMatrix::<f64>::zeros(n, n);
     for j in 0..n {
+        let threshold = rel_tol * n as f64 * a[(j, j)];
         let mut s = a[(j, j)];
         for k in 0..j {
             s -= l[(j, k)] * l[(j, k)];
@@ -100,13 +103,20 @@ mod tests {
         let f = cholesky_checked(&b, PD_RELATIVE_TOLERANCE).unwrap_err();
         assert_eq!(f.pivot, 1);
         assert!((f.value + 3.0).abs() < 1e-15);
-        // Numerically singular: pivot below 4 ε n max diag.
+        // Numerically singular: pivot below 4 ε n times its own diagonal entry.
         let c = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0 + 1e-17]);
         assert_eq!(cholesky_checked(&c, PD_RELATIVE_TOLERANCE).unwrap_err().pivot, 1);
         // NaN and non-square.
         let d = DMatrix::from_element(1, 1, f64::NAN);
         assert!(cholesky_checked(&d, PD_RELATIVE_TOLERANCE).is_err());
         assert!(cholesky_checked(&DMatrix::zeros(2, 3), PD_RELATIVE_TOLERANCE).is_err());
+        // Badly scaled but positive definite to working precision: accepted (scale invariant).
+        let d = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![1e-12, 1e4]));
+        assert!(cholesky_checked(&d, PD_RELATIVE_TOLERANCE).is_ok());
+        let mut g = DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.5, 1.0]);
+        let scale = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![1e-8, 1e8]));
+        g = &scale * g * &scale;
+        assert!(cholesky_checked(&g, PD_RELATIVE_TOLERANCE).is_ok());
         // Empty: the empty factor.
         assert_eq!(cholesky_checked(&DMatrix::zeros(0, 0), PD_RELATIVE_TOLERANCE).unwrap().nrows(), 0);
     }

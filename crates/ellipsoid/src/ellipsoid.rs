@@ -28,7 +28,7 @@ impl Ellipsoid {
     /// Checks, in this order: `center` non-empty; `shape` square with the dimension of
     /// `center`; all entries finite; `shape` symmetric within [`crate::SYMMETRY_TOLERANCE`]
     /// (relative to its largest entry); `shape` positive definite (Cholesky with pivots above
-    /// [`crate::PD_RELATIVE_TOLERANCE`]` · n · max_i P_ii`). The symmetrised `(P + Pᵀ)/2` is
+    /// [`crate::PD_RELATIVE_TOLERANCE`]` · n · P_jj`). The symmetrised `(P + Pᵀ)/2` is
     /// stored.
     pub fn new(center: DVector<f64>, shape: DMatrix<f64>) -> Result<Self> {
         let n = center.len();

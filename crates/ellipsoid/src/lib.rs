@@ -28,8 +28,8 @@
 //!   `(P + Pᵀ)/2`.
 //! * [`PD_RELATIVE_TOLERANCE`]: positive definite means every Cholesky pivot `s_j` (the
 //!   square of the `j`-th diagonal entry of the factor) is finite and
-//!   `s_j > 4 ε · n · max_i P_ii` (`ε` the machine epsilon), i.e. `P` is not numerically
-//!   singular.
+//!   `s_j > 4 ε · n · P_jj` (`ε` the machine epsilon): positive definite to working precision,
+//!   whatever the scaling of the coordinates.
 //! * [`RANK_RELATIVE_TOLERANCE`]: at `λ = 1` the intersection bound needs `Cᵀ R⁻¹ C`
 //!   non-singular; it is treated as singular below a relative pivot `1e-12 · n · max diag`.
 //! * [`CONTAINMENT_TOLERANCE`]: point and ellipsoid containment accept a normalised distance
@@ -85,8 +85,8 @@ pub use crate::intersection::{IntersectionBound, MeasurementSet};
 /// workspace's, from `dense-kernels`).
 pub use dense_kernels::SYMMETRY_TOLERANCE;
 
-/// Relative positive-definiteness tolerance: every Cholesky pivot must exceed
-/// `PD_RELATIVE_TOLERANCE · n · max_i P_ii` (the workspace's, from `dense-kernels`).
+/// Relative positive-definiteness tolerance: every Cholesky pivot `s_j` must exceed
+/// `PD_RELATIVE_TOLERANCE · n · P_jj` (the workspace's, from `dense-kernels`).
 pub use dense_kernels::PD_RELATIVE_TOLERANCE;
 
 /// Relative rank tolerance for `Cᵀ R⁻¹ C` (in whitened form) at `λ = 1` in the intersection

@@ -67,7 +67,8 @@ pub(crate) fn check_spd(what: &'static str, m: &DMatrix<f64>, n: usize) -> Resul
     }
     let mut s = m.clone();
     dense_kernels::symmetrize(&mut s);
-    // Positive definite, and not numerically singular: every pivot above 4 ε n max diag.
+    // Positive definite to working precision: every pivot above 4 ε n times its own diagonal
+    // entry (`dense_kernels::spd`).
     if n == 0 || dense_kernels::cholesky_checked(&s, dense_kernels::PD_RELATIVE_TOLERANCE).is_err() {
         return Err(EstimatorError::NotPositiveDefinite { what });
     }
@@ -92,10 +93,18 @@ pub(crate) fn check_spd_no_alloc(
     }
     work.copy_from(m);
     dense_kernels::symmetrize(work);
-    let max_diag = (0..n).map(|i| work[(i, i)]).fold(0.0, f64::max);
-    let floor = dense_kernels::PD_RELATIVE_TOLERANCE * n as f64 * max_diag;
-    if !dense_kernels::cholesky_in_place(work) || (0..n).any(|i| work[(i, i)] * work[(i, i)] <= floor) {
+    // Positive definite to working precision, as `dense_kernels::cholesky_checked` judges it:
+    // every pivot G_ii² above 4 ε n times its own diagonal entry M_ii = Σ_k G_ik² (scale
+    // invariant).
+    if !dense_kernels::cholesky_in_place(work) {
         return Err(EstimatorError::NotPositiveDefinite { what });
+    }
+    let tol = dense_kernels::PD_RELATIVE_TOLERANCE * n as f64;
+    for i in 0..n {
+        let diag: f64 = (0..=i).map(|k| work[(i, k)] * work[(i, k)]).sum();
+        if work[(i, i)] * work[(i, i)] <= tol * diag {
+            return Err(EstimatorError::NotPositiveDefinite { what });
+        }
     }
     Ok(())
 }

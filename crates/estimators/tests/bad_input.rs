@@ -254,3 +254,20 @@ fn yang_li_refuses_an_input_outside_its_box_and_stays_unchanged() {
         assert_eq!(r.report.tau, t.report.tau);
     }
 }
+
+#[test]
+fn badly_scaled_positive_definite_noise_is_accepted() {
+    // diag(1e-12, 1e4) is positive definite to working precision (a conditioning floor relative to
+    // the largest diagonal entry used to reject it); a singular one is still refused.
+    use estimators::{KalmanFilter, SetMembershipFilter};
+    use nalgebra::{DMatrix, DVector};
+    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-12, 1e4]));
+    let r = DMatrix::identity(1, 1);
+    let p0 = DMatrix::identity(2, 2);
+    assert!(KalmanFilter::new(DVector::zeros(2), p0.clone(), q.clone(), r.clone(), 1).is_ok());
+    let mut f = SetMembershipFilter::two_multiplier(DVector::zeros(2), p0.clone(), q.clone(), r.clone(), 1).unwrap();
+    assert!(f.set_process_noise(&q).is_ok());
+    let singular = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+    assert!(f.set_process_noise(&singular).is_err());
+    assert!(KalmanFilter::new(DVector::zeros(2), p0, singular, r, 1).is_err());
+}
