@@ -296,6 +296,11 @@ impl SdpBackend for ClarabelBackend {
 }
 
 impl ClarabelBackend {
+    /// Solves the equilibrated problem; if that does not end optimal and the scaling was not the
+    /// identity, solves the problem as given too and keeps that answer when it is optimal.
+    /// Clarabel equilibrates internally as well, and on some moderately scaled problems (the
+    /// carrier's LMI (28) with a small `P_k`) the two scalings together end in numerical trouble
+    /// where the unscaled problem is solved.
     fn solve_with(&mut self, st: &mut State, problem: &SdpProblem, solution: &mut SdpSolution) -> Result<(), LmiError> {
         if !st.structure.same_structure(problem) {
             return Err(LmiError::StructureMismatch("problem differs from the one given to setup".into()));
@@ -303,8 +308,24 @@ impl ClarabelBackend {
         if !solution.fits(problem) {
             return Err(LmiError::StructureMismatch("solution is not sized for this problem".into()));
         }
-        let start = Instant::now();
         let scale = Equilibration::compute(problem, self.settings.equilibrate);
+        let start = Instant::now();
+        self.solve_scaled(st, problem, solution, scale)?;
+        if !solution.status.is_optimal() && !scale.is_identity() {
+            self.solve_scaled(st, problem, solution, Equilibration::IDENTITY)?;
+            solution.solve_time = start.elapsed();
+        }
+        Ok(())
+    }
+
+    fn solve_scaled(
+        &mut self,
+        st: &mut State,
+        problem: &SdpProblem,
+        solution: &mut SdpSolution,
+        scale: Equilibration,
+    ) -> Result<(), LmiError> {
+        let start = Instant::now();
         Self::fill(&st.slots, problem, &scale, &mut st.a_values, &mut st.b, &mut st.q);
         let solver = match st.solver.take() {
             Some(mut solver) => {
