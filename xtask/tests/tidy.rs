@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, &[&str])] = &[
     ("dense-kernels", &[]),
     ("counting-allocator", &[]),
+    ("fuzzy-inference", &[]),
     ("models", &["dense-kernels"]),
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
