@@ -205,3 +205,30 @@ fn ekf_step_on_the_truck_does_not_allocate() {
     });
     assert_eq!(n, 0, "EKF step on the truck allocated");
 }
+
+#[test]
+fn inconsistent_steps_do_not_allocate_under_any_policy() {
+    use estimators::InconsistencyPolicy;
+    let a = common::reference_a();
+    let b = DMatrix::from_fn(4, 2, |i, j| 0.01 * (i + 2 * j) as f64);
+    let c = common::reference_c();
+    let model = StepModel::new(&a, &b, &c);
+    let u = DVector::from_vec(vec![0.2, -0.1]);
+    let y = DVector::from_vec(vec![0.01, 0.0, -0.01]);
+    let outlier = DVector::from_vec(vec![50.0, 0.0, 0.0]);
+    for policy in [InconsistencyPolicy::Error, InconsistencyPolicy::FlagAndContinue, InconsistencyPolicy::Restart] {
+        let mut f = SetMembershipFilter::two_multiplier(
+            DVector::zeros(4),
+            DMatrix::identity(4, 4) * 0.5,
+            DMatrix::identity(4, 4) * 0.01,
+            DMatrix::identity(3, 3) * 0.05,
+            2,
+        )
+        .unwrap();
+        f.set_inconsistency_policy(policy);
+        f.step(&model, &u, &y).unwrap();
+        let (r, n) = count(|| f.step(&model, &u, &outlier).map(|e| e.report.guaranteed));
+        assert_eq!(n, 0, "{policy:?}: an inconsistent step allocated");
+        assert_eq!(r.ok(), if policy == InconsistencyPolicy::Error { None } else { Some(false) }, "{policy:?}");
+    }
+}

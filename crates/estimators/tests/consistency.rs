@@ -171,3 +171,34 @@ fn flag_and_continue_marks_every_later_step() {
         assert_eq!(e.report.guaranteed, k < 40, "step {k}");
     }
 }
+
+#[test]
+fn restart_moves_the_set_to_the_data_and_marks_the_guarantee_lost() {
+    let s = setup();
+    let model = StepModel::new(&s.a, &s.b, &s.c);
+    let run = boundary_run(&s, 300, 5);
+    let mut f = filter(&s);
+    f.set_inconsistency_policy(InconsistencyPolicy::Restart);
+    for k in 0..300 {
+        let mut y = run.measurements[k + 1].clone();
+        if k >= 150 {
+            // From step 150 on, the roll-rate sensor reads 20 noise bounds too high.
+            y[2] += 20.0 * 2e-5f64.sqrt();
+        }
+        let e = f.step(&model, &run.inputs[k], &y).unwrap();
+        assert!(e.center.iter().chain(e.shape.iter()).all(|v| v.is_finite()), "step {k}");
+        if k < 150 {
+            assert!(e.report.consistency.is_consistent() && e.report.guaranteed, "step {k}");
+        } else {
+            assert!(!e.report.guaranteed, "step {k}");
+        }
+        if k == 150 {
+            assert!(!e.report.consistency.is_consistent());
+            // The restarted set is centred near what the biased sensor says.
+            let gap = (e.center[3] - y[2]).abs();
+            assert!(gap < 10.0 * 2e-5f64.sqrt(), "the set did not move to the data: {gap}");
+        }
+    }
+    // After the restart the biased data are consistent again with the (moved) sets.
+    assert!(f.estimate().report.consistency.is_consistent());
+}

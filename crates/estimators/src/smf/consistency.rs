@@ -68,6 +68,13 @@ pub enum InconsistencyPolicy {
     /// every later step as no longer guaranteed ([`StepReport::guaranteed`](crate::StepReport::guaranteed)
     /// is `false` from then on).
     FlagAndContinue,
+    /// Restart from the measurement: inflate the prediction (`A P_k Aᵀ`, `Q` and `P_k` alike, by
+    /// `(1 + excess)²` and then powers of four) until the measurement strip meets it, and update
+    /// from that inflated prediction, so the set moves to where the data are. The step is marked
+    /// [`Consistency::Inconsistent`] and this and every later set as no longer guaranteed (the
+    /// inflation is a choice, not a bound); the certification rounding bounds are computed for the
+    /// inflated prediction as if it were the true one.
+    Restart,
 }
 
 /// Buffers of the check (`m` outputs, `n` states).

@@ -309,25 +309,60 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         dense_kernels::mul_nn(1.0, model.a, &est.shape, 0.0, &mut ws.ap);
         dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
         // Effective process noise and the input used by the predictor.
-        let (q_used, u_used): (&DMatrix<f64>, &DVector<f64>) = match input {
-            InputModel::Predictor => (q, u),
+        let bounded = matches!(input, InputModel::BoundedDisturbance { .. });
+        let u_used: &DVector<f64> = match input {
+            InputModel::Predictor => u,
             InputModel::BoundedDisturbance { mid, w_diag, .. } => {
                 effective_noise(q, model.b, w_diag, &mut ws.bw, &mut ws.q_eff);
-                (&ws.q_eff, mid)
+                mid
             }
         };
         let warm = est.report.tau;
         // Consistency of y with the predicted set and the noise bounds, before anything changes.
         dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
         dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
-        let consistency = consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm);
-        if let Consistency::Inconsistent { excess } = consistency
-            && *policy == InconsistencyPolicy::Error
-        {
-            return Err(EstimatorError::InconsistentData { step: *steps + 1, excess });
+        let consistency = {
+            let q_used = if bounded { &ws.q_eff } else { &*q };
+            consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm)
+        };
+        let mut restarted = false;
+        if let Consistency::Inconsistent { excess } = consistency {
+            match *policy {
+                InconsistencyPolicy::FlagAndContinue => {}
+                InconsistencyPolicy::Restart => {
+                    // Inflate the prediction (A P_k Aᵀ, Q and P_k alike) by powers of four, starting
+                    // from (1 + excess)², until the measurement is compatible with it.
+                    if !bounded {
+                        ws.q_eff.copy_from(q);
+                    }
+                    ws.ap.copy_from(&est.shape);
+                    let mut factor = (1.0 + excess) * (1.0 + excess);
+                    for _ in 0..64 {
+                        for m in [&mut ws.x1, &mut ws.q_eff, &mut ws.ap] {
+                            m.iter_mut().for_each(|v| *v *= factor);
+                        }
+                        let ok = ws.x1.iter().chain(ws.q_eff.iter()).all(|v| v.is_finite());
+                        if ok
+                            && consistency::check(&mut ws.cons, model.c, &ws.x1, &ws.q_eff, r, y, warm).is_consistent()
+                        {
+                            restarted = true;
+                            break;
+                        }
+                        if !ok {
+                            break;
+                        }
+                        factor = 4.0;
+                    }
+                    if !restarted {
+                        return Err(EstimatorError::InconsistentData { step: *steps + 1, excess });
+                    }
+                }
+                _ => return Err(EstimatorError::InconsistentData { step: *steps + 1, excess }),
+            }
         }
-        let problem =
-            UpdateProblem { a: model.a, c: model.c, q: q_used, r, p: &est.shape, x_hat: &est.center, x1: &ws.x1 };
+        let q_used: &DMatrix<f64> = if bounded || restarted { &ws.q_eff } else { q };
+        let p_used: &DMatrix<f64> = if restarted { &ws.ap } else { &est.shape };
+        let problem = UpdateProblem { a: model.a, c: model.c, q: q_used, r, p: p_used, x_hat: &est.center, x1: &ws.x1 };
         let t0 = Instant::now();
         let result = solver.solve(&problem, warm, sol);
         let solve_time = t0.elapsed();
