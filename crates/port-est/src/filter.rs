@@ -158,6 +158,17 @@ pub fn run_filter<R: Read, W: Write>(
                     EstimatorError::InputOutsideBounds { index, .. } => 1 + index,
                     _ => 0,
                 };
+                if let EstimatorError::NumericalFailure(what) = source {
+                    // Not this row's numbers: the model makes the estimate overflow or lose
+                    // positive definiteness (an unstable `a`, huge noise sizes…).
+                    let message = format!(
+                        "step k = {}: numerical failure: {what}; the cause is the model in {} (its `a`, `b`, `c`, `q`, \
+                         `r`, `p0`), not this row's numbers",
+                        row.k,
+                        model.path().display()
+                    );
+                    return Err(Error::At { at: data.locate(Some(cell)), message });
+                }
                 return Err(Error::Step { at: data.locate(Some(cell)), k: row.k, source });
             }
         };
@@ -257,5 +268,12 @@ mod tests {
         assert!(e.starts_with("d.csv:7:1: step k = 5: data inconsistent with the noise bounds at step 6"), "{e}");
         // The Kalman filter has no bounds to contradict.
         assert!(run(MODEL, &data, "kf", None).is_ok());
+    }
+
+    #[test]
+    fn a_model_that_overflows_is_named_as_the_cause() {
+        let model = MODEL.replace("a = [[1.0, 0.01], [0.0, 0.99]]", "a = [[1e100, 0.0], [0.0, 1e100]]");
+        let e = run(&model, &ramp(10), "kf", None).unwrap_err().to_string();
+        assert!(e.contains("numerical failure") && e.contains("the cause is the model in m.toml"), "{e}");
     }
 }
