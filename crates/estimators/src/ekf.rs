@@ -111,6 +111,43 @@ impl ExtendedKalmanFilter {
         replace_spd("R", &mut self.r, r, &mut self.upd.s)
     }
 
+    /// A prediction-only step (7), (8): `x⁻ = f(x̂, u)`, `P⁻ = F P Fᵀ + Q`. On error the state is
+    /// unchanged.
+    ///
+    /// # Errors
+    /// As [`ExtendedKalmanFilter::step`].
+    pub fn predict<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let d = model.dims();
+        for (what, expected, found) in [
+            ("model states", self.n, d.states),
+            ("model inputs", self.p, d.inputs),
+            ("model outputs", self.m, d.outputs),
+        ] {
+            if expected != found {
+                return Err(EstimatorError::DimensionMismatch { what, expected, found });
+            }
+        }
+        check_vec("u", u, self.p)?;
+        model.f_with_jacobian(&self.est.mean, u, &mut self.x_pred, &mut self.f)?;
+        dense::mul_nn(1.0, &self.f, &self.est.covariance, 0.0, &mut self.fp);
+        self.p_pred.copy_from(&self.q);
+        dense::mul_nt(1.0, &self.fp, &self.f, 1.0, &mut self.p_pred);
+        dense::symmetrize(&mut self.p_pred);
+        if self.x_pred.iter().chain(self.p_pred.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
+        }
+        std::mem::swap(&mut self.est.mean, &mut self.x_pred);
+        std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
+        for i in 0..self.n {
+            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
+        }
+        Ok(&self.est)
+    }
+
     /// One step (7)–(11): consumes `u_k` and `y_{k+1}`. On error the state is unchanged.
     ///
     /// # Errors
@@ -163,6 +200,9 @@ impl<M: DifferentiableModel + ?Sized> Estimator<M> for ExtendedKalmanFilter {
     type Estimate = GaussianEstimate;
     fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
         ExtendedKalmanFilter::step(self, model, u, y)
+    }
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        ExtendedKalmanFilter::predict(self, model, u)
     }
     fn estimate(&self) -> &GaussianEstimate {
         &self.est

@@ -194,6 +194,33 @@ impl KalmanFilter {
         crate::validate::replace_spd("R", &mut self.r, r, &mut self.upd.s)
     }
 
+    /// A prediction-only step (no measurement): `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q`. On error the
+    /// state is unchanged. Allocation-free.
+    pub fn predict<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        check_vec("u", u, self.p)?;
+        let (a, b) = (model.a(), model.b());
+        dense::gemv(1.0, a, &self.est.mean, 0.0, &mut self.x_pred);
+        dense::gemv(1.0, b, u, 1.0, &mut self.x_pred);
+        dense::mul_nn(1.0, a, &self.est.covariance, 0.0, &mut self.ap);
+        self.p_pred.copy_from(&self.q);
+        dense::mul_nt(1.0, &self.ap, a, 1.0, &mut self.p_pred);
+        dense::symmetrize(&mut self.p_pred);
+        if self.x_pred.iter().chain(self.p_pred.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
+        }
+        std::mem::swap(&mut self.est.mean, &mut self.x_pred);
+        std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
+        for i in 0..self.n {
+            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
+        }
+        Ok(&self.est)
+    }
+
     /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
     /// state is unchanged. Allocation-free.
     pub fn step<M: LinearModel + ?Sized>(
@@ -238,6 +265,9 @@ impl<M: LinearModel + ?Sized> Estimator<M> for KalmanFilter {
     type Estimate = GaussianEstimate;
     fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
         KalmanFilter::step(self, model, u, y)
+    }
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        KalmanFilter::predict(self, model, u)
     }
     fn estimate(&self) -> &GaussianEstimate {
         &self.est

@@ -81,6 +81,13 @@ pub trait Estimator<M: ?Sized> {
     /// # Errors
     /// An [`EstimatorError`] naming what is wrong; the state is unchanged.
     fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&Self::Estimate, EstimatorError>;
+    /// A prediction-only step (no measurement arrived, for example a gap in a log): the
+    /// estimate of `x_{k+1}` from `u_k` alone; for a guaranteed estimator the set grows to cover
+    /// every state the model and the process-noise bound allow.
+    ///
+    /// # Errors
+    /// As [`Estimator::step`]; the state is unchanged.
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&Self::Estimate, EstimatorError>;
     /// The current estimate.
     fn estimate(&self) -> &Self::Estimate;
     /// States, inputs and outputs.
@@ -96,6 +103,11 @@ pub trait DynEstimator<M: ?Sized> {
     /// # Errors
     /// As [`Estimator::step`].
     fn step_dyn(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError>;
+    /// A prediction-only step (see [`Estimator::predict`]).
+    ///
+    /// # Errors
+    /// As [`Estimator::predict`].
+    fn predict_dyn(&mut self, model: &M, u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError>;
     /// The current estimate.
     fn estimate_dyn(&self) -> &dyn Estimate;
     /// States, inputs and outputs.
@@ -105,6 +117,12 @@ pub trait DynEstimator<M: ?Sized> {
 impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
     fn step_dyn(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
         match self.step(model, u, y) {
+            Ok(e) => Ok(e),
+            Err(e) => Err(e),
+        }
+    }
+    fn predict_dyn(&mut self, model: &M, u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        match self.predict(model, u) {
             Ok(e) => Ok(e),
             Err(e) => Err(e),
         }

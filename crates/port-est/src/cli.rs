@@ -96,6 +96,11 @@ pub struct FilterArgs {
     /// How the set-membership filters solve their SDP (29) [default: two-multiplier]
     #[arg(short, long, value_name = "NAME", value_parser = solver_names())]
     pub solver: Option<String>,
+    /// What a gap in `k` (rows missing from the log) does: `error` names the row; `bridge` runs
+    /// prediction-only steps with the last input held (a guaranteed set grows honestly) and writes
+    /// a row for each missing step
+    #[arg(long, value_name = "POLICY", default_value = "error", value_parser = ["error", "bridge"])]
+    pub gaps: String,
 }
 
 /// The registry's estimators, with their summaries for `--help`.
@@ -113,7 +118,8 @@ fn solver_names() -> PossibleValuesParser {
 
 impl From<FilterArgs> for crate::FilterOptions {
     fn from(a: FilterArgs) -> Self {
-        Self { model: a.model, input: a.input, output: a.output, estimator: a.estimator, solver: a.solver }
+        let gaps = if a.gaps == "bridge" { crate::filter::GapPolicy::Bridge } else { crate::filter::GapPolicy::Error };
+        Self { model: a.model, input: a.input, output: a.output, estimator: a.estimator, solver: a.solver, gaps }
     }
 }
 

@@ -106,6 +106,8 @@ pub struct DataReader<R: Read> {
     rows: u64,
     /// `k` of the previous data row.
     last_k: Option<u64>,
+    /// Whether `k` may skip values (the caller bridges the gap).
+    allow_gaps: bool,
 }
 
 impl DataReader<File> {
@@ -172,9 +174,16 @@ impl<R: Read> DataReader<R> {
             header_line: 1,
             rows: 0,
             last_k: None,
+            allow_gaps: false,
         };
         r.read_header()?;
         Ok(r)
+    }
+
+    /// Accept rows whose `k` skips values (still strictly increasing): the caller bridges the
+    /// missing steps (`port-est filter --gaps bridge`).
+    pub fn set_allow_gaps(&mut self, allow: bool) {
+        self.allow_gaps = allow;
     }
 
     /// The file's name, as given.
@@ -293,7 +302,7 @@ impl<R: Read> DataReader<R> {
                 );
                 return Err(Error::at(self.locate(Some(0)), message));
             }
-            if k != prev + 1 {
+            if k != prev + 1 && !self.allow_gaps {
                 let message = format!(
                     "k jumps from {prev} to {k}: the rows k = {}..={} are missing (dropped rows or concatenated logs); \
                      k must increase by one from row to row",

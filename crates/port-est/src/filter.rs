@@ -9,8 +9,9 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use estimators::registry::{self, EstimatorInfo, LinearSetup, TWO_MULTIPLIER};
-use estimators::{EstimatorError, NoiseSettings};
+use estimators::{Estimate, EstimatorError, NoiseSettings};
 use models::StepModel;
+use nalgebra::DVector;
 
 use crate::data::{DataReader, DataRow};
 use crate::error::{Error, echo};
@@ -31,6 +32,22 @@ pub struct FilterOptions {
     /// How a set-membership filter solves (29) (`None`: [`TWO_MULTIPLIER`]); only for the
     /// estimators that use a solver.
     pub solver: Option<String>,
+    /// What a gap in `k` does: an error naming the row (default), or prediction-only steps.
+    pub gaps: GapPolicy,
+}
+
+/// What `port-est filter` does when `k` skips values (rows missing from the log).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum GapPolicy {
+    /// Refuse the file at the row after the gap.
+    #[default]
+    Error,
+    /// Bridge the missing steps by prediction-only steps with the last logged input held (no
+    /// measurement: a guaranteed set grows to cover every state the model and the noise bound
+    /// allow, and stays guaranteed if that was the input applied); one output row per missing
+    /// step.
+    Bridge,
 }
 
 /// What a run did.
@@ -91,6 +108,7 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let mut out = OutputFile::create(&options.output, &[("input", &options.input), ("model", &options.model)])?;
     let model = read_model(&options.model)?;
     let mut data = DataReader::open(&options.input, model.inputs(), model.outputs())?;
+    data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
     let summary = run_filter(&model, &mut data, info, &solver, &mut out, &options.output)?;
     out.commit()?;
     Ok(summary)
@@ -145,7 +163,20 @@ pub fn run_filter<R: Read, W: Write>(
     let sm = StepModel::new(&model.a, &model.b, &model.c);
     let mut row = DataRow::zeros(model.inputs(), model.outputs());
     let (mut steps, mut fallbacks) = (0, 0);
+    let mut last: Option<(u64, DVector<f64>)> = None;
     while data.read_row(&mut row)? {
+        // A gap (only with `--gaps bridge`): prediction-only steps with the last input held.
+        if let Some((last_k, last_u)) = &last {
+            for missing in last_k + 1..row.k {
+                let e = est.predict_dyn(&sm, last_u).map_err(|source| Error::Step {
+                    at: data.locate(Some(0)),
+                    k: missing,
+                    source,
+                })?;
+                write_row(out, missing + 1, e, n, with_tau).map_err(wio)?;
+                steps += 1;
+            }
+        }
         let Some(label) = row.k.checked_add(1) else {
             let message = format!("k = {} is too large (the output row is labelled k + 1)", row.k);
             return Err(Error::at(data.locate(Some(0)), message));
@@ -172,30 +203,41 @@ pub fn run_filter<R: Read, W: Write>(
                 return Err(Error::Step { at: data.locate(Some(cell)), k: row.k, source });
             }
         };
-        write!(out, "{label}").map_err(wio)?;
-        for v in e.center().iter() {
-            write!(out, ",{v:e}").map_err(wio)?;
-        }
-        // `bounds(i)` is `Some` for every state `i < n` (the estimator was built for `n`).
-        for i in 0..n {
-            write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.0)).map_err(wio)?;
-        }
-        for i in 0..n {
-            write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.1)).map_err(wio)?;
-        }
-        write!(out, ",{:e}", e.shape().trace()).map_err(wio)?;
-        if with_tau {
-            match e.multipliers() {
-                Some([t1, t2, t3]) => write!(out, ",{t1:e},{t2:e},{t3:e}"),
-                None => write!(out, ",,,"),
-            }
-            .map_err(wio)?;
-        }
-        writeln!(out).map_err(wio)?;
+        write_row(out, label, e, n, with_tau).map_err(wio)?;
         steps += 1;
         fallbacks += u64::from(e.fallback_used());
+        match &mut last {
+            Some((k, u)) => {
+                *k = row.k;
+                u.copy_from(&row.u);
+            }
+            None => last = Some((row.k, row.u.clone())),
+        }
     }
     Ok(FilterSummary { estimator: info.name, steps, fallbacks })
+}
+
+/// One output row: `label`, the centre, the bounds, the trace and (if `with_tau`) `τ`.
+fn write_row<W: Write>(out: &mut W, label: u64, e: &dyn Estimate, n: usize, with_tau: bool) -> std::io::Result<()> {
+    write!(out, "{label}")?;
+    for v in e.center().iter() {
+        write!(out, ",{v:e}")?;
+    }
+    // `bounds(i)` is `Some` for every state `i < n` (the estimator was built for `n`).
+    for i in 0..n {
+        write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.0))?;
+    }
+    for i in 0..n {
+        write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.1))?;
+    }
+    write!(out, ",{:e}", e.shape().trace())?;
+    if with_tau {
+        match e.multipliers() {
+            Some([t1, t2, t3]) => write!(out, ",{t1:e},{t2:e},{t3:e}")?,
+            None => write!(out, ",,,")?,
+        }
+    }
+    writeln!(out)
 }
 
 #[cfg(test)]
@@ -275,5 +317,37 @@ mod tests {
         let model = MODEL.replace("a = [[1.0, 0.01], [0.0, 0.99]]", "a = [[1e100, 0.0], [0.0, 1e100]]");
         let e = run(&model, &ramp(10), "kf", None).unwrap_err().to_string();
         assert!(e.contains("numerical failure") && e.contains("the cause is the model in m.toml"), "{e}");
+    }
+
+    #[test]
+    fn gaps_are_refused_or_bridged_as_chosen() {
+        let gap = "k,u1,y1\n0,1.0,0.0\n1,1.0,0.01\n4,1.0,0.04\n5,1.0,0.05\n";
+        let e = run(MODEL, gap, "smf", None).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:4:1: k jumps from 1 to 4"), "{e}");
+        // Bridged: rows k + 1 = 1..=6, the missing steps predicted (the set grows while blind).
+        let model = parse_model(Path::new("m.toml"), MODEL).unwrap();
+        let full = "k,u1,y1\n0,1.0,0.0\n1,1.0,0.01\n2,1.0,0.02\n3,1.0,0.03\n4,1.0,0.04\n5,1.0,0.05\n";
+        for est in ["smf", "kf"] {
+            let with_all = run(MODEL, full, est, None).unwrap();
+            let all: Vec<Vec<f64>> = with_all
+                .lines()
+                .skip(1)
+                .map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect())
+                .collect();
+            let mut data = DataReader::from_text(Path::new("d.csv"), gap, 1, 1).unwrap();
+            data.set_allow_gaps(true);
+            let (info, solver) = select(est, None).unwrap();
+            let mut out = Vec::new();
+            let s = run_filter(&model, &mut data, info, &solver, &mut out, Path::new("o.csv")).unwrap();
+            assert_eq!(s.steps, 6, "{est}");
+            let text = String::from_utf8(out).unwrap();
+            let rows: Vec<Vec<f64>> =
+                text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
+            let labels: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+            assert_eq!(labels, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "{est}");
+            // Without their measurements the bridged steps 3 and 4 publish larger sets (trace,
+            // column 7) than the same steps with them.
+            assert!(rows[2][7] > all[2][7] && rows[3][7] > all[3][7], "{est}: {text}");
+        }
     }
 }

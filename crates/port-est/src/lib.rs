@@ -24,7 +24,7 @@ use std::io::{self, Write};
 
 pub use cli::{Cli, Command, FilterArgs};
 pub use error::{Error, Location};
-pub use filter::{FilterOptions, FilterSummary, filter};
+pub use filter::{FilterOptions, FilterSummary, GapPolicy, filter};
 pub use model::{Model, parse_model, read_model};
 
 use estimators::registry;

@@ -31,6 +31,7 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
         output: dir.join("out.csv"),
         estimator: "smf".into(),
         solver: None,
+        gaps: port_est::GapPolicy::Error,
     };
     (dir, options)
 }

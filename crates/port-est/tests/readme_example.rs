@@ -43,6 +43,7 @@ fn readme_filter_example_runs_for_every_estimator() {
             output: output.clone(),
             estimator: info.name.to_owned(),
             solver: solver.map(str::to_owned),
+            gaps: port_est::GapPolicy::Error,
         })
         .unwrap_or_else(|e| panic!("{label}: {e}"));
         assert_eq!(summary.steps, 40, "{label}");

@@ -95,6 +95,8 @@ struct Workspace {
     /// `m × m` scratch for validating a new `R` in place.
     gain_r: DMatrix<f64>,
     cons: ConsistencyWork,
+    /// A zero measurement for the prediction-only step's certification (`L = 0`).
+    y_zero: DVector<f64>,
 }
 
 /// The improved set-membership filter, generic over the solver of (29).
@@ -195,6 +197,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 gain: GainWork::new(n, m),
                 gain_r: DMatrix::zeros(m, m),
                 cons: ConsistencyWork::new(n, m),
+                y_zero: DVector::zeros(m),
             },
         })
     }
@@ -284,6 +287,61 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     /// The solver, mutably (for example to change its settings).
     pub fn solver_mut(&mut self) -> &mut S {
         &mut self.solver
+    }
+
+    /// A prediction-only step (no measurement arrived): the certified outer bound of
+    /// `A 𝓔(x̂_k, P_k) ⊕ 𝓔(0, Q)` (plus `B u_k`), the update (13)–(29) with `τ₃ = 0` and `L = 0`:
+    /// `P = X₁/τ₁ + Q/τ₂` with the trace-optimal `τ₁ = √tr X₁ / (√tr X₁ + √tr Q)`, certified
+    /// as every published set. The set grows honestly; it stays guaranteed. On error the filter is
+    /// unchanged. Allocation-free.
+    pub fn predict<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        let model = &StepModel::new(model.a(), model.b(), model.c());
+        check_vec("u", u, self.p)?;
+        if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
+            check_in_box(u, lower, upper)?;
+        }
+        let Self { q, r, input, est, sol, ws, steps, guarantee_lost, .. } = self;
+        dense_kernels::mul_nn(1.0, model.a, &est.shape, 0.0, &mut ws.ap);
+        dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
+        let bounded = matches!(input, InputModel::BoundedDisturbance { .. });
+        let u_used: &DVector<f64> = match input {
+            InputModel::Predictor => u,
+            InputModel::BoundedDisturbance { mid, w_diag, .. } => {
+                effective_noise(q, model.b, w_diag, &mut ws.bw, &mut ws.q_eff);
+                mid
+            }
+        };
+        let q_used: &DMatrix<f64> = if bounded { &ws.q_eff } else { q };
+        let (sx, sq) = (ws.x1.trace().max(0.0).sqrt(), q_used.trace().max(0.0).sqrt());
+        let t1 = if sx + sq > 0.0 { sx / (sx + sq) } else { 0.5 };
+        let Some(tau) = clamp_tau([t1, 1.0 - t1, 0.0]) else {
+            return Err(EstimatorError::NumericalFailure("the prediction's multipliers are not finite"));
+        };
+        sol.l.fill(0.0);
+        let Some(inflation) = certify(&mut ws.cert, model, &sol.l, tau, &ws.x1, q_used, r, est, u_used, &ws.y_zero)
+        else {
+            return Err(EstimatorError::NumericalFailure("the predicted set is not finite"));
+        };
+        std::mem::swap(&mut est.center, &mut ws.cert.x_new);
+        std::mem::swap(&mut est.shape, &mut ws.cert.p_new);
+        est.set_bounds();
+        *steps += 1;
+        est.report = StepReport {
+            tau,
+            status: UpdateStatus::Unsolved,
+            iterations: 0,
+            fallback: None,
+            inflation,
+            solve_time: Duration::ZERO,
+            consistency: Consistency::Consistent,
+            guaranteed: !*guarantee_lost,
+        };
+        Ok(est)
     }
 
     /// One step: consumes `u_k` and the measurement `y_{k+1}`, returns the certified set
@@ -475,6 +533,9 @@ impl<S: UpdateSolver, M: LinearModel + ?Sized> Estimator<M> for SetMembershipFil
     type Estimate = SetEstimate;
     fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
         SetMembershipFilter::step(self, model, u, y)
+    }
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
+        SetMembershipFilter::predict(self, model, u)
     }
     fn estimate(&self) -> &SetEstimate {
         &self.est
