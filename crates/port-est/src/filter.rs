@@ -36,6 +36,11 @@ pub struct FilterOptions {
     pub gaps: GapPolicy,
 }
 
+/// The largest number of states for which `port-est filter` runs a set-membership filter with an
+/// SDP solver (LMI (28) has order `3n + 1 + m`): beyond it a step takes seconds (n = 50: 8 s per
+/// step with faer-ipm), so the exact two-multiplier solver is the only sensible choice.
+pub const MAX_SDP_STATES: usize = 16;
+
 /// What `port-est filter` does when `k` skips values (rows missing from the log).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
@@ -121,6 +126,17 @@ fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::
             path: model.path().to_owned(),
             message: format!("--estimator {} needs the input range `u_lower`, `u_upper` in the model file", info.name),
         });
+    }
+    if info.uses_solver && solver != TWO_MULTIPLIER && model.states() > MAX_SDP_STATES {
+        let (n, m) = (model.states(), model.outputs());
+        return Err(Error::Usage(format!(
+            "--solver {solver} solves LMI (28) at every step: for n = {n} states it has order {} and {} unknowns, \
+             seconds to minutes per step; the SDP solvers are offered up to n = {MAX_SDP_STATES}. Use --solver {} \
+             (exact, the same update at a few microseconds per step)",
+            3 * n + 1 + m,
+            n * (n + 1) / 2 + n * m + n + 3,
+            TWO_MULTIPLIER
+        )));
     }
     let noise = NoiseSettings::new(model.q.clone(), model.r.clone());
     let mut setup = LinearSetup::new(model.x0.clone(), model.p0.clone(), noise, model.inputs());
@@ -349,5 +365,36 @@ mod tests {
             // column 7) than the same steps with them.
             assert!(rows[2][7] > all[2][7] && rows[3][7] > all[3][7], "{est}: {text}");
         }
+    }
+
+    #[test]
+    fn sdp_solvers_are_refused_for_large_models() {
+        let n = MAX_SDP_STATES + 1;
+        let mat = |r: usize, c: usize, diag: f64| {
+            let rows: Vec<String> = (0..r)
+                .map(|i| {
+                    let cells: Vec<String> =
+                        (0..c).map(|j| if i == j { format!("{diag:?}") } else { "0.0".into() }).collect();
+                    format!("[{}]", cells.join(", "))
+                })
+                .collect();
+            format!("[{}]", rows.join(", "))
+        };
+        let model = format!(
+            "a = {}\nb = {}\nc = {}\nq = {}\nr = {}\np0 = {}\nx0 = [{}]\n",
+            mat(n, n, 0.9),
+            mat(n, 1, 1.0),
+            mat(1, n, 1.0),
+            mat(n, n, 0.01),
+            mat(1, 1, 0.1),
+            mat(n, n, 1.0),
+            vec!["0.0"; n].join(", ")
+        );
+        let e = run(&model, &ramp(3), "smf", Some("faer-ipm")).unwrap_err().to_string();
+        assert!(e.starts_with("--solver faer-ipm solves LMI (28) at every step: for n = 17 states"), "{e}");
+        // The two-multiplier solver is not refused (these synthetic data may contradict the bounds,
+        // which is reported at its row, not as a size limit).
+        let other = run(&model, &ramp(3), "smf", None);
+        assert!(!matches!(other, Err(Error::Usage(_))), "{other:?}");
     }
 }
