@@ -20,7 +20,7 @@ use dense_kernels as dense;
 use models::{DifferentiableModel, Dims};
 
 use crate::error::EstimatorError;
-use crate::kalman::{GaussianEstimate, GaussianUpdate};
+use crate::kalman::{GaussianEstimate, GaussianUpdate, commit_prediction};
 use crate::traits::{Estimator, NoiseSettings};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
 
@@ -121,7 +121,15 @@ impl ExtendedKalmanFilter {
         model: &M,
         u: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        let d = model.dims();
+        self.check_dims(model.dims())?;
+        check_vec("u", u, self.p)?;
+        self.predict_into_buffers(model, u)?;
+        commit_prediction(&mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        Ok(&self.est)
+    }
+
+    /// The model's dimensions must be the filter's.
+    fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
         for (what, expected, found) in [
             ("model states", self.n, d.states),
             ("model inputs", self.p, d.inputs),
@@ -131,21 +139,24 @@ impl ExtendedKalmanFilter {
                 return Err(EstimatorError::DimensionMismatch { what, expected, found });
             }
         }
-        check_vec("u", u, self.p)?;
+        Ok(())
+    }
+
+    /// (7), (8): `x⁻ = f(x̂, u)`, `F = ∂f/∂x`, `P⁻ = F P Fᵀ + Q` into the prediction buffers.
+    fn predict_into_buffers<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<(), EstimatorError> {
         model.f_with_jacobian(&self.est.mean, u, &mut self.x_pred, &mut self.f)?;
+        if self.x_pred.iter().chain(self.f.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the model's prediction or its Jacobian is not finite"));
+        }
         dense::mul_nn(1.0, &self.f, &self.est.covariance, 0.0, &mut self.fp);
         self.p_pred.copy_from(&self.q);
         dense::mul_nt(1.0, &self.fp, &self.f, 1.0, &mut self.p_pred);
         dense::symmetrize(&mut self.p_pred);
-        if self.x_pred.iter().chain(self.p_pred.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
-        }
-        std::mem::swap(&mut self.est.mean, &mut self.x_pred);
-        std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
-        for i in 0..self.n {
-            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
-        }
-        Ok(&self.est)
+        Ok(())
     }
 
     /// One step (7)–(11): consumes `u_k` and `y_{k+1}`. On error the state is unchanged.
@@ -161,27 +172,10 @@ impl ExtendedKalmanFilter {
         u: &DVector<f64>,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        let d = model.dims();
-        for (what, expected, found) in [
-            ("model states", self.n, d.states),
-            ("model inputs", self.p, d.inputs),
-            ("model outputs", self.m, d.outputs),
-        ] {
-            if expected != found {
-                return Err(EstimatorError::DimensionMismatch { what, expected, found });
-            }
-        }
+        self.check_dims(model.dims())?;
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
-        // Predict (7), (8).
-        model.f_with_jacobian(&self.est.mean, u, &mut self.x_pred, &mut self.f)?;
-        if self.x_pred.iter().chain(self.f.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the model's prediction or its Jacobian is not finite"));
-        }
-        dense::mul_nn(1.0, &self.f, &self.est.covariance, 0.0, &mut self.fp);
-        self.p_pred.copy_from(&self.q);
-        dense::mul_nt(1.0, &self.fp, &self.f, 1.0, &mut self.p_pred);
-        dense::symmetrize(&mut self.p_pred);
+        self.predict_into_buffers(model, u)?;
         // Gain (9).
         model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
         if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {

@@ -69,6 +69,25 @@ pub(crate) struct GaussianUpdate {
     p_new: DMatrix<f64>,
 }
 
+/// Publishes a prediction `(x⁻, P⁻)` as the estimate (swapping buffers) after checking that it is
+/// finite; on error nothing changes. Shared by the prediction-only steps of the Kalman and the
+/// extended Kalman filter.
+pub(crate) fn commit_prediction(
+    est: &mut GaussianEstimate,
+    x_pred: &mut DVector<f64>,
+    p_pred: &mut DMatrix<f64>,
+) -> Result<(), EstimatorError> {
+    if x_pred.iter().chain(p_pred.iter()).any(|v| !v.is_finite()) {
+        return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
+    }
+    std::mem::swap(&mut est.mean, x_pred);
+    std::mem::swap(&mut est.covariance, p_pred);
+    for i in 0..est.mean.len() {
+        est.std_dev[i] = est.covariance[(i, i)].max(0.0).sqrt();
+    }
+    Ok(())
+}
+
 impl GaussianUpdate {
     /// Buffers for `n` states and `m` outputs.
     pub(crate) fn new(n: usize, m: usize) -> Self {
@@ -203,22 +222,19 @@ impl KalmanFilter {
     ) -> Result<&GaussianEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
-        let (a, b) = (model.a(), model.b());
+        self.predict_into_buffers(model.a(), model.b(), u);
+        commit_prediction(&mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        Ok(&self.est)
+    }
+
+    /// `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q` into the prediction buffers (allocation-free).
+    fn predict_into_buffers(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, u: &DVector<f64>) {
         dense::gemv(1.0, a, &self.est.mean, 0.0, &mut self.x_pred);
         dense::gemv(1.0, b, u, 1.0, &mut self.x_pred);
         dense::mul_nn(1.0, a, &self.est.covariance, 0.0, &mut self.ap);
         self.p_pred.copy_from(&self.q);
         dense::mul_nt(1.0, &self.ap, a, 1.0, &mut self.p_pred);
         dense::symmetrize(&mut self.p_pred);
-        if self.x_pred.iter().chain(self.p_pred.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
-        }
-        std::mem::swap(&mut self.est.mean, &mut self.x_pred);
-        std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
-        for i in 0..self.n {
-            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
-        }
-        Ok(&self.est)
     }
 
     /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
@@ -233,13 +249,7 @@ impl KalmanFilter {
         let (a, b, c) = (model.a(), model.b(), model.c());
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
-        // Predict.
-        dense::gemv(1.0, a, &self.est.mean, 0.0, &mut self.x_pred);
-        dense::gemv(1.0, b, u, 1.0, &mut self.x_pred);
-        dense::mul_nn(1.0, a, &self.est.covariance, 0.0, &mut self.ap);
-        self.p_pred.copy_from(&self.q);
-        dense::mul_nt(1.0, &self.ap, a, 1.0, &mut self.p_pred);
-        dense::symmetrize(&mut self.p_pred);
+        self.predict_into_buffers(a, b, u);
         // Gain, mean and Joseph-form covariance.
         self.innov.copy_from(y);
         dense::gemv(-1.0, c, &self.x_pred, 1.0, &mut self.innov);

@@ -10,6 +10,19 @@ use nalgebra::DVector;
 
 use super::runner::Run;
 
+/// A short description of the machine (CPU model and core count).
+#[must_use]
+pub fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores")
+}
+
 /// Writes `bytes` to `path` atomically: to a temporary file in the same directory, flushed and
 /// synced, then renamed over `path`. On error the temporary file is removed and `path` is
 /// untouched.

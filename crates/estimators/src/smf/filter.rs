@@ -306,16 +306,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             check_in_box(u, lower, upper)?;
         }
         let Self { q, r, input, est, sol, ws, steps, guarantee_lost, .. } = self;
-        dense_kernels::mul_nn(1.0, model.a, &est.shape, 0.0, &mut ws.ap);
-        dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
-        let bounded = matches!(input, InputModel::BoundedDisturbance { .. });
-        let u_used: &DVector<f64> = match input {
-            InputModel::Predictor => u,
-            InputModel::BoundedDisturbance { mid, w_diag, .. } => {
-                effective_noise(q, model.b, w_diag, &mut ws.bw, &mut ws.q_eff);
-                mid
-            }
-        };
+        let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
         let q_used: &DMatrix<f64> = if bounded { &ws.q_eff } else { q };
         let (sx, sq) = (ws.x1.trace().max(0.0).sqrt(), q_used.trace().max(0.0).sqrt());
         let t1 = if sx + sq > 0.0 { sx / (sx + sq) } else { 0.5 };
@@ -363,18 +354,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         }
         let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, .. } = self;
         let (n, m) = (*n, *m);
-        // X₁ = A P_k Aᵀ.
-        dense_kernels::mul_nn(1.0, model.a, &est.shape, 0.0, &mut ws.ap);
-        dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
-        // Effective process noise and the input used by the predictor.
-        let bounded = matches!(input, InputModel::BoundedDisturbance { .. });
-        let u_used: &DVector<f64> = match input {
-            InputModel::Predictor => u,
-            InputModel::BoundedDisturbance { mid, w_diag, .. } => {
-                effective_noise(q, model.b, w_diag, &mut ws.bw, &mut ws.q_eff);
-                mid
-            }
-        };
+        let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
         let warm = est.report.tau;
         // Consistency of y with the predicted set and the noise bounds, before anything changes.
         dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
@@ -499,6 +479,29 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             guaranteed,
         };
         Ok(est)
+    }
+}
+
+/// The prediction shared by a step and a prediction-only step: `X₁ = A P_k Aᵀ` into `ws.x1`, and
+/// the input the predictor uses with the effective process noise: `(false, u)` with `Q`, or for
+/// an input treated as a bounded disturbance `(true, u_mid)` with `Q_eff` written into
+/// `ws.q_eff`. Allocation-free.
+fn predictor<'a>(
+    model: &StepModel<'_>,
+    shape: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    input: &'a InputModel,
+    u: &'a DVector<f64>,
+    ws: &mut Workspace,
+) -> (bool, &'a DVector<f64>) {
+    dense_kernels::mul_nn(1.0, model.a, shape, 0.0, &mut ws.ap);
+    dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
+    match input {
+        InputModel::Predictor => (false, u),
+        InputModel::BoundedDisturbance { mid, w_diag, .. } => {
+            effective_noise(q, model.b, w_diag, &mut ws.bw, &mut ws.q_eff);
+            (true, mid)
+        }
     }
 }
 

@@ -2,6 +2,8 @@
 
 use std::fmt::Write as _;
 
+use crate::reproduce::outputs::machine;
+
 use carrier_dynamics::{CarrierModel, CarrierParams};
 use serde::Serialize;
 
@@ -377,18 +379,6 @@ pub fn markdown(s: &Summary) -> String {
         }
     }
     md
-}
-
-/// A short description of the machine (CPU model and core count).
-fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    format!("{cpu}, {cores} cores")
 }
 
 /// What the command prints: the timing table of the paper scenario and the claims.

@@ -236,7 +236,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         kalman_step,
         figures,
         claims,
-        machine: report::machine(),
+        machine: crate::reproduce::outputs::machine(),
         build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
         load_average,
         truth_seconds,

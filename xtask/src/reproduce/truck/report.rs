@@ -463,19 +463,6 @@ fn observations(s: &Summary) -> String {
     o
 }
 
-/// A short description of the machine (CPU model and core count).
-#[must_use]
-pub fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    format!("{cpu}, {cores} cores")
-}
-
 /// What the command prints: a line per case and the claims.
 #[must_use]
 pub fn console(s: &Summary) -> String {
