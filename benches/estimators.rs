@@ -7,6 +7,9 @@
 //! Kalman step of the same size, and the truck model's evaluations alone (f, ∂f/∂x, h, ∂h/∂x: the
 //! tyre forces and their derivatives), so that the EKF's time splits into tyre evaluations and
 //! linear algebra.
+//!
+//! And the supply vessel's UKF step (paper's α, β, κ; 6 states, Euler at 0.1 s) beside its EKF
+//! step, and one NSAMPC control law.
 
 use std::hint::black_box;
 
@@ -170,5 +173,54 @@ fn truck(crit: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, steps, truck);
+/// The supply vessel (dp-vessel note): one UKF step with the paper's `α, β, κ` (6 states, 13 sigma
+/// points, Euler model at 0.1 s), the EKF step on the same model, and one NSAMPC control law.
+fn vessel(crit: &mut Criterion) {
+    use estimators::{ExtendedKalmanFilter, UkfParams, UnscentedKalmanFilter};
+    use vessel_control::{Nsampc, NsampcParams, ReferenceSample};
+    use vessel_dynamics::{DiscreteVessel, VesselParams};
+    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let x0 = DVector::zeros(6);
+    let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1, 0.1, 0.1, 0.01]));
+    let q = DMatrix::identity(6, 6) * 1e-2;
+    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1]));
+    let inputs: Vec<DVector<f64>> = (0..64)
+        .map(|k| DVector::from_vec(vec![1e5 * (k as f64 * 0.1).sin(), 3e4, 1e6 * (k as f64 * 0.2).cos()]))
+        .collect();
+    let ys: Vec<DVector<f64>> =
+        (0..64).map(|k| DVector::from_vec(vec![0.1 * k as f64, 0.05 * k as f64, 0.01 * (k % 7) as f64])).collect();
+    let mut group = crit.benchmark_group("vessel_step");
+    let mut ukf =
+        UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper()).unwrap();
+    let mut k = 0;
+    group.bench_function("ukf", |b| {
+        b.iter(|| {
+            k = (k + 1) % ys.len();
+            if k == 0 {
+                ukf = UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper())
+                    .unwrap();
+            }
+            black_box(ukf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
+        })
+    });
+    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3).unwrap();
+    group.bench_function("ekf", |b| {
+        b.iter(|| {
+            k = (k + 1) % ys.len();
+            if k == 0 {
+                ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3).unwrap();
+            }
+            black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
+        })
+    });
+    let ctrl = Nsampc::new(&VesselParams::paper(), NsampcParams::paper()).unwrap();
+    let reference = ReferenceSample::hold(nalgebra::Vector3::new(50.0, 50.0, 0.0));
+    let x = [10.0, 20.0, 0.1, 0.3, 0.1, 0.01];
+    group.bench_function("nsampc-control", |b| {
+        b.iter(|| black_box(ctrl.control(black_box(&x), &reference).unwrap().tau[0]))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, steps, truck, vessel);
 criterion_main!(benches);

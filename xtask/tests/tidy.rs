@@ -22,8 +22,9 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels"]),
-    ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi"]),
-    ("port-est", &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics"]),
+    ("vessel-control", &["models", "dense-kernels", "vessel-dynamics"]),
+    ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi", "fuzzy-inference"]),
+    ("port-est", &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics", "fuzzy-inference"]),
 ];
 
 fn root() -> PathBuf {

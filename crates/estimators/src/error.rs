@@ -99,6 +99,25 @@ pub enum EstimatorError {
         /// How far outside, relative to the set's extent in the separating direction.
         excess: f64,
     },
+    /// A scalar setting of an estimator is out of range (for example the UKF's `α`).
+    #[error("invalid setting {what} = {value}: must be {requirement}")]
+    InvalidSetting {
+        /// Which setting.
+        what: &'static str,
+        /// The value given (or derived from the settings).
+        value: f64,
+        /// What it must satisfy.
+        requirement: &'static str,
+    },
+    /// A setting of an estimator is invalid (for example block lengths that do not sum to the
+    /// horizon, an empty noise box, or `λv ≤ 1` for the min–max moving-horizon estimator).
+    #[error("invalid configuration of {estimator}: {message}")]
+    InvalidConfiguration {
+        /// The estimator.
+        estimator: &'static str,
+        /// What is wrong, naming the setting.
+        message: String,
+    },
     /// The model could not be evaluated.
     #[error("model: {0}")]
     Model(#[from] ModelError),

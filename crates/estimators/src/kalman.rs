@@ -237,6 +237,42 @@ impl KalmanFilter {
         dense::symmetrize(&mut self.p_pred);
     }
 
+    /// The first half of a step for filters that choose their measurement noise from the
+    /// innovation (`adaptive`): validates the data, predicts into the buffers and forms the
+    /// innovation `ν = y − C x⁻`; nothing is published. Allocation-free.
+    pub(crate) fn predict_and_innovate<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&DVector<f64>, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        check_vec("u", u, self.p)?;
+        check_vec("y", y, self.m)?;
+        self.predict_into_buffers(model.a(), model.b(), u);
+        self.innov.copy_from(y);
+        dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        Ok(&self.innov)
+    }
+
+    /// The second half: the Joseph-form update of the buffered prediction and innovation with
+    /// `C` and the measurement covariance `r` (`m × m`, for example a scaled `R`), published on
+    /// success; on error nothing changes. Allocation-free.
+    pub(crate) fn update_buffered(
+        &mut self,
+        c: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.upd.compute(&self.x_pred, &self.p_pred, c, r, &self.innov)?;
+        self.upd.commit(&mut self.est);
+        Ok(&self.est)
+    }
+
+    /// The measurement-noise covariance `R`.
+    pub(crate) fn measurement_noise(&self) -> &DMatrix<f64> {
+        &self.r
+    }
+
     /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
     /// state is unchanged. Allocation-free.
     pub fn step<M: LinearModel + ?Sized>(

@@ -25,6 +25,11 @@
 //!   [`smf::lmi28`]). The published shape is certified (module [`smf`]: the inflation rule and
 //!   the fallback).
 //! * [`yang_li`]: the reconstruction of the paper's reference \[17\].
+//! * [`AdaptiveKalmanFilter`] (module [`adaptive`]): the Kalman step with `R` scaled every epoch by
+//!   `t_k` from any [`NoiseScaling`]; [`FuzzyKalmanFilter`] is the BDS/INS paper's, with the Mamdani
+//!   system of `fuzzy-inference` (`docs/bds-ins-fuzzy-kf.md`).
+//! * [`UnscentedKalmanFilter`]: scaled sigma points (`α, β, κ`, negative weights allowed, with a
+//!   positive-definiteness guard) over any [`models::DiscreteModel`] (`docs/dp-vessel.md`).
 //!
 //! Every filter implements [`Estimator`] for the model capability it needs (here
 //! [`LinearModel`]) and publishes an [`Estimate`] (centre, shape, bounds, and whether it is a
@@ -38,18 +43,26 @@
 //! does an SDP-backed step after the first (which builds the SDP) with the default backend; all
 //! return borrowed views of the filter's estimate.
 
+pub mod adaptive;
 pub mod ekf;
 pub mod error;
 pub mod kalman;
+pub mod mhe;
 pub mod registry;
 pub mod smf;
 pub mod traits;
+pub mod ukf;
 mod validate;
 pub mod yang_li;
 
+pub use adaptive::{
+    AdaptiveError, AdaptiveKalmanFilter, AdaptiveStep, ConstantScaling, FuzzyKalmanFilter, FuzzyScaling, NoiseScaling,
+    ReceiverStatus, ScalingContext,
+};
 pub use ekf::ExtendedKalmanFilter;
 pub use error::EstimatorError;
 pub use kalman::{GaussianEstimate, KalmanFilter};
+pub use mhe::{MheSettings, MovingHorizonEstimator};
 pub use models::{LinearModel, StepModel};
 pub use registry::{EstimatorInfo, LINEAR_ESTIMATORS, LinearSetup};
 pub use smf::{
@@ -58,4 +71,5 @@ pub use smf::{
     UpdateStatus,
 };
 pub use traits::{DynEstimator, Estimate, EstimateKind, Estimator, NoiseSettings};
+pub use ukf::{UkfParams, UkfReport, UnscentedKalmanFilter};
 pub use validate::SYMMETRY_TOLERANCE;

@@ -3,18 +3,21 @@
 //!
 //! Estimators are grouped by the model capability they need: [`LINEAR_ESTIMATORS`] run on linear
 //! (time-varying) models ([`linear`], `Box<dyn DynEstimator<dyn LinearModel>>`),
-//! [`DIFFERENTIABLE_ESTIMATORS`] on models with Jacobians ([`differentiable`]).
+//! [`DIFFERENTIABLE_ESTIMATORS`] on models with Jacobians ([`differentiable`]),
+//! [`NONLINEAR_ESTIMATORS`] on models that give only `f` and `h` ([`nonlinear`]).
 
 use nalgebra::{DMatrix, DVector};
 
 use lmi::SolverSettings;
-use models::{DifferentiableModel, LinearModel};
+use models::{DifferentiableModel, DiscreteModel, LinearModel};
 
 use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
+use crate::mhe::{MheCost, MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
 use crate::smf::{SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver};
 use crate::traits::{DynEstimator, EstimateKind, NoiseSettings};
+use crate::ukf::{UkfParams, UnscentedKalmanFilter};
 use crate::yang_li;
 
 /// The solver name of the exact two-multiplier method (the default of the set-membership
@@ -67,6 +70,20 @@ pub const LINEAR_ESTIMATORS: &[EstimatorInfo] = &[
         uses_solver: true,
         needs_input_bounds: false,
     },
+    EstimatorInfo {
+        name: "rmhe",
+        kind: EstimateKind::Point,
+        summary: "robust min-max moving-horizon estimator with disturbance blocking (car paper), box-bounded noise",
+        uses_solver: false,
+        needs_input_bounds: false,
+    },
+    EstimatorInfo {
+        name: "mhe",
+        kind: EstimateKind::Point,
+        summary: "plain least-squares moving-horizon estimator (the rmhe settings with lambda_v -> infinity)",
+        uses_solver: false,
+        needs_input_bounds: false,
+    },
 ];
 
 /// Everything a linear-model estimator is built from.
@@ -87,6 +104,9 @@ pub struct LinearSetup {
     pub solver: String,
     /// Settings of an SDP backend.
     pub sdp_settings: SolverSettings,
+    /// Settings of the moving-horizon estimators (`rmhe`, `mhe`); their `x0`, `p0`, `q`, `r`
+    /// are replaced by this setup's.
+    pub mhe: Option<MheSettings>,
 }
 
 impl LinearSetup {
@@ -101,6 +121,7 @@ impl LinearSetup {
             input_bounds: None,
             solver: TWO_MULTIPLIER.to_owned(),
             sdp_settings: SolverSettings::default(),
+            mhe: None,
         }
     }
 }
@@ -145,6 +166,19 @@ pub fn linear(name: &str, setup: &LinearSetup) -> Result<BoxedLinearEstimator, E
             Box::new(yang_li::with_input(x0, p0, q, r, *inputs, TwoMultiplierSolver::new())?)
         }
         "yang-li-with-input" => Box::new(yang_li::with_input(x0, p0, q, r, *inputs, sdp()?)?),
+        "rmhe" | "mhe" => {
+            let Some(settings) = &setup.mhe else {
+                return Err(EstimatorError::MissingSetting {
+                    estimator: if name == "rmhe" { "rmhe" } else { "mhe" },
+                    what: "the moving-horizon settings (horizon, blocks, noise boxes W and V, lambda_v)",
+                });
+            };
+            let mut settings = MheSettings { x0, p0, q, r, ..settings.clone() };
+            if name == "mhe" {
+                settings.cost = MheCost::LeastSquares;
+            }
+            Box::new(MovingHorizonEstimator::new(settings, *inputs)?)
+        }
         _ => {
             return Err(EstimatorError::UnknownEstimator {
                 name: name.to_owned(),
@@ -161,13 +195,23 @@ pub fn info(name: &str) -> Option<&'static EstimatorInfo> {
 }
 
 /// The estimators for differentiable (nonlinear) models, in display order.
-pub const DIFFERENTIABLE_ESTIMATORS: &[EstimatorInfo] = &[EstimatorInfo {
-    name: "ekf",
-    kind: EstimateKind::Gaussian,
-    summary: "extended Kalman filter, Joseph form (truck paper (7)-(11)); Q, R, P0 as covariances",
-    uses_solver: false,
-    needs_input_bounds: false,
-}];
+pub const DIFFERENTIABLE_ESTIMATORS: &[EstimatorInfo] = &[
+    EstimatorInfo {
+        name: "ekf",
+        kind: EstimateKind::Gaussian,
+        summary: "extended Kalman filter, Joseph form (truck paper (7)-(11)); Q, R, P0 as covariances",
+        uses_solver: false,
+        needs_input_bounds: false,
+    },
+    EstimatorInfo {
+        name: "mhe-ukf",
+        kind: EstimateKind::Point,
+        summary: "nonlinear moving-horizon estimator, N = 10, Gauss-Newton on the banded window, UKF arrival cost \
+                  (vessel paper (21)-(37)); Q, R, P0 as weights",
+        uses_solver: false,
+        needs_input_bounds: false,
+    },
+];
 
 /// Everything a Gaussian estimator of a nonlinear model is built from.
 #[derive(Debug, Clone)]
@@ -195,9 +239,68 @@ pub fn differentiable(name: &str, setup: &GaussianSetup) -> Result<BoxedDifferen
         "ekf" => {
             Ok(Box::new(ExtendedKalmanFilter::new(x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone(), *inputs)?))
         }
+        "mhe-ukf" => Ok(Box::new(NonlinearMhe::new(
+            NonlinearMheSettings::new(x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone()),
+            *inputs,
+        )?)),
         _ => Err(EstimatorError::UnknownEstimator {
             name: name.to_owned(),
             known: DIFFERENTIABLE_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
+        }),
+    }
+}
+
+/// The estimators that need only `f` and `h` ([`models::DiscreteModel`]), in display order.
+pub const NONLINEAR_ESTIMATORS: &[EstimatorInfo] = &[EstimatorInfo {
+    name: "ukf",
+    kind: EstimateKind::Gaussian,
+    summary: "unscented Kalman filter, scaled sigma points with a positive-definiteness guard (dp-vessel note); \
+              Q, R, P0 as covariances",
+    uses_solver: false,
+    needs_input_bounds: false,
+}];
+
+/// Everything an estimator of [`NONLINEAR_ESTIMATORS`] is built from: the Gaussian setup and
+/// the sigma-point parameters.
+#[derive(Debug, Clone)]
+pub struct NonlinearSetup {
+    /// Initial mean and covariance, noise covariances, number of inputs.
+    pub gaussian: GaussianSetup,
+    /// Sigma-point parameters of `ukf`.
+    pub ukf: UkfParams,
+}
+
+impl NonlinearSetup {
+    /// A setup with the default sigma-point parameters ([`UkfParams::default`]).
+    #[must_use]
+    pub fn new(gaussian: GaussianSetup) -> Self {
+        Self { gaussian, ukf: UkfParams::default() }
+    }
+}
+
+/// An estimator of discrete (nonlinear) models.
+pub type BoxedNonlinearEstimator = Box<dyn for<'m> DynEstimator<dyn DiscreteModel + 'm>>;
+
+/// Builds the registered estimator `name` for discrete models from `setup`. (Every estimator
+/// here also implements `Estimator<dyn DifferentiableModel>`, so the same filter can be boxed
+/// beside the EKF.)
+///
+/// # Errors
+/// [`EstimatorError::UnknownEstimator`]; the constructors' validation errors.
+pub fn nonlinear(name: &str, setup: &NonlinearSetup) -> Result<BoxedNonlinearEstimator, EstimatorError> {
+    let GaussianSetup { x0, p0, noise, inputs } = &setup.gaussian;
+    match name {
+        "ukf" => Ok(Box::new(UnscentedKalmanFilter::new(
+            x0.clone(),
+            p0.clone(),
+            noise.q.clone(),
+            noise.r.clone(),
+            *inputs,
+            setup.ukf,
+        )?)),
+        _ => Err(EstimatorError::UnknownEstimator {
+            name: name.to_owned(),
+            known: NONLINEAR_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
         }),
     }
 }

@@ -16,6 +16,9 @@ pub enum EstimateKind {
     /// A guaranteed ellipsoid `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}` that contains the true
     /// state whenever the noises respect their bounds (bounds are the set's projections).
     GuaranteedEllipsoid,
+    /// A point estimate (moving-horizon estimators): the shape is a weight matrix of the method
+    /// (documented by the estimator), neither a calibrated covariance nor a guaranteed set.
+    Point,
 }
 
 impl EstimateKind {
@@ -25,6 +28,7 @@ impl EstimateKind {
         match self {
             EstimateKind::Gaussian => "gaussian",
             EstimateKind::GuaranteedEllipsoid => "guaranteed ellipsoid",
+            EstimateKind::Point => "point",
         }
     }
 }

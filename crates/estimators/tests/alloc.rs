@@ -150,6 +150,15 @@ fn registry_estimators_and_noise_setters_do_not_allocate_after_warm_up() {
     let mut setup =
         LinearSetup::new(DVector::zeros(4), DMatrix::identity(4, 4) * 0.5, NoiseSettings::new(q.clone(), r.clone()), 2);
     setup.input_bounds = Some((DVector::from_element(2, -1.0), DVector::from_element(2, 1.0)));
+    // The moving-horizon estimators need their settings (noise boxes); x0, P0, Q, R are the setup's.
+    setup.mhe = Some(estimators::MheSettings::new(
+        DVector::zeros(4),
+        DMatrix::identity(4, 4),
+        DMatrix::identity(4, 4),
+        DMatrix::identity(3, 3),
+        (DVector::from_element(4, -0.5), DVector::from_element(4, 0.5)),
+        (DVector::from_element(3, -1.0), DVector::from_element(3, 1.0)),
+    ));
     for info in LINEAR_ESTIMATORS {
         let mut est = linear(info.name, &setup).unwrap();
         est.step_dyn(dyn_model, &u, &ys[0]).unwrap();

@@ -24,6 +24,8 @@ pub enum Command {
     Filter(FilterArgs),
     /// Run the truck paper's extended Kalman filter over logged data of a 3-axle port truck
     Truck(TruckArgs),
+    /// Run the BDS/INS paper's fuzzy-adaptive Kalman filter over logged INS and BDS solutions with the receiver status
+    BdsIns(BdsInsArgs),
     /// List the estimators (--estimator) and the solvers of the set-membership filters (--solver)
     Estimators,
 }
@@ -57,6 +59,64 @@ pub struct TruckArgs {
 impl From<TruckArgs> for crate::truck::TruckOptions {
     fn from(a: TruckArgs) -> Self {
         Self { input: a.input, output: a.output, config: a.config }
+    }
+}
+
+const BDS_INS_FORMATS: &str = "\
+Files:
+  DATA.csv    header `k,u1,u2,u3,y1,y2,y3,y4,y5`, one row per epoch: u1, u2 = INS position east, north [m];
+              u3 = INS heading (azimuth, clockwise from north) [rad]; y1, y2 = BDS position east, north [m];
+              y3 = BDS dual-antenna heading [rad]; y4 = satellites used (>= 0); y5 = RTK status 1 single,
+              2 differential, 3 fixed, 4 float, 0 = no fix (prediction only; y1..y4 ignored). With --gga,
+              y5 is the NMEA GGA quality (0 no fix, 1, 2, 4 RTK fixed, 5 RTK float).
+  OUT.csv     header `k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d`, one row per epoch labelled k+1: the
+              corrected position and heading (INS minus the estimated error; the INS is never reset), the
+              estimated errors and their standard deviations, the noise scale t_k and the distance d_k
+              (empty without a fix); written atomically.
+  CONFIG.toml optional: `ts` (s, default 1), `latitude_deg` (31), `flat` (false), `sigma0` (nominal BDS
+              horizontal sigma, m, 0.2), `heading_sigma_deg` (0.2), `accel_white` (m/s^2/sqrt(Hz)),
+              `gyro_white` (rad/s/sqrt(Hz)), `p0_sigma` (13 initial sigmas, paper state order).
+  SYSTEM.toml optional fuzzy system with inputs [N, RTK, d] (default: the 45-rule system of
+              docs/bds-ins-fuzzy-kf.md with the d sets scaled by sigma0; an editable copy is
+              crates/fuzzy-inference/systems/bds_ins.toml).
+
+Example:
+  port-est bds-ins --input examples/bds-ins/data.csv --output out.csv";
+
+/// The arguments of `port-est bds-ins`.
+#[derive(Debug, Args)]
+#[command(after_long_help = BDS_INS_FORMATS)]
+pub struct BdsInsArgs {
+    /// The logged data: header `k,u1,u2,u3,y1,y2,y3,y4,y5` (INS x, y, heading; BDS x, y, heading, satellites, RTK)
+    #[arg(short, long, value_name = "DATA.csv")]
+    pub input: PathBuf,
+    /// Where to write the estimates (CSV; replaced only if the run succeeds)
+    #[arg(short, long, value_name = "OUT.csv")]
+    pub output: PathBuf,
+    /// Settings overriding the digest's defaults (TOML)
+    #[arg(short, long, value_name = "CONFIG.toml")]
+    pub config: Option<PathBuf>,
+    /// A fuzzy system with inputs [N, RTK, d] replacing the built-in one (TOML)
+    #[arg(long, value_name = "SYSTEM.toml")]
+    pub fis: Option<PathBuf>,
+    /// `fuzzy`: R scaled by the fuzzy system every epoch; `none`: the plain Kalman filter
+    #[arg(long, value_name = "SCALING", default_value = "fuzzy", value_parser = ["fuzzy", "none"])]
+    pub scaling: String,
+    /// Read y5 as an NMEA GGA quality indicator instead of the paper's RTK code
+    #[arg(long)]
+    pub gga: bool,
+}
+
+impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
+    fn from(a: BdsInsArgs) -> Self {
+        Self {
+            input: a.input,
+            output: a.output,
+            config: a.config,
+            fis: a.fis,
+            fuzzy: a.scaling == "fuzzy",
+            rtk_coding: if a.gga { crate::bds_ins::RtkCoding::Gga } else { crate::bds_ins::RtkCoding::Paper },
+        }
     }
 }
 

@@ -141,6 +141,17 @@ fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::
     let noise = NoiseSettings::new(model.q.clone(), model.r.clone());
     let mut setup = LinearSetup::new(model.x0.clone(), model.p0.clone(), noise, model.inputs());
     setup.input_bounds.clone_from(&model.input_range);
+    setup.mhe.clone_from(&model.mhe);
+    if matches!(info.name, "rmhe" | "mhe") && model.mhe.is_none() {
+        return Err(Error::File {
+            path: model.path().to_owned(),
+            message: format!(
+                "--estimator {} needs an `[mhe]` table in the model file (at least the noise boxes `w_lower`, \
+                 `w_upper`, `v_lower`, `v_upper`; see README)",
+                info.name
+            ),
+        });
+    }
     solver.clone_into(&mut setup.solver);
     registry::linear(info.name, &setup).map_err(|e| match e {
         EstimatorError::Lmi(_) | EstimatorError::UnknownEstimator { .. } | EstimatorError::MissingSetting { .. } => {

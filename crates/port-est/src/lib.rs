@@ -3,6 +3,8 @@
 //! ```text
 //! port-est filter --model MODEL.toml --input DATA.csv --output OUT.csv [--estimator NAME] [--solver NAME]
 //! port-est estimators
+//! port-est truck --input DATA.csv --output OUT.csv [--config CONFIG.toml]
+//! port-est bds-ins --input DATA.csv --output OUT.csv [--config CONFIG.toml] [--fis SYSTEM.toml] [--scaling none] [--gga]
 //! ```
 //!
 //! `filter` runs any estimator of [`estimators::registry`] (the set-membership filter `smf` by
@@ -12,10 +14,12 @@
 //! `file:line:column` ([`Error`]). The binary is a thin layer over [`execute`], so that tests
 //! drive the same code.
 
+pub mod bds_ins;
 pub mod cli;
 pub mod data;
 pub mod error;
 pub mod filter;
+mod mhe_table;
 pub mod model;
 pub mod output;
 pub mod truck;
@@ -57,6 +61,19 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
             let options = truck::TruckOptions::from(args);
             let steps = truck::truck(&options)?;
             let _ = writeln!(stderr, "{steps} steps of ekf written to {}", options.output.display());
+            Ok(())
+        }
+        Command::BdsIns(args) => {
+            let options = bds_ins::BdsInsOptions::from(args);
+            let s = bds_ins::bds_ins(&options)?;
+            let filter = if options.fuzzy { "the fuzzy-adaptive Kalman filter" } else { "the Kalman filter" };
+            let _ = writeln!(
+                stderr,
+                "{} epochs ({} without a fix) of {filter} written to {}",
+                s.epochs,
+                s.outages,
+                options.output.display()
+            );
             Ok(())
         }
         Command::Estimators => match write_estimators(stdout) {

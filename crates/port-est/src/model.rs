@@ -26,6 +26,7 @@ struct ModelFile {
     x0: Spanned<Vec<f64>>,
     u_lower: Option<Spanned<Vec<f64>>>,
     u_upper: Option<Spanned<Vec<f64>>>,
+    mhe: Option<Spanned<crate::mhe_table::MheTable>>,
 }
 
 /// A validated model: `n = a.nrows()` states, `p = b.ncols()` inputs, `m = c.nrows()` outputs.
@@ -47,6 +48,9 @@ pub struct Model {
     pub x0: DVector<f64>,
     /// The known input range `(u_lower, u_upper)`, if given.
     pub input_range: Option<(DVector<f64>, DVector<f64>)>,
+    /// The moving-horizon settings of the `[mhe]` table, if given (checked structurally; the
+    /// estimator validates them when built, see [`Model::mhe_error`]).
+    pub mhe: Option<estimators::MheSettings>,
     /// The file it was read from and where each key's value starts, to report later complaints
     /// (an estimator rejecting `q`, say) at the right place.
     source: Source,
@@ -102,6 +106,14 @@ impl Model {
             | EstimatorError::DimensionMismatch { what, .. } => key_of(what),
             EstimatorError::InvalidInputBounds { .. } => Some("u_lower"),
             _ => None,
+        };
+        let key = match (&e, key) {
+            (EstimatorError::InvalidConfiguration { message, .. }, None) => crate::mhe_table::key_of_message(message)
+                .iter()
+                .copied()
+                .chain(["mhe"])
+                .find(|k| self.key_location(k).is_some()),
+            (_, key) => key,
         };
         match key.and_then(|k| self.key_location(k).map(|at| (k, at))) {
             Some((k, at)) => Error::At { at, message: format!("`{k}`: {e}") },
@@ -260,7 +272,23 @@ pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
         let (line, column) = line_col(text, span.start);
         keys.push((k, line, column));
     }
-    Ok(Model { a, b, c, q, r, p0, x0, input_range, source: Source { path: path.to_owned(), keys } })
+    let mhe = match &f.mhe {
+        Some(table) => {
+            let (settings, spans) = table
+                .get_ref()
+                .settings(&x0, &p0, &q, &r)
+                .map_err(|(span, message)| Error::at(cx.at(span), message))?;
+            let (line, column) = line_col(text, table.span().start);
+            keys.push(("mhe", line, column));
+            for (k, span) in spans {
+                let (line, column) = line_col(text, span.start);
+                keys.push((k, line, column));
+            }
+            Some(settings)
+        }
+        None => None,
+    };
+    Ok(Model { a, b, c, q, r, p0, x0, input_range, mhe, source: Source { path: path.to_owned(), keys } })
 }
 
 /// Reads and validates `MODEL.toml` (see [`parse_model`]).

@@ -6,8 +6,11 @@
 //! are written once: [`runner`] (driving registry estimators over simulated data, metrics),
 //! [`outputs`] (CSV, atomic writes) and the figures of `crate::plot`.
 
+pub mod bds_ins;
 pub mod carrier;
+pub mod dp_vessel;
 pub mod outputs;
+pub mod rmhe;
 pub mod runner;
 pub mod truck;
 
@@ -51,7 +54,13 @@ pub trait Paper {
 
 /// Every paper, in the order of the index.
 pub fn papers() -> Vec<Box<dyn Paper>> {
-    vec![Box::new(carrier::CarrierPaper), Box::new(truck::TruckPaper)]
+    vec![
+        Box::new(carrier::CarrierPaper),
+        Box::new(truck::TruckPaper),
+        Box::new(bds_ins::BdsInsPaper),
+        Box::new(rmhe::RmhePaper),
+        Box::new(dp_vessel::DpVesselPaper),
+    ]
 }
 
 /// Default base seed of the reproduction.

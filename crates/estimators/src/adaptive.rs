@@ -1,0 +1,396 @@
+//! The fuzzy-adaptive Kalman filter of the BDS/INS paper (`docs/bds-ins-fuzzy-kf.md` §2): a
+//! Kalman step whose measurement-noise covariance is scaled every epoch by `t_k`, chosen from
+//! the receiver's working state and the innovation,
+//!
+//! ```text
+//! (3), (4)  x⁻ = A x + B u,   P⁻ = A P Aᵀ + Q
+//! (8)       r_k = y − C x⁻                         (innovation)
+//!           d_k = √(r_x² + r_y²)                   (horizontal BDS-to-INS distance, A)
+//!           t_k = scaling(N_k, RTK_k, d_k, r_k)    (the FIS, or any NoiseScaling)
+//! (9)       K = P⁻ Cᵀ (C P⁻ Cᵀ + t_k R)⁻¹
+//! (6), (7)  x = x⁻ + K r_k,   P = (I − K C) P⁻ (I − K C)ᵀ + K t_k R Kᵀ   (Joseph form)
+//! ```
+//!
+//! The filter is a [`KalmanFilter`] whose step is split around the choice of `t_k` (the same
+//! prediction and the same Joseph-form update, not a copy), so with `t_k ≡ 1` it is the plain
+//! Kalman filter (tested). `t_k` comes from a [`NoiseScaling`]: the paper's Mamdani system through
+//! [`FuzzyScaling`] (any [`FuzzySystem`] with inputs `[N, RTK, d]`, for example loaded from TOML),
+//! a closure `|c: &ScalingContext| -> f64`, or [`ConstantScaling`]. Each step reports its `t_k` and
+//! `d_k` ([`AdaptiveStep`]). Without a fix the filter only predicts ([`AdaptiveKalmanFilter::predict`]).
+//!
+//! Bad input is a typed [`AdaptiveError`] and leaves the filter unchanged: NaN anywhere, a
+//! negative satellite count, an RTK code outside 1–4 ([`ReceiverStatus::new`]), a scale that is not
+//! positive and finite. After construction a step allocates nothing (tested with a counting
+//! allocator, FIS included).
+
+use nalgebra::{DMatrix, DVector};
+
+use fuzzy_inference::{Evaluation, FuzzyError, FuzzySystem};
+use models::LinearModel;
+
+use crate::error::EstimatorError;
+use crate::kalman::{GaussianEstimate, KalmanFilter};
+
+/// The RTK codes the paper uses (P): 1 single, 2 differential, 3 fixed, 4 float.
+pub const RTK_CODES: std::ops::RangeInclusive<u8> = 1..=4;
+
+/// What the adaptive filter and its scalings can reject.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AdaptiveError {
+    /// A receiver-status value is NaN or infinite.
+    #[error("{what} must be finite, got {value}")]
+    NonFinite {
+        /// Which value.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A negative number of satellites.
+    #[error("the satellite count must be non-negative, got {0}")]
+    NegativeSatellites(f64),
+    /// An RTK status code outside 1–4 (or not an integer).
+    #[error("RTK status code {0} is not one of 1 (single), 2 (differential), 3 (fixed), 4 (float)")]
+    RtkOutOfRange(f64),
+    /// The scaling returned a `t_k` that is not positive and finite.
+    #[error("the noise scale t_k must be positive and finite, got {0}")]
+    InvalidScale(f64),
+    /// The innovation components that form `d_k` are not distinct outputs of the model.
+    #[error("the horizontal components {components:?} must be two distinct indices below {outputs}")]
+    HorizontalComponents {
+        /// The indices given.
+        components: [usize; 2],
+        /// Number of outputs `m`.
+        outputs: usize,
+    },
+    /// A fuzzy system given to [`FuzzyScaling`] does not have the three inputs `[N, RTK, d]`.
+    #[error("a noise-scaling fuzzy system needs 3 inputs [N, RTK, d], this one has {0}")]
+    FuzzyInputCount(usize),
+    /// The fuzzy system rejected its inputs.
+    #[error("fuzzy inference: {0}")]
+    Fuzzy(#[from] FuzzyError),
+    /// The Kalman step rejected its data (dimensions, NaN, a numerical failure).
+    #[error(transparent)]
+    Filter(#[from] EstimatorError),
+}
+
+/// The receiver's working state at one epoch, validated: satellites used `N ≥ 0` and the RTK
+/// status code (1 single, 2 differential, 3 fixed, 4 float; NMEA GGA 1 → 1, 2 → 2, 4 → 3,
+/// 5 → 4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReceiverStatus {
+    satellites: f64,
+    rtk: u8,
+}
+
+impl ReceiverStatus {
+    /// Validates a status as logged (numbers, as read from a file).
+    ///
+    /// # Errors
+    /// [`AdaptiveError::NonFinite`] for a NaN/∞ value, [`AdaptiveError::NegativeSatellites`],
+    /// [`AdaptiveError::RtkOutOfRange`] for a code that is not an integer in 1–4.
+    pub fn new(satellites: f64, rtk_code: f64) -> Result<Self, AdaptiveError> {
+        if !satellites.is_finite() {
+            return Err(AdaptiveError::NonFinite { what: "the satellite count", value: satellites });
+        }
+        if satellites < 0.0 {
+            return Err(AdaptiveError::NegativeSatellites(satellites));
+        }
+        if !rtk_code.is_finite() {
+            return Err(AdaptiveError::NonFinite { what: "the RTK status code", value: rtk_code });
+        }
+        let code = rtk_code as u8;
+        if rtk_code.fract() != 0.0 || !(f64::from(*RTK_CODES.start())..=f64::from(*RTK_CODES.end())).contains(&rtk_code)
+        {
+            return Err(AdaptiveError::RtkOutOfRange(rtk_code));
+        }
+        Ok(Self { satellites, rtk: code })
+    }
+
+    /// Satellites used `N`.
+    #[must_use]
+    pub fn satellites(&self) -> f64 {
+        self.satellites
+    }
+
+    /// The RTK status code (1–4).
+    #[must_use]
+    pub fn rtk_code(&self) -> u8 {
+        self.rtk
+    }
+}
+
+/// What a [`NoiseScaling`] may look at to choose `t_k`.
+#[derive(Debug, Clone, Copy)]
+pub struct ScalingContext<'a> {
+    /// The receiver's working state.
+    pub status: ReceiverStatus,
+    /// `d_k`: the norm of the two horizontal innovation components (BDS fix to INS prediction).
+    pub distance: f64,
+    /// The whole innovation `r_k = y − C x⁻` (8).
+    pub innovation: &'a DVector<f64>,
+    /// The step (1 for the first update of the filter).
+    pub step: u64,
+}
+
+/// Chooses the measurement-noise scale `t_k` of (9) at every update. Implemented by
+/// [`FuzzyScaling`] (the paper's FIS), [`ConstantScaling`], and every closure
+/// `FnMut(&ScalingContext) -> f64`.
+pub trait NoiseScaling {
+    /// `t_k` for this epoch (must be positive and finite; the filter checks).
+    ///
+    /// # Errors
+    /// Whatever the scaling rejects (the filter is left unchanged).
+    fn scale(&mut self, context: &ScalingContext<'_>) -> Result<f64, AdaptiveError>;
+}
+
+impl<F: FnMut(&ScalingContext<'_>) -> f64> NoiseScaling for F {
+    fn scale(&mut self, context: &ScalingContext<'_>) -> Result<f64, AdaptiveError> {
+        Ok(self(context))
+    }
+}
+
+/// A constant `t_k` (`ConstantScaling(1.0)` is the plain Kalman filter).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstantScaling(pub f64);
+
+impl NoiseScaling for ConstantScaling {
+    fn scale(&mut self, _context: &ScalingContext<'_>) -> Result<f64, AdaptiveError> {
+        Ok(self.0)
+    }
+}
+
+/// A Mamdani [`FuzzySystem`] as the noise scaling: `t_k = FIS(N_k, RTK_k, d_k)`, the paper's
+/// fuzzy Kalman filter. The system's inputs are, in order, satellites, RTK code and `d` \[m\].
+#[derive(Debug, Clone)]
+pub struct FuzzyScaling {
+    system: FuzzySystem,
+    last: Option<Evaluation>,
+}
+
+impl FuzzyScaling {
+    /// Wraps `system`.
+    ///
+    /// # Errors
+    /// [`AdaptiveError::FuzzyInputCount`] unless the system has exactly three inputs.
+    pub fn new(system: FuzzySystem) -> Result<Self, AdaptiveError> {
+        match system.inputs().len() {
+            3 => Ok(Self { system, last: None }),
+            n => Err(AdaptiveError::FuzzyInputCount(n)),
+        }
+    }
+
+    /// The digest's 45-rule system with `σ0 = 0.2 m` ([`FuzzySystem::bds_ins_default`]).
+    #[must_use]
+    pub fn bds_ins_default() -> Self {
+        Self { system: FuzzySystem::bds_ins_default(), last: None }
+    }
+
+    /// The fuzzy system.
+    #[must_use]
+    pub fn system(&self) -> &FuzzySystem {
+        &self.system
+    }
+
+    /// The evaluation of the last call of [`NoiseScaling::scale`] (rules fired, firing strength,
+    /// clamping), `None` before the first.
+    #[must_use]
+    pub fn last_evaluation(&self) -> Option<&Evaluation> {
+        self.last.as_ref()
+    }
+}
+
+impl NoiseScaling for FuzzyScaling {
+    fn scale(&mut self, c: &ScalingContext<'_>) -> Result<f64, AdaptiveError> {
+        let e = self.system.evaluate(&[c.status.satellites(), f64::from(c.status.rtk_code()), c.distance])?;
+        self.last = Some(e);
+        Ok(e.output)
+    }
+}
+
+/// What one update chose: the scale `t_k` and the distance `d_k` it was chosen from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdaptiveStep {
+    /// `t_k` of (9).
+    pub scale: f64,
+    /// `d_k` \[units of the horizontal outputs\].
+    pub distance: f64,
+}
+
+/// The Kalman filter with the measurement noise scaled by a [`NoiseScaling`] (module
+/// documentation); [`FuzzyKalmanFilter`] is the paper's.
+#[derive(Debug, Clone)]
+pub struct AdaptiveKalmanFilter<S> {
+    kf: KalmanFilter,
+    scaling: S,
+    r_scaled: DMatrix<f64>,
+    horizontal: [usize; 2],
+    updates: u64,
+    last: Option<AdaptiveStep>,
+}
+
+/// The paper's fuzzy Kalman filter (FKF): the adaptive filter with a [`FuzzyScaling`].
+pub type FuzzyKalmanFilter = AdaptiveKalmanFilter<FuzzyScaling>;
+
+impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
+    /// A filter with initial mean `x0`, covariance `p0`, process covariance `q`, nominal
+    /// measurement covariance `r` (`t_k = 1`), `inputs` input components, and the scaling. `d_k`
+    /// is formed from innovation components 0 and 1 (see [`AdaptiveKalmanFilter::with_horizontal`]).
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::new`] (wrapped in [`AdaptiveError::Filter`]), and
+    /// [`AdaptiveError::HorizontalComponents`] for fewer than two outputs.
+    pub fn new(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        q: DMatrix<f64>,
+        r: DMatrix<f64>,
+        inputs: usize,
+        scaling: S,
+    ) -> Result<Self, AdaptiveError> {
+        let kf = KalmanFilter::new(x0, p0, q, r, inputs)?;
+        let r_scaled = kf.measurement_noise().clone();
+        Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, last: None }.with_horizontal([0, 1])
+    }
+
+    /// Chooses which two innovation components form `d_k = √(r_i² + r_j²)`.
+    ///
+    /// # Errors
+    /// [`AdaptiveError::HorizontalComponents`] unless they are distinct and below `m`.
+    pub fn with_horizontal(mut self, components: [usize; 2]) -> Result<Self, AdaptiveError> {
+        let m = self.kf.dims().2;
+        if components[0] == components[1] || components.iter().any(|&i| i >= m) {
+            return Err(AdaptiveError::HorizontalComponents { components, outputs: m });
+        }
+        self.horizontal = components;
+        Ok(self)
+    }
+
+    /// One predict–update step with the receiver's working state: consumes `u_k`, the
+    /// measurement `y_{k+1}` and the status of that epoch; returns the `t_k` and `d_k` used (the
+    /// estimate is [`AdaptiveKalmanFilter::estimate`]). On error the filter is unchanged.
+    /// Allocation-free (if the scaling is).
+    ///
+    /// # Errors
+    /// [`AdaptiveError::Filter`] for a model, input or measurement the Kalman step rejects
+    /// (dimensions, NaN/∞, a numerical failure), the scaling's error, or
+    /// [`AdaptiveError::InvalidScale`].
+    pub fn step<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        status: &ReceiverStatus,
+    ) -> Result<AdaptiveStep, AdaptiveError> {
+        let innovation = self.kf.predict_and_innovate(model, u, y)?;
+        let [i, j] = self.horizontal;
+        let distance = innovation[i].hypot(innovation[j]);
+        let context = ScalingContext { status: *status, distance, innovation, step: self.updates + 1 };
+        let scale = self.scaling.scale(&context)?;
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(AdaptiveError::InvalidScale(scale));
+        }
+        self.r_scaled.copy_from(self.kf.measurement_noise());
+        self.r_scaled.iter_mut().for_each(|v| *v *= scale);
+        self.kf.update_buffered(model.c(), &self.r_scaled)?;
+        self.updates += 1;
+        let report = AdaptiveStep { scale, distance };
+        self.last = Some(report);
+        Ok(report)
+    }
+
+    /// A prediction-only step (no fix this epoch): `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q`. On error
+    /// the filter is unchanged. Allocation-free.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::predict`], wrapped in [`AdaptiveError::Filter`].
+    pub fn predict<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, AdaptiveError> {
+        Ok(self.kf.predict(model, u)?)
+    }
+
+    /// The current estimate.
+    #[must_use]
+    pub fn estimate(&self) -> &GaussianEstimate {
+        self.kf.estimate()
+    }
+
+    /// `t_k` and `d_k` of the last update (`None` before the first).
+    #[must_use]
+    pub fn last_step(&self) -> Option<AdaptiveStep> {
+        self.last
+    }
+
+    /// Number of updates so far (prediction-only steps are not counted).
+    #[must_use]
+    pub fn updates(&self) -> u64 {
+        self.updates
+    }
+
+    /// The nominal measurement covariance `R` (`t_k = 1`).
+    #[must_use]
+    pub fn nominal_measurement_noise(&self) -> &DMatrix<f64> {
+        self.kf.measurement_noise()
+    }
+
+    /// The scaling.
+    #[must_use]
+    pub fn scaling(&self) -> &S {
+        &self.scaling
+    }
+
+    /// The scaling, mutably (for example to change a closure's settings between steps).
+    pub fn scaling_mut(&mut self) -> &mut S {
+        &mut self.scaling
+    }
+
+    /// `(n, p, m)`.
+    #[must_use]
+    pub fn dims(&self) -> (usize, usize, usize) {
+        self.kf.dims()
+    }
+
+    /// Replaces the process-noise covariance in place (a model rebuilt per step, e.g. a turning
+    /// route with body-frame biases); validated, no allocation, unchanged on error.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::set_process_noise`].
+    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), AdaptiveError> {
+        Ok(self.kf.set_process_noise(q)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn receiver_status_is_validated() {
+        let s = ReceiverStatus::new(20.0, 3.0).unwrap();
+        assert_eq!((s.satellites(), s.rtk_code()), (20.0, 3));
+        assert_eq!(ReceiverStatus::new(-1.0, 3.0), Err(AdaptiveError::NegativeSatellites(-1.0)));
+        assert!(matches!(ReceiverStatus::new(f64::NAN, 3.0), Err(AdaptiveError::NonFinite { .. })));
+        assert!(matches!(ReceiverStatus::new(5.0, f64::INFINITY), Err(AdaptiveError::NonFinite { .. })));
+        for bad in [0.0, 5.0, 2.5, -1.0, 300.0] {
+            assert_eq!(ReceiverStatus::new(5.0, bad), Err(AdaptiveError::RtkOutOfRange(bad)));
+        }
+        for code in 1..=4 {
+            assert_eq!(ReceiverStatus::new(0.0, f64::from(code)).unwrap().rtk_code(), code);
+        }
+        assert_eq!(
+            AdaptiveError::RtkOutOfRange(5.0).to_string(),
+            "RTK status code 5 is not one of 1 (single), 2 (differential), 3 (fixed), 4 (float)"
+        );
+    }
+
+    #[test]
+    fn fuzzy_scaling_needs_three_inputs() {
+        let f = FuzzyScaling::bds_ins_default();
+        assert_eq!(f.system().inputs().len(), 3);
+        assert!(f.last_evaluation().is_none());
+        assert!(FuzzyScaling::new(FuzzySystem::bds_ins_default()).is_ok());
+    }
+}

@@ -1,0 +1,81 @@
+//! Clarabel's interior-point QP path (pure Rust, no BLAS) as the inner solver of the coordinate
+//! rotation's minimisation step (44), for comparison with the active-set solver
+//! ([`InnerSolver::Clarabel`](crate::mhe::InnerSolver::Clarabel)). Allocates per solve.
+
+use clarabel_qp::algebra::CscMatrix;
+use clarabel_qp::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
+
+use crate::mhe::window::WindowProblem;
+
+/// Solves `min ½ zᵀ H z − bᵀ z` over the window's box with Clarabel; `Ok(iterations)` with the
+/// solution in `z`, `Err(())` if Clarabel does not report a solution (or panics).
+pub(crate) fn solve_box_qp(w: &WindowProblem, z: &mut [f64]) -> Result<usize, ()> {
+    let nz = w.nz;
+    let (h, b, lo, hi) = (&w.h[..nz * nz], &w.b[..nz], &w.lo[..nz], &w.hi[..nz]);
+    // P: upper triangle of H (column c holds rows r ≤ c; H is stored by its lower triangle).
+    let mut colptr = Vec::with_capacity(nz + 1);
+    let mut rowval = Vec::new();
+    let mut nzval = Vec::new();
+    colptr.push(0);
+    for c in 0..nz {
+        for r in 0..=c {
+            let v = h[r * nz + c];
+            if v != 0.0 {
+                rowval.push(r);
+                nzval.push(v);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    let p = CscMatrix::new(nz, nz, colptr, rowval, nzval);
+    let q: Vec<f64> = b.iter().map(|v| -v).collect();
+    // Bounds as rows of A z ≤ bb: z_i ≤ hi_i and −z_i ≤ −lo_i, for finite bounds.
+    let mut a_col: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nz];
+    let mut bb = Vec::new();
+    for i in 0..nz {
+        if hi[i].is_finite() {
+            a_col[i].push((bb.len(), 1.0));
+            bb.push(hi[i]);
+        }
+        if lo[i].is_finite() {
+            a_col[i].push((bb.len(), -1.0));
+            bb.push(-lo[i]);
+        }
+    }
+    let mut colptr = vec![0];
+    let mut rowval = Vec::new();
+    let mut nzval = Vec::new();
+    for col in &a_col {
+        for &(r, v) in col {
+            rowval.push(r);
+            nzval.push(v);
+        }
+        colptr.push(rowval.len());
+    }
+    let rows = bb.len();
+    let a = CscMatrix::new(rows, nz, colptr, rowval, nzval);
+    let cones = if rows > 0 { vec![NonnegativeConeT(rows)] } else { Vec::new() };
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .presolve_enable(false)
+        .tol_gap_abs(1e-12)
+        .tol_gap_rel(1e-12)
+        .tol_feas(1e-12)
+        .build()
+        .map_err(|_| ())?;
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings).ok()?;
+        solver.solve();
+        let ok = matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved);
+        ok.then(|| (solver.solution.x.clone(), solver.solution.iterations as usize))
+    }));
+    match result {
+        Ok(Some((x, iterations))) if x.len() == nz && x.iter().all(|v| v.is_finite()) => {
+            for i in 0..nz {
+                z[i] = x[i].clamp(lo[i], hi[i]);
+            }
+            Ok(iterations)
+        }
+        _ => Err(()),
+    }
+}

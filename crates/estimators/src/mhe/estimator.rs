@@ -1,0 +1,628 @@
+//! [`MovingHorizonEstimator`]: windowing (§2.2), the arrival cost (§2.3), blocking (§2.4) and the
+//! window solvers (§2.6–2.7) of docs/robust-mhe.md behind the [`Estimator`] trait.
+
+use std::time::{Duration, Instant};
+
+use nalgebra::{DMatrix, DVector};
+
+use models::{Dims, LinearModel};
+
+use crate::error::EstimatorError;
+use crate::mhe::settings::{ArrivalRecursion, BlockWeighting, MheCost, MheSettings, PriorMean, WindowSolver};
+use crate::mhe::small::{chol_inverse, cholesky};
+use crate::mhe::solve::{
+    NoiseData, SolveCounters, SolverScratch, WindowStatus, coordinate_rotation, exact_saddle, saddle_value,
+};
+use crate::mhe::window::WindowProblem;
+use crate::traits::{Estimate, EstimateKind, Estimator};
+use crate::validate::{check_model, check_vec};
+
+/// Which form of the arrival-cost recursion (20) advanced the weight in this step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ArrivalStatus {
+    /// The Kalman form with `R_eff`.
+    Kalman,
+    /// The H∞ form; its existence condition held.
+    HInfinity,
+    /// The H∞ form's existence condition `P⁻¹ − θ I + Cᵀ R⁻¹ C ≻ 0` failed: this step used the
+    /// Kalman form instead.
+    HInfinityConditionFailed,
+}
+
+/// What one update did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MheReport {
+    /// Window solver status and counters.
+    pub solve: SolveCounters,
+    /// Samples in the window (`T − s + 1`).
+    pub window: usize,
+    /// Vector unknowns `1 + S` (`x_s` and one per block).
+    pub vector_unknowns: usize,
+    /// Scalar unknowns `n (1 + S)`.
+    pub unknowns: usize,
+    /// The arrival-cost recursion of this step.
+    pub arrival: ArrivalStatus,
+    /// The window's saddle value `Φ(z*, v*)` (least squares: the MHE cost).
+    pub objective: f64,
+    /// Wall time of the update (recursion, window build and solve).
+    pub elapsed: Duration,
+}
+
+/// The estimate of a moving-horizon estimator: the last state of the window's optimal trajectory
+/// and, as its shape, the arrival-cost recursion's matrix updated with the last measurement
+/// (`(P_T⁻¹ + Cᵀ R_eff⁻¹ C)⁻¹`): a covariance of the equivalent Kalman filter, not a calibrated
+/// covariance of the estimate nor a guaranteed set ([`EstimateKind::Point`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MheEstimate {
+    /// `x̂_{T|T}`.
+    pub state: DVector<f64>,
+    /// The shape (see above).
+    pub shape: DMatrix<f64>,
+    /// What the last update did (`None` before the first).
+    pub report: Option<MheReport>,
+}
+
+impl Estimate for MheEstimate {
+    fn kind(&self) -> EstimateKind {
+        EstimateKind::Point
+    }
+    fn center(&self) -> &DVector<f64> {
+        &self.state
+    }
+    fn shape(&self) -> &DMatrix<f64> {
+        &self.shape
+    }
+}
+
+/// A moving-horizon estimator for linear models with box-bounded noise: the robust min–max MHE
+/// with disturbance blocking of the car paper (any blocks, either `λv`), or plain MHE
+/// ([`MheCost::LeastSquares`]); configured entirely by [`MheSettings`].
+///
+/// A step consumes `u_k` and `y_{k+1}` (the workspace's convention) and returns `x̂_{k+1|k+1}`;
+/// [`MovingHorizonEstimator::measure_initial`] adds a measurement of `x_0` before the first
+/// step. After construction no update allocates with the active-set inner solver (tested).
+#[derive(Debug, Clone)]
+pub struct MovingHorizonEstimator {
+    settings: MheSettings,
+    n: usize,
+    p: usize,
+    m: usize,
+    cap: usize,
+    /// Current time `T` (steps done).
+    t: usize,
+    initial_measured: bool,
+    // Rings indexed by absolute sample k at (k mod cap).
+    a_ring: Vec<f64>,
+    bu_ring: Vec<f64>,
+    u_ring: Vec<f64>,
+    c_ring: Vec<f64>,
+    y_ring: Vec<f64>,
+    has_y: Vec<bool>,
+    p_ring: Vec<f64>,
+    traj_ring: Vec<f64>,
+    filt_ring: Vec<f64>,
+    v_ring: Vec<f64>,
+    // Constant data.
+    q: Vec<f64>,
+    q_inv: Vec<f64>,
+    p0: Vec<f64>,
+    r_inv: Vec<f64>,
+    v_lo: Vec<f64>,
+    v_hi: Vec<f64>,
+    w_lo: Vec<f64>,
+    w_hi: Vec<f64>,
+    // Work.
+    window: WindowProblem,
+    scratch: SolverScratch,
+    z: Vec<f64>,
+    v: Vec<f64>,
+    traj_work: Vec<f64>,
+    p_next: Vec<f64>,
+    prior_mean: Vec<f64>,
+    prior_inv: Vec<f64>,
+    mat_a: Vec<f64>,
+    mat_b: Vec<f64>,
+    mat_c: Vec<f64>,
+    mat_d: Vec<f64>,
+    vec_a: Vec<f64>,
+    buf_c: Vec<f64>,
+    buf_y: Vec<f64>,
+    est: MheEstimate,
+}
+
+impl MovingHorizonEstimator {
+    /// An estimator with `inputs` inputs for the validated `settings`.
+    ///
+    /// # Errors
+    /// [`EstimatorError::InvalidConfiguration`] naming the first invalid setting.
+    pub fn new(settings: MheSettings, inputs: usize) -> Result<Self, EstimatorError> {
+        settings.validate()?;
+        let (n, m, p) = (settings.states(), settings.outputs(), inputs);
+        let horizon = settings.horizon;
+        let cap = horizon + 2;
+        let max_len = horizon + 1;
+        let max_blocks = horizon.max(settings.blocks.len());
+        let nz_cap = n * (1 + max_blocks);
+        let to_vec = |a: &DMatrix<f64>| a.as_slice().to_vec();
+        let mut q_inv = vec![0.0; n * n];
+        let mut work = to_vec(&settings.q);
+        if !cholesky(&mut work, n) {
+            return Err(EstimatorError::InvalidConfiguration {
+                estimator: "mhe",
+                message: "Q is not positive definite".into(),
+            });
+        }
+        chol_inverse(&work, n, &mut q_inv);
+        let r_inv: Vec<f64> = (0..m).map(|i| 1.0 / settings.r[(i, i)]).collect();
+        let mut p_ring = vec![0.0; cap * n * n];
+        p_ring[..n * n].copy_from_slice(settings.p0.as_slice());
+        let mut traj_ring = vec![0.0; cap * n];
+        traj_ring[..n].copy_from_slice(settings.x0.as_slice());
+        let mut filt_ring = vec![0.0; cap * n];
+        filt_ring[..n].copy_from_slice(settings.x0.as_slice());
+        let est = MheEstimate { state: settings.x0.clone(), shape: settings.p0.clone(), report: None };
+        Ok(Self {
+            n,
+            p,
+            m,
+            cap,
+            t: 0,
+            initial_measured: false,
+            a_ring: vec![0.0; cap * n * n],
+            bu_ring: vec![0.0; cap * n],
+            u_ring: vec![0.0; cap * p],
+            c_ring: vec![0.0; cap * m * n],
+            y_ring: vec![0.0; cap * m],
+            has_y: vec![false; cap],
+            p_ring,
+            traj_ring,
+            filt_ring,
+            v_ring: vec![0.0; cap * m],
+            q: to_vec(&settings.q),
+            q_inv,
+            p0: to_vec(&settings.p0),
+            r_inv,
+            v_lo: settings.v_box.0.as_slice().to_vec(),
+            v_hi: settings.v_box.1.as_slice().to_vec(),
+            w_lo: settings.w_box.0.as_slice().to_vec(),
+            w_hi: settings.w_box.1.as_slice().to_vec(),
+            window: WindowProblem::new(n, m, max_len, max_blocks),
+            scratch: SolverScratch::new(nz_cap, max_len * m),
+            z: vec![0.0; nz_cap],
+            v: vec![0.0; max_len * m],
+            traj_work: vec![0.0; max_len * n],
+            p_next: vec![0.0; n * n],
+            prior_mean: vec![0.0; n],
+            prior_inv: vec![0.0; n * n],
+            mat_a: vec![0.0; n * n],
+            mat_b: vec![0.0; n * n],
+            mat_c: vec![0.0; n * n],
+            mat_d: vec![0.0; n * n],
+            vec_a: vec![0.0; n],
+            buf_c: vec![0.0; m * n],
+            buf_y: vec![0.0; m],
+            est,
+            settings,
+        })
+    }
+
+    /// The settings.
+    #[must_use]
+    pub fn settings(&self) -> &MheSettings {
+        &self.settings
+    }
+
+    /// Current time `T` (steps done).
+    #[must_use]
+    pub fn time(&self) -> usize {
+        self.t
+    }
+
+    /// The current estimate (as [`Estimator::estimate`], without naming the model type).
+    #[must_use]
+    pub fn estimate(&self) -> &MheEstimate {
+        &self.est
+    }
+
+    /// The report of the last update.
+    #[must_use]
+    pub fn report(&self) -> Option<&MheReport> {
+        self.est.report.as_ref()
+    }
+
+    /// Adds the measurement `y_0 = C x_0 + v_0` before the first step and publishes `x̂_{0|0}`.
+    ///
+    /// # Errors
+    /// Wrong sizes or non-finite data, or a call after the first step or a second call
+    /// ([`EstimatorError::InvalidConfiguration`]); the estimator is unchanged.
+    pub fn measure_initial<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y0: &DVector<f64>,
+    ) -> Result<&MheEstimate, EstimatorError> {
+        if self.t != 0 || self.initial_measured {
+            return Err(EstimatorError::InvalidConfiguration {
+                estimator: "mhe",
+                message: "the initial measurement can be given once, before the first step".into(),
+            });
+        }
+        self.check(model, None, Some(y0))?;
+        let start = Instant::now();
+        let (n, m) = (self.n, self.m);
+        self.c_ring[..m * n].copy_from_slice(model.c().as_slice());
+        self.y_ring[..m].copy_from_slice(y0.as_slice());
+        self.has_y[0] = true;
+        let (counters, objective) = match self.solve_window(0) {
+            Ok(r) => r,
+            Err(e) => {
+                self.has_y[0] = false;
+                return Err(e);
+            }
+        };
+        self.initial_measured = true;
+        self.commit(0, 0, counters, objective, ArrivalStatus::Kalman, start);
+        Ok(&self.est)
+    }
+
+    fn check<M: LinearModel + ?Sized>(
+        &self,
+        model: &M,
+        u: Option<&DVector<f64>>,
+        y: Option<&DVector<f64>>,
+    ) -> Result<(), EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        if let Some(u) = u {
+            check_vec("u", u, self.p)?;
+        }
+        if let Some(y) = y {
+            check_vec("y", y, self.m)?;
+        }
+        Ok(())
+    }
+
+    /// One update to time `t + 1` with input `u_t` and, if given, `y_{t+1}`.
+    fn advance<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: Option<&DVector<f64>>,
+    ) -> Result<&MheEstimate, EstimatorError> {
+        self.check(model, Some(u), y)?;
+        let start = Instant::now();
+        let (n, m, p, cap) = (self.n, self.m, self.p, self.cap);
+        let t = self.t;
+        let (st, sn) = (t % cap, (t + 1) % cap);
+        // Transition t → t+1 (slot t) and measurement t+1 (slot t+1, outside the current window).
+        self.a_ring[st * n * n..(st + 1) * n * n].copy_from_slice(model.a().as_slice());
+        self.u_ring[st * p..(st + 1) * p].copy_from_slice(u.as_slice());
+        let b = model.b();
+        for r in 0..n {
+            let mut s = 0.0;
+            for k in 0..p {
+                s += b[(r, k)] * u[k];
+            }
+            self.bu_ring[st * n + r] = s;
+        }
+        self.c_ring[sn * m * n..(sn + 1) * m * n].copy_from_slice(model.c().as_slice());
+        let old_has = self.has_y[sn];
+        match y {
+            Some(y) => {
+                self.y_ring[sn * m..(sn + 1) * m].copy_from_slice(y.as_slice());
+                self.has_y[sn] = true;
+            }
+            None => self.has_y[sn] = false,
+        }
+        // (20): P_{t+1} from P_t, the measurement at t and A_t.
+        let arrival = self.riccati(st);
+        let result = self.solve_window(t + 1);
+        match result {
+            Ok((counters, objective)) => {
+                self.p_ring[sn * n * n..(sn + 1) * n * n].copy_from_slice(&self.p_next);
+                self.t = t + 1;
+                self.commit(t + 1, self.window_start(t + 1), counters, objective, arrival, start);
+                Ok(&self.est)
+            }
+            Err(e) => {
+                self.has_y[sn] = old_has;
+                Err(e)
+            }
+        }
+    }
+
+    fn window_start(&self, big_t: usize) -> usize {
+        big_t.saturating_sub(self.settings.horizon)
+    }
+
+    /// Advances the arrival weight: `p_next = A (P⁻¹ + Cᵀ W C − θ I)⁻¹ Aᵀ + Q` with the slot's
+    /// `P`, `C`, measurement flag and `A`.
+    fn riccati(&mut self, slot: usize) -> ArrivalStatus {
+        let n = self.n;
+        let (r_eff, theta) = (self.settings.r_eff_factor(), self.settings.arrival);
+        let status = match theta {
+            ArrivalRecursion::HInfinity { theta } => {
+                if self.information(slot, 1.0, theta) {
+                    ArrivalStatus::HInfinity
+                } else {
+                    let ok = self.information(slot, r_eff, 0.0);
+                    debug_assert!(ok);
+                    ArrivalStatus::HInfinityConditionFailed
+                }
+            }
+            ArrivalRecursion::Kalman => {
+                self.information(slot, r_eff, 0.0);
+                ArrivalStatus::Kalman
+            }
+        };
+        // mat_b holds S⁻¹; p_next = A S⁻¹ Aᵀ + Q.
+        let a = &self.a_ring[slot * n * n..(slot + 1) * n * n];
+        for c in 0..n {
+            for r in 0..n {
+                let mut s = 0.0;
+                for k in 0..n {
+                    s += a[k * n + r] * self.mat_b[c * n + k];
+                }
+                self.mat_c[c * n + r] = s;
+            }
+        }
+        for c in 0..n {
+            for r in 0..n {
+                let mut s = self.q[c * n + r];
+                for k in 0..n {
+                    s += self.mat_c[k * n + r] * a[k * n + c];
+                }
+                self.p_next[c * n + r] = s;
+            }
+        }
+        sym(&mut self.p_next, n);
+        status
+    }
+
+    /// `mat_b ← (P⁻¹ + Cᵀ diag(1/(f R)) C − θ I)⁻¹` for the P, C and measurement flag of `slot`;
+    /// false (and `mat_b` unspecified) if the bracket is not positive definite.
+    fn information(&mut self, slot: usize, r_factor: f64, theta: f64) -> bool {
+        let (n, m) = (self.n, self.m);
+        self.mat_a.copy_from_slice(&self.p_ring[slot * n * n..(slot + 1) * n * n]);
+        if !cholesky(&mut self.mat_a, n) {
+            return false;
+        }
+        chol_inverse(&self.mat_a, n, &mut self.mat_d);
+        if self.has_y[slot] {
+            let c = &self.c_ring[slot * m * n..(slot + 1) * m * n];
+            for i in 0..m {
+                let w = self.r_inv[i] / r_factor;
+                for col in 0..n {
+                    for r in 0..n {
+                        self.mat_d[col * n + r] += w * c[r * m + i] * c[col * m + i];
+                    }
+                }
+            }
+        }
+        for i in 0..n {
+            self.mat_d[i * n + i] -= theta;
+        }
+        if !cholesky(&mut self.mat_d, n) {
+            return false;
+        }
+        chol_inverse(&self.mat_d, n, &mut self.mat_b);
+        true
+    }
+
+    /// Builds and solves the window ending at `big_t` into `z`, `v`, `traj_work`.
+    fn solve_window(&mut self, big_t: usize) -> Result<(SolveCounters, f64), EstimatorError> {
+        let (n, m, cap) = (self.n, self.m, self.cap);
+        let horizon = self.settings.horizon;
+        let s = self.window_start(big_t);
+        let len = big_t - s + 1;
+        let blocked = big_t > horizon;
+        let nblocks = if blocked { self.settings.blocks.len() } else { len - 1 };
+        // Prior of x_s: (x̄_s, P_s).
+        if s == 0 {
+            self.prior_mean.copy_from_slice(self.settings.x0.as_slice());
+            self.mat_a.copy_from_slice(&self.p0);
+        } else {
+            match self.settings.prior_mean {
+                PriorMean::Smoothed => {
+                    let o = (s % cap) * n;
+                    self.prior_mean.copy_from_slice(&self.traj_ring[o..o + n]);
+                }
+                PriorMean::Filtered => {
+                    let sl = (s - 1) % cap;
+                    let a = &self.a_ring[sl * n * n..(sl + 1) * n * n];
+                    let x = &self.filt_ring[sl * n..(sl + 1) * n];
+                    for r in 0..n {
+                        let mut acc = self.bu_ring[sl * n + r];
+                        for k in 0..n {
+                            acc += a[k * n + r] * x[k];
+                        }
+                        self.prior_mean[r] = acc;
+                    }
+                }
+            }
+            let sl = s % cap;
+            if big_t == self.t + 1 && sl == (big_t % cap) {
+                self.mat_a.copy_from_slice(&self.p_next);
+            } else {
+                self.mat_a.copy_from_slice(&self.p_ring[sl * n * n..(sl + 1) * n * n]);
+            }
+        }
+        if !cholesky(&mut self.mat_a, n) {
+            return Err(EstimatorError::NumericalFailure("the arrival-cost weight lost positive definiteness"));
+        }
+        chol_inverse(&self.mat_a, n, &mut self.prior_inv);
+        // Blocks: lengths and weights.
+        let blocks = &self.settings.blocks;
+        let weighting = self.settings.block_weighting;
+        let block_of = |j: usize| -> usize {
+            if !blocked {
+                return j;
+            }
+            let mut acc = 0;
+            for (b, d) in blocks.iter().enumerate() {
+                acc += d;
+                if j < acc {
+                    return b;
+                }
+            }
+            blocks.len() - 1
+        };
+        let kappa = |b: usize| -> f64 {
+            match (blocked, weighting) {
+                (true, BlockWeighting::Length) => blocks[b] as f64,
+                _ => 1.0,
+            }
+        };
+        let (a_ring, bu_ring, c_ring, y_ring, has_y) =
+            (&self.a_ring, &self.bu_ring, &self.c_ring, &self.y_ring, &self.has_y);
+        self.window.build(
+            len,
+            nblocks,
+            |j, a_out, bu_out| {
+                let sl = (s + j) % cap;
+                a_out.copy_from_slice(&a_ring[sl * n * n..(sl + 1) * n * n]);
+                bu_out.copy_from_slice(&bu_ring[sl * n..(sl + 1) * n]);
+            },
+            |j, c_out, y_out| {
+                let sl = (s + j) % cap;
+                c_out.copy_from_slice(&c_ring[sl * m * n..(sl + 1) * m * n]);
+                y_out.copy_from_slice(&y_ring[sl * m..(sl + 1) * m]);
+                has_y[sl]
+            },
+            block_of,
+            kappa,
+            &self.prior_mean,
+            &self.prior_inv,
+            &self.q_inv,
+            &self.w_lo,
+            &self.w_hi,
+            &mut self.mat_c,
+            &mut self.vec_a,
+            &mut self.buf_c,
+            &mut self.buf_y,
+        );
+        // Warm start: x_s from the prior mean, ω = 0; v from the previous window, 0 for new samples.
+        let nz = self.window.nz;
+        self.z[..nz].fill(0.0);
+        self.z[..n].copy_from_slice(&self.prior_mean);
+        for j in 0..len {
+            let k = s + j;
+            let sl = k % cap;
+            for i in 0..m {
+                self.v[j * m + i] = if k < big_t && k <= self.t { self.v_ring[sl * m + i] } else { 0.0 };
+            }
+        }
+        let noise = NoiseData { r_inv: &self.r_inv, v_lo: &self.v_lo, v_hi: &self.v_hi, cost: self.settings.cost };
+        let counters = match self.settings.solver {
+            WindowSolver::CoordinateRotation { max_sweeps, tolerance, inner } => coordinate_rotation(
+                &mut self.window,
+                &noise,
+                &mut self.scratch,
+                &mut self.z,
+                &mut self.v,
+                max_sweeps,
+                tolerance,
+                inner,
+            ),
+            WindowSolver::ExactSaddle { max_iterations, tolerance } => exact_saddle(
+                &mut self.window,
+                &noise,
+                &mut self.scratch,
+                &mut self.z,
+                &mut self.v,
+                max_iterations,
+                tolerance,
+            ),
+        };
+        let objective = saddle_value(&mut self.window, &noise, &self.z[..nz], &mut self.scratch.e[..len * m]);
+        for j in 0..len {
+            self.window.state(j, &self.z[..nz], &mut self.traj_work[j * n..(j + 1) * n]);
+        }
+        if !self.traj_work[..len * n].iter().all(|x| x.is_finite()) || !objective.is_finite() {
+            return Err(EstimatorError::NumericalFailure("the window's solution is not finite"));
+        }
+        Ok((counters, objective))
+    }
+
+    /// Stores the solved window ending at `big_t` (start `s`) and publishes its last state.
+    fn commit(
+        &mut self,
+        big_t: usize,
+        s: usize,
+        solve: SolveCounters,
+        objective: f64,
+        arrival: ArrivalStatus,
+        start: Instant,
+    ) {
+        let (n, m, cap) = (self.n, self.m, self.cap);
+        let len = big_t - s + 1;
+        for j in 0..len {
+            let sl = (s + j) % cap;
+            self.traj_ring[sl * n..(sl + 1) * n].copy_from_slice(&self.traj_work[j * n..(j + 1) * n]);
+            self.v_ring[sl * m..(sl + 1) * m].copy_from_slice(&self.v[j * m..(j + 1) * m]);
+        }
+        let sl = big_t % cap;
+        let last = &self.traj_work[(len - 1) * n..len * n];
+        self.filt_ring[sl * n..(sl + 1) * n].copy_from_slice(last);
+        self.est.state.as_mut_slice().copy_from_slice(last);
+        // Shape: (P_T⁻¹ + Cᵀ R_eff⁻¹ C)⁻¹ (the Kalman form's posterior).
+        let r_eff = self.settings.r_eff_factor();
+        if self.information(sl, r_eff, 0.0) {
+            self.est.shape.as_mut_slice().copy_from_slice(&self.mat_b);
+        }
+        let blocks = if big_t > self.settings.horizon { self.settings.blocks.len() } else { len - 1 };
+        self.est.report = Some(MheReport {
+            solve,
+            window: len,
+            vector_unknowns: 1 + blocks,
+            unknowns: n * (1 + blocks),
+            arrival,
+            objective,
+            elapsed: start.elapsed(),
+        });
+    }
+}
+
+fn sym(a: &mut [f64], n: usize) {
+    for c in 0..n {
+        for r in c + 1..n {
+            let v = 0.5 * (a[c * n + r] + a[r * n + c]);
+            a[c * n + r] = v;
+            a[r * n + c] = v;
+        }
+    }
+}
+
+impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
+    type Estimate = MheEstimate;
+
+    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
+        self.advance(model, u, Some(y))
+    }
+
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
+        self.advance(model, u, None)
+    }
+
+    fn estimate(&self) -> &MheEstimate {
+        &self.est
+    }
+
+    fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
+    }
+}
+
+/// Whether a report's window solve met its tolerance.
+#[must_use]
+pub fn converged(report: &MheReport) -> bool {
+    report.solve.status == WindowStatus::Converged
+}
+
+/// `λv` of a cost (`∞` for least squares).
+#[must_use]
+pub fn lambda_v(cost: MheCost) -> f64 {
+    match cost {
+        MheCost::MinMax { lambda_v } => lambda_v,
+        MheCost::LeastSquares => f64::INFINITY,
+    }
+}

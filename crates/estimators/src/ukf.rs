@@ -1,0 +1,612 @@
+//! The unscented Kalman filter over any [`DiscreteModel`] (only `f` and `h` are needed), with
+//! scaled sigma points (Wan & van der Merwe 2000; `docs/dp-vessel.md` (24)–(32) and steps 2–6 of
+//! §2, reconstructed):
+//!
+//! ```text
+//! λ = α²(n + κ) − n,   c = n + λ = α²(n + κ) > 0,   γ = √c
+//! sigma points (24):   X₀ = m,  X_i = m + γ L_i,  X_{n+i} = m − γ L_i   (L = chol P, columns L_i)
+//! weights (25)–(28):   Wm₀ = λ/c,  Wc₀ = λ/c + 1 − α² + β,  Wm_i = Wc_i = 1/(2c)
+//! time update:         X'_i = f(X_i, u),  x⁻ = Σ Wm_i X'_i,  P⁻ = Σ Wc_i (X'_i − x⁻)(X'_i − x⁻)ᵀ + Q
+//! measurement (29)–(32): redraw X from (x⁻, P⁻),  Z_i = h(X_i, u),  ẑ = Σ Wm_i Z_i,
+//!                      Pzz = Σ Wc_i (Z_i − ẑ)(Z_i − ẑ)ᵀ + R,  Pxz = Σ Wc_i (X_i − x⁻)(Z_i − ẑ)ᵀ,
+//!                      K = Pxz Pzz⁻¹,  x⁺ = x⁻ + K (y − ẑ),  P⁺ = P⁻ − K Pzz Kᵀ
+//! ```
+//!
+//! The paper's `α = 0.5, β = 2, κ = −2` ([`UkfParams::paper`]) give, for `n = 6`, `c = 1`,
+//! `Wm₀ = −5` and `Wc₀ = −2.25`: negative weights are allowed.
+//!
+//! **Positive-definiteness guard** (the digest's step 6, made precise; [`UkfReport`] counts its
+//! uses). With `Wc₀ < 0` the sums above are not guaranteed positive semidefinite. Every
+//! covariance is symmetrised and factorised with the workspace's relative pivot test
+//! (`dense_kernels::PD_RELATIVE_TOLERANCE`); when that fails:
+//!
+//! * `P⁻` and `Pzz` (with `Pxz`) are recomputed about the propagated central point instead of
+//!   the weighted mean, `Σ_{i≥1} Wc_i (X'_i − X'₀)(X'_i − X'₀)ᵀ + Q` (Julier's modified form):
+//!   every weight in that sum is `1/(2c) > 0`, so the result is at least `Q` (resp. `R`) and
+//!   positive definite;
+//! * `P⁺` is recomputed in Joseph form with the statistically linearised output matrix
+//!   `H = Pxzᵀ P⁻⁻¹`: `P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ`, positive semidefinite by
+//!   construction and equal to `P⁻ − K Pzz Kᵀ` when `h` is linear.
+//!
+//! If a guarded covariance still fails the test the step is refused with
+//! [`EstimatorError::NumericalFailure`]. So the published covariance is always positive definite.
+//!
+//! When is the guard needed? With `d_i = Y_i − Y₀` and `S = Σ_{i≥1} W_i d_i`, the identities
+//! `Σ Wm = 1` and `Wc₀ − Wm₀ = 1 − α² + β` give
+//! `Σ Wc_i (Y_i − ȳ)(Y_i − ȳ)ᵀ = Σ_{i≥1} W_i d_i d_iᵀ + (β − α²) S Sᵀ`, and Cauchy–Schwarz
+//! (`Σ_{i≥1} W_i = n/c`) bounds the first sum below by `(c/n) S Sᵀ`. So the sample covariance is
+//! positive semidefinite whenever `β ≥ −α² κ / n`, whatever the sign of `Wc₀` — in particular for
+//! the paper's `α = 0.5, β = 2, κ = −2` (`Wc₀ = −2.25`), where the guard fires only on rounding.
+//! It matters for `β < −α² κ / n` (tested with `β = −10`).
+//!
+//! On a linear model the central point is the mean, `Wc₀` multiplies a zero matrix, and the
+//! filter is the Kalman filter (tested to 1e-9). All buffers are allocated in
+//! [`UnscentedKalmanFilter::new`]; a step allocates nothing when the model's evaluations do not.
+//! On error the filter is unchanged.
+
+use nalgebra::{DMatrix, DVector};
+
+use dense_kernels as dense;
+use models::{Dims, DiscreteModel};
+
+use crate::error::EstimatorError;
+use crate::kalman::GaussianEstimate;
+use crate::traits::{Estimator, NoiseSettings};
+use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
+
+/// The scaling parameters of the sigma points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UkfParams {
+    /// Spread `α > 0`.
+    pub alpha: f64,
+    /// Prior-distribution weight `β` (2 is optimal for Gaussians).
+    pub beta: f64,
+    /// Secondary scaling `κ`; `α²(n + κ)` must be positive.
+    pub kappa: f64,
+}
+
+impl UkfParams {
+    /// The paper's `α = 0.5, β = 2, κ = −2` **\[P\]** (valid for `n > 2`).
+    #[must_use]
+    pub fn paper() -> Self {
+        Self { alpha: 0.5, beta: 2.0, kappa: -2.0 }
+    }
+
+    /// The weights for `n` states: `(c, Wm₀, Wc₀, W_i)`.
+    ///
+    /// # Errors
+    /// [`EstimatorError::InvalidSetting`] for a non-positive or non-finite `α`, a non-finite
+    /// `β` or `κ`, or `c = α²(n + κ) ≤ 0`.
+    pub fn weights(&self, n: usize) -> Result<(f64, f64, f64, f64), EstimatorError> {
+        if !(self.alpha.is_finite() && self.alpha > 0.0) {
+            return Err(EstimatorError::InvalidSetting { what: "UKF alpha", value: self.alpha, requirement: "> 0" });
+        }
+        if !self.beta.is_finite() {
+            return Err(EstimatorError::InvalidSetting { what: "UKF beta", value: self.beta, requirement: "finite" });
+        }
+        if !self.kappa.is_finite() {
+            return Err(EstimatorError::InvalidSetting { what: "UKF kappa", value: self.kappa, requirement: "finite" });
+        }
+        let c = self.alpha * self.alpha * (n as f64 + self.kappa);
+        if !(c.is_finite() && c > 0.0) {
+            return Err(EstimatorError::InvalidSetting {
+                what: "UKF c = alpha^2 (n + kappa)",
+                value: c,
+                requirement: "> 0 (kappa > -n)",
+            });
+        }
+        let lambda = c - n as f64;
+        Ok((c, lambda / c, lambda / c + 1.0 - self.alpha * self.alpha + self.beta, 0.5 / c))
+    }
+}
+
+impl Default for UkfParams {
+    /// `α = 1, β = 2, κ = 0`: `c = n`, `Wm₀ = 0`, `Wc₀ = 2`, no negative weight, valid for every
+    /// `n` (the registry's default).
+    fn default() -> Self {
+        Self { alpha: 1.0, beta: 2.0, kappa: 0.0 }
+    }
+}
+
+/// What the last step did beyond the plain recursion.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct UkfReport {
+    /// The predicted covariance `P⁻` needed the guard in the last step.
+    pub guarded_prediction: bool,
+    /// `Pzz` needed the guard in the last step.
+    pub guarded_innovation: bool,
+    /// `P⁺` needed the Joseph-form guard in the last step.
+    pub guarded_update: bool,
+    /// Guard uses since construction (all three kinds).
+    pub guard_total: u64,
+}
+
+/// An unscented Kalman filter; `Q`, `R` are covariances.
+#[derive(Debug, Clone)]
+pub struct UnscentedKalmanFilter {
+    n: usize,
+    p: usize,
+    m: usize,
+    params: UkfParams,
+    gamma: f64,
+    wm0: f64,
+    wc0: f64,
+    wi: f64,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    est: GaussianEstimate,
+    report: UkfReport,
+    // Buffers (allocated once).
+    chol: DMatrix<f64>,
+    sig: DMatrix<f64>,
+    prop: DMatrix<f64>,
+    zsig: DMatrix<f64>,
+    xcol: DVector<f64>,
+    fcol: DVector<f64>,
+    zcol: DVector<f64>,
+    x_pred: DVector<f64>,
+    p_pred: DMatrix<f64>,
+    p_pred_chol: DMatrix<f64>,
+    z_pred: DVector<f64>,
+    pzz: DMatrix<f64>,
+    pzz_chol: DMatrix<f64>,
+    pxz: DMatrix<f64>,
+    k: DMatrix<f64>,
+    h_stat: DMatrix<f64>,
+    ikh: DMatrix<f64>,
+    tmp_nn: DMatrix<f64>,
+    kr: DMatrix<f64>,
+    x_new: DVector<f64>,
+    p_new: DMatrix<f64>,
+    p_new_chol: DMatrix<f64>,
+    dx: DVector<f64>,
+    dz: DVector<f64>,
+    innov: DVector<f64>,
+}
+
+/// Copies the symmetric `src` into `dst` and factorises it there; `true` if it is positive
+/// definite to working precision (every pivot `G_ii²` above `4 ε n` times its diagonal entry).
+fn factor_pd(src: &DMatrix<f64>, dst: &mut DMatrix<f64>) -> bool {
+    dst.copy_from(src);
+    if !dense::cholesky_in_place(dst) {
+        return false;
+    }
+    let n = dst.nrows();
+    let tol = dense::PD_RELATIVE_TOLERANCE * n as f64;
+    (0..n).all(|i| dst[(i, i)] * dst[(i, i)] > tol * src[(i, i)])
+}
+
+/// `out += w · a bᵀ` for vectors `a`, `b`.
+fn add_outer(out: &mut DMatrix<f64>, w: f64, a: &DVector<f64>, b: &DVector<f64>) {
+    for j in 0..b.len() {
+        let wb = w * b[j];
+        for i in 0..a.len() {
+            out[(i, j)] += wb * a[i];
+        }
+    }
+}
+
+impl UnscentedKalmanFilter {
+    /// A filter with initial mean `x0`, covariance `p0` (`n × n`), process covariance `q`
+    /// (`n × n`), measurement covariance `r` (`m × m`), `inputs` input components and sigma-point
+    /// parameters `params`.
+    ///
+    /// # Errors
+    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the argument;
+    /// [`EstimatorError::InvalidSetting`] for `params` (see [`UkfParams::weights`]).
+    pub fn new(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        q: DMatrix<f64>,
+        r: DMatrix<f64>,
+        inputs: usize,
+        params: UkfParams,
+    ) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
+        let (c, wm0, wc0, wi) = params.weights(n)?;
+        let s = 2 * n + 1;
+        let std_dev = p0.diagonal().map(f64::sqrt);
+        let nn = || DMatrix::zeros(n, n);
+        Ok(Self {
+            n,
+            p: inputs,
+            m,
+            params,
+            gamma: c.sqrt(),
+            wm0,
+            wc0,
+            wi,
+            q,
+            r,
+            est: GaussianEstimate { mean: x0, covariance: p0, std_dev },
+            report: UkfReport::default(),
+            chol: nn(),
+            sig: DMatrix::zeros(n, s),
+            prop: DMatrix::zeros(n, s),
+            zsig: DMatrix::zeros(m, s),
+            xcol: DVector::zeros(n),
+            fcol: DVector::zeros(n),
+            zcol: DVector::zeros(m),
+            x_pred: DVector::zeros(n),
+            p_pred: nn(),
+            p_pred_chol: nn(),
+            z_pred: DVector::zeros(m),
+            pzz: DMatrix::zeros(m, m),
+            pzz_chol: DMatrix::zeros(m, m),
+            pxz: DMatrix::zeros(n, m),
+            k: DMatrix::zeros(n, m),
+            h_stat: DMatrix::zeros(m, n),
+            ikh: nn(),
+            tmp_nn: nn(),
+            kr: DMatrix::zeros(n, m),
+            x_new: DVector::zeros(n),
+            p_new: nn(),
+            p_new_chol: nn(),
+            dx: DVector::zeros(n),
+            dz: DVector::zeros(m),
+            innov: DVector::zeros(m),
+        })
+    }
+
+    /// A filter from [`NoiseSettings`] (covariances).
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::new`].
+    pub fn with_noise(
+        x0: DVector<f64>,
+        p0: DMatrix<f64>,
+        noise: &NoiseSettings,
+        inputs: usize,
+        params: UkfParams,
+    ) -> Result<Self, EstimatorError> {
+        Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs, params)
+    }
+
+    /// The current estimate.
+    pub fn estimate(&self) -> &GaussianEstimate {
+        &self.est
+    }
+
+    /// The sigma-point parameters.
+    pub fn params(&self) -> UkfParams {
+        self.params
+    }
+
+    /// The weights `(Wm₀, Wc₀, W_i)` in use.
+    pub fn weights(&self) -> (f64, f64, f64) {
+        (self.wm0, self.wc0, self.wi)
+    }
+
+    /// What the last step did (guard uses).
+    pub fn report(&self) -> UkfReport {
+        self.report
+    }
+
+    /// Replaces the process covariance in place (no allocation; unchanged on error).
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::new`] for `Q`.
+    pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        replace_spd("Q", &mut self.q, q, &mut self.tmp_nn)
+    }
+
+    /// Replaces the measurement covariance in place (no allocation; unchanged on error).
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::new`] for `R`.
+    pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        replace_spd("R", &mut self.r, r, &mut self.pzz_chol)
+    }
+
+    fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
+        for (what, expected, found) in [
+            ("model states", self.n, d.states),
+            ("model inputs", self.p, d.inputs),
+            ("model outputs", self.m, d.outputs),
+        ] {
+            if expected != found {
+                return Err(EstimatorError::DimensionMismatch { what, expected, found });
+            }
+        }
+        Ok(())
+    }
+
+    /// Sigma points (24) of `mean` with the lower factor `l` into `sig`.
+    fn draw(sig: &mut DMatrix<f64>, mean: &DVector<f64>, l: &DMatrix<f64>, gamma: f64) {
+        let n = mean.len();
+        for i in 0..n {
+            sig[(i, 0)] = mean[i];
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let d = gamma * l[(i, j)];
+                sig[(i, 1 + j)] = mean[i] + d;
+                sig[(i, 1 + n + j)] = mean[i] - d;
+            }
+        }
+    }
+
+    fn wm(&self, i: usize) -> f64 {
+        if i == 0 { self.wm0 } else { self.wi }
+    }
+
+    /// Time update into `x_pred`, `P⁻` (`p_pred`) and its factor `p_pred_chol`.
+    fn predict_into_buffers<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<bool, EstimatorError> {
+        let (n, s) = (self.n, 2 * self.n + 1);
+        if !factor_pd(&self.est.covariance, &mut self.chol) {
+            return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
+        }
+        Self::draw(&mut self.sig, &self.est.mean, &self.chol, self.gamma);
+        for j in 0..s {
+            self.xcol.copy_from(&self.sig.column(j));
+            model.f(&self.xcol, u, &mut self.fcol)?;
+            self.prop.set_column(j, &self.fcol);
+        }
+        if self.prop.iter().any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the model's prediction of a sigma point is not finite"));
+        }
+        self.x_pred.fill(0.0);
+        for j in 0..s {
+            let w = self.wm(j);
+            for i in 0..n {
+                self.x_pred[i] += w * self.prop[(i, j)];
+            }
+        }
+        // P⁻ about the mean; the guard recomputes it about the central point.
+        let mut guarded = false;
+        for attempt in 0..2 {
+            self.p_pred.copy_from(&self.q);
+            for j in usize::from(attempt == 1)..s {
+                for i in 0..n {
+                    let centre = if attempt == 0 { self.x_pred[i] } else { self.prop[(i, 0)] };
+                    self.dx[i] = self.prop[(i, j)] - centre;
+                }
+                let w = if j == 0 { self.wc0 } else { self.wi };
+                add_outer(&mut self.p_pred, w, &self.dx, &self.dx);
+            }
+            dense::symmetrize(&mut self.p_pred);
+            if factor_pd(&self.p_pred, &mut self.p_pred_chol) {
+                return Ok(guarded);
+            }
+            guarded = true;
+        }
+        Err(EstimatorError::NumericalFailure("the predicted covariance is not positive definite"))
+    }
+
+    /// A prediction-only step: the time update, published. On error the state is unchanged.
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::step`].
+    pub fn predict<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.check_dims(model.dims())?;
+        check_vec("u", u, self.p)?;
+        let guarded = self.predict_into_buffers(model, u)?;
+        std::mem::swap(&mut self.est.mean, &mut self.x_pred);
+        std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
+        self.publish_std_dev();
+        self.report.guarded_prediction = guarded;
+        self.report.guarded_innovation = false;
+        self.report.guarded_update = false;
+        self.report.guard_total += u64::from(guarded);
+        Ok(&self.est)
+    }
+
+    fn publish_std_dev(&mut self) {
+        for i in 0..self.n {
+            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
+        }
+    }
+
+    /// One step: time update with `u_k`, measurement update with `y_{k+1}`. On error the state
+    /// is unchanged.
+    ///
+    /// # Errors
+    /// Wrong dimensions of the model or of `u`, `y`; NaN/∞ in `u`, `y`; a model that cannot be
+    /// evaluated ([`EstimatorError::Model`]); a non-finite sigma-point image, or a covariance the
+    /// guard cannot make positive definite ([`EstimatorError::NumericalFailure`]).
+    pub fn step<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.check_dims(model.dims())?;
+        check_vec("u", u, self.p)?;
+        check_vec("y", y, self.m)?;
+        let guarded_prediction = self.predict_into_buffers(model, u)?;
+        self.update_from_prediction(model, u, y, guarded_prediction)
+    }
+
+    /// Replaces the state by `(mean, covariance)` (for an arrival-cost update that starts from
+    /// another estimator's estimate). Allocation-free; on error the filter is unchanged.
+    ///
+    /// # Errors
+    /// Wrong sizes, non-finite entries, a covariance that is not symmetric positive definite.
+    pub fn reset(&mut self, mean: &DVector<f64>, covariance: &DMatrix<f64>) -> Result<(), EstimatorError> {
+        check_vec("mean", mean, self.n)?;
+        if covariance.shape() != (self.n, self.n) {
+            return Err(EstimatorError::DimensionMismatch {
+                what: "covariance",
+                expected: self.n,
+                found: covariance.nrows(),
+            });
+        }
+        if let Some(index) = covariance.iter().position(|v| !v.is_finite()) {
+            return Err(EstimatorError::NonFinite { what: "covariance", index });
+        }
+        if dense::max_asymmetry(covariance, dense::SYMMETRY_TOLERANCE).is_some() {
+            return Err(EstimatorError::NotSymmetric { what: "covariance" });
+        }
+        if !factor_pd(covariance, &mut self.chol) {
+            return Err(EstimatorError::NotPositiveDefinite { what: "covariance" });
+        }
+        self.est.mean.copy_from(mean);
+        self.est.covariance.copy_from(covariance);
+        dense::symmetrize(&mut self.est.covariance);
+        self.publish_std_dev();
+        Ok(())
+    }
+
+    /// A measurement update only, (29)–(32), of the current state with `y` (`u` is passed to
+    /// `h`): the first half of the arrival-cost update of the vessel paper's §3.2 (update with
+    /// `y_s`, then [`UnscentedKalmanFilter::predict`] with `u_s`). On error the state is unchanged.
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::step`].
+    pub fn correct<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.check_dims(model.dims())?;
+        check_vec("u", u, self.p)?;
+        check_vec("y", y, self.m)?;
+        self.x_pred.copy_from(&self.est.mean);
+        self.p_pred.copy_from(&self.est.covariance);
+        if !factor_pd(&self.p_pred, &mut self.p_pred_chol) {
+            return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
+        }
+        self.update_from_prediction(model, u, y, false)
+    }
+
+    /// The measurement update (29)–(32) from `x_pred`, `p_pred` (factor in `p_pred_chol`).
+    fn update_from_prediction<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        guarded_prediction: bool,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let (n, m, s) = (self.n, self.m, 2 * self.n + 1);
+        // Redraw from (x⁻, P⁻) and map through h (29).
+        Self::draw(&mut self.sig, &self.x_pred, &self.p_pred_chol, self.gamma);
+        for j in 0..s {
+            self.xcol.copy_from(&self.sig.column(j));
+            model.h(&self.xcol, u, &mut self.zcol)?;
+            self.zsig.set_column(j, &self.zcol);
+        }
+        if self.zsig.iter().any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the model's output at a sigma point is not finite"));
+        }
+        self.z_pred.fill(0.0);
+        for j in 0..s {
+            let w = self.wm(j);
+            for i in 0..m {
+                self.z_pred[i] += w * self.zsig[(i, j)];
+            }
+        }
+        // Pzz, Pxz (30)–(31); guard: about the central point.
+        let mut guarded_innovation = false;
+        let mut ok = false;
+        for attempt in 0..2 {
+            self.pzz.copy_from(&self.r);
+            self.pxz.fill(0.0);
+            for j in usize::from(attempt == 1)..s {
+                for i in 0..m {
+                    let centre = if attempt == 0 { self.z_pred[i] } else { self.zsig[(i, 0)] };
+                    self.dz[i] = self.zsig[(i, j)] - centre;
+                }
+                for i in 0..n {
+                    // X₀ = x⁻: the centre is the same in both forms.
+                    self.dx[i] = self.sig[(i, j)] - self.x_pred[i];
+                }
+                let w = if j == 0 { self.wc0 } else { self.wi };
+                add_outer(&mut self.pzz, w, &self.dz, &self.dz);
+                add_outer(&mut self.pxz, w, &self.dx, &self.dz);
+            }
+            dense::symmetrize(&mut self.pzz);
+            if factor_pd(&self.pzz, &mut self.pzz_chol) {
+                ok = true;
+                break;
+            }
+            guarded_innovation = true;
+        }
+        if !ok {
+            return Err(EstimatorError::NumericalFailure("the innovation covariance is not positive definite"));
+        }
+        // K = Pxz Pzz⁻¹ (32), by two triangular solves with the factor of Pzz.
+        self.k.copy_from(&self.pxz);
+        dense::solve_right_lower_t(&mut self.k, &self.pzz_chol);
+        dense::solve_right_lower(&mut self.k, &self.pzz_chol);
+        self.innov.copy_from(y);
+        self.innov -= &self.z_pred;
+        self.x_new.copy_from(&self.x_pred);
+        dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
+        // P⁺ = P⁻ − K Pzz Kᵀ = P⁻ − K Pxzᵀ.
+        self.p_new.copy_from(&self.p_pred);
+        dense::mul_nt(-1.0, &self.k, &self.pxz, 1.0, &mut self.p_new);
+        dense::symmetrize(&mut self.p_new);
+        let mut guarded_update = false;
+        if !factor_pd(&self.p_new, &mut self.p_new_chol) {
+            // Joseph form with H = Pxzᵀ P⁻⁻¹ (statistical linearisation).
+            guarded_update = true;
+            self.h_stat.tr_copy_from(&self.pxz);
+            dense::solve_right_lower_t(&mut self.h_stat, &self.p_pred_chol);
+            dense::solve_right_lower(&mut self.h_stat, &self.p_pred_chol);
+            dense::i_minus_lc(&self.k, &self.h_stat, &mut self.ikh);
+            dense::mul_nn(1.0, &self.ikh, &self.p_pred, 0.0, &mut self.tmp_nn);
+            dense::mul_nt(1.0, &self.tmp_nn, &self.ikh, 0.0, &mut self.p_new);
+            dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
+            dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
+            dense::symmetrize(&mut self.p_new);
+            if !factor_pd(&self.p_new, &mut self.p_new_chol) {
+                return Err(EstimatorError::NumericalFailure("the updated covariance is not positive definite"));
+            }
+        }
+        if self.x_new.iter().any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
+        }
+        std::mem::swap(&mut self.est.mean, &mut self.x_new);
+        std::mem::swap(&mut self.est.covariance, &mut self.p_new);
+        self.publish_std_dev();
+        self.report.guarded_prediction = guarded_prediction;
+        self.report.guarded_innovation = guarded_innovation;
+        self.report.guarded_update = guarded_update;
+        self.report.guard_total +=
+            u64::from(guarded_prediction) + u64::from(guarded_innovation) + u64::from(guarded_update);
+        Ok(&self.est)
+    }
+}
+
+impl<M: DiscreteModel + ?Sized> Estimator<M> for UnscentedKalmanFilter {
+    type Estimate = GaussianEstimate;
+    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        UnscentedKalmanFilter::step(self, model, u, y)
+    }
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        UnscentedKalmanFilter::predict(self, model, u)
+    }
+    fn estimate(&self) -> &GaussianEstimate {
+        &self.est
+    }
+    fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_weights() {
+        let (c, wm0, wc0, wi) = UkfParams::paper().weights(6).unwrap();
+        assert_eq!((c, wm0, wc0, wi), (1.0, -5.0, -2.25, 0.5));
+        // The weights of the mean sum to one; Wc₀ − Wm₀ = 1 − α² + β.
+        assert!((wm0 + 12.0 * wi - 1.0).abs() < 1e-15);
+        assert!(UkfParams::paper().weights(2).is_err());
+        assert!(UkfParams { alpha: 0.0, ..UkfParams::paper() }.weights(6).is_err());
+        assert!(UkfParams { beta: f64::NAN, ..UkfParams::paper() }.weights(6).is_err());
+        let (c, wm0, wc0, _) = UkfParams::default().weights(3).unwrap();
+        assert_eq!((c, wm0, wc0), (3.0, 0.0, 2.0));
+    }
+}

@@ -1,0 +1,56 @@
+//! No heap allocation in a moving-horizon update after construction (active-set inner solver,
+//! coordinate rotation and exact saddle, every blocking preset, with and without measurements).
+
+use counting_allocator::{Counting, count};
+
+use estimators::mhe::{ArrivalRecursion, BlockingPreset, MheCost, MheSettings, MovingHorizonEstimator, WindowSolver};
+use estimators::{Estimator, StepModel};
+use nalgebra::{DMatrix, DVector};
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn updates_do_not_allocate() {
+    let a = DMatrix::from_row_slice(
+        4,
+        4,
+        &[1.0, 0.5, 0.1, 0.0, 0.0, 1.0, 0.05, 0.1, 0.0, 0.0, 0.3, -0.1, 0.0, 0.0, 0.2, 0.1],
+    );
+    let b = DMatrix::from_column_slice(4, 1, &[0.5, 0.2, -0.1, 0.4]);
+    let c = DMatrix::from_row_slice(1, 4, &[1.0, 0.0, 0.0, 0.0]);
+    let model = StepModel::new(&a, &b, &c);
+    let inputs: Vec<DVector<f64>> = (0..30).map(|k| DVector::from_element(1, (0.4 * k as f64).sin())).collect();
+    let outputs: Vec<DVector<f64>> = (0..30).map(|k| DVector::from_element(1, (0.7 * k as f64).cos() * 3.0)).collect();
+    for preset in [BlockingPreset::Rmhe, BlockingPreset::RmheOp, BlockingPreset::RmheOf] {
+        for solver in [WindowSolver::coordinate_rotation(), WindowSolver::exact_saddle()] {
+            for arrival in [ArrivalRecursion::Kalman, ArrivalRecursion::HInfinity { theta: 0.9 }] {
+                let mut s = MheSettings::new(
+                    DVector::zeros(4),
+                    DMatrix::identity(4, 4) * 0.01,
+                    DMatrix::identity(4, 4) * 9e-4,
+                    DMatrix::from_element(1, 1, 0.1),
+                    (DVector::repeat(4, -0.1), DVector::repeat(4, 0.1)),
+                    (DVector::repeat(1, -1.0), DVector::repeat(1, 1.0)),
+                )
+                .with_preset(6, preset)
+                .unwrap();
+                s.solver = solver;
+                s.arrival = arrival;
+                s.cost = MheCost::MinMax { lambda_v: 10.0 };
+                let mut e = MovingHorizonEstimator::new(s, 1).unwrap();
+                let (_, allocations) = count(|| {
+                    e.measure_initial(&model, &outputs[0]).unwrap();
+                    for k in 0..30 {
+                        if k % 7 == 3 {
+                            e.predict(&model, &inputs[k]).unwrap();
+                        } else {
+                            e.step(&model, &inputs[k], &outputs[k]).unwrap();
+                        }
+                    }
+                });
+                assert_eq!(allocations, 0, "{preset:?} {solver:?} {arrival:?}");
+            }
+        }
+    }
+}

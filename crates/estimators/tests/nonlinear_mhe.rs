@@ -1,0 +1,258 @@
+//! The nonlinear moving-horizon estimator (vessel paper (21)–(23)) against independent
+//! references: the Kalman filter (full information on a linear model), the linear MHE of the car
+//! paper (same arrival recursion on a linear model, after the window fills), UKF = EKF arrival on
+//! a linear model, the optimality conditions of the window problem by central differences of an
+//! independently written cost on a nonlinear model, bad input, and no allocation.
+
+use counting_allocator::{Counting, count};
+
+use estimators::mhe::{
+    ArrivalRecursion, MheCost, MheSettings, MovingHorizonEstimator, NonlinearArrival, NonlinearMhe,
+    NonlinearMheSettings, PriorMean, WindowSolver, WindowStatus,
+};
+use estimators::ukf::UkfParams;
+use estimators::{Estimator, EstimatorError, KalmanFilter};
+use models::{DifferentiableModel, Dims, DiscreteModel, ModelError};
+use nalgebra::{DMatrix, DVector};
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn linear() -> models::ConstantModel {
+    let a = DMatrix::from_row_slice(3, 3, &[1.0, 0.1, 0.0, -0.05, 0.95, 0.1, 0.0, 0.0, 0.9]);
+    let b = DMatrix::from_column_slice(3, 1, &[0.0, 0.1, 0.05]);
+    let c = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+    models::ConstantModel::new(a, b, c).unwrap()
+}
+
+fn data(model: &dyn DiscreteModel, steps: usize, seed: u64) -> (Vec<DVector<f64>>, Vec<DVector<f64>>) {
+    let mut rng = models::Xoshiro256StarStar::seed_from_u64(seed);
+    let d = model.dims();
+    let mut x = DVector::from_element(d.states, 0.2);
+    let (mut us, mut ys) = (Vec::new(), Vec::new());
+    let mut out = DVector::zeros(d.states);
+    let mut z = DVector::zeros(d.outputs);
+    for k in 0..steps {
+        let u = DVector::from_element(d.inputs, (0.2 * k as f64).sin());
+        model.f(&x, &u, &mut out).unwrap();
+        x = &out + DVector::from_fn(d.states, |_, _| 0.05 * rng.uniform(-1.0, 1.0));
+        model.h(&x, &u, &mut z).unwrap();
+        ys.push(&z + DVector::from_fn(d.outputs, |_, _| 0.1 * rng.uniform(-1.0, 1.0)));
+        us.push(u);
+    }
+    (us, ys)
+}
+
+fn settings(n: usize, m: usize, horizon: usize, arrival: NonlinearArrival) -> NonlinearMheSettings {
+    let mut s = NonlinearMheSettings::new(
+        DVector::zeros(n),
+        DMatrix::identity(n, n) * 0.5,
+        DMatrix::identity(n, n) * 0.01,
+        DMatrix::identity(m, m) * 0.04,
+    );
+    s.horizon = horizon;
+    s.arrival = arrival;
+    s
+}
+
+#[test]
+fn full_information_on_a_linear_model_is_the_kalman_filter() {
+    let model = linear();
+    let s = settings(3, 2, 40, NonlinearArrival::Ekf);
+    let mut kf = KalmanFilter::new(s.x0.clone(), s.p0.clone(), s.q.clone(), s.r.clone(), 1).unwrap();
+    let mut mhe = NonlinearMhe::new(s, 1).unwrap();
+    let (us, ys) = data(&model, 30, 1);
+    for (u, y) in us.iter().zip(&ys) {
+        let xk = kf.step(&model, u, y).unwrap().mean.clone();
+        let e = mhe.step(&model, u, y).unwrap();
+        assert!((&e.state - &xk).amax() < 1e-8, "{} vs {xk}", e.state);
+        assert_eq!(e.report.unwrap().status, WindowStatus::Converged);
+    }
+}
+
+#[test]
+fn on_a_linear_model_it_is_the_linear_mhe_with_the_same_arrival_recursion() {
+    let model = linear();
+    for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper())] {
+        let s = settings(3, 2, 5, arrival);
+        let mut lin = MheSettings::new(
+            s.x0.clone(),
+            s.p0.clone(),
+            s.q.clone(),
+            s.r.clone(),
+            (DVector::repeat(3, f64::NEG_INFINITY), DVector::repeat(3, f64::INFINITY)),
+            (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
+        );
+        lin.horizon = 5;
+        lin.blocks = vec![1; 5];
+        lin.cost = MheCost::LeastSquares;
+        lin.arrival = ArrivalRecursion::Kalman;
+        lin.prior_mean = PriorMean::Smoothed;
+        lin.solver = WindowSolver::exact_saddle();
+        let mut reference = MovingHorizonEstimator::new(lin, 1).unwrap();
+        let mut mhe = NonlinearMhe::new(s, 1).unwrap();
+        let (us, ys) = data(&model, 25, 2);
+        for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
+            let xr = reference.step(&model, u, y).unwrap().state.clone();
+            let x = mhe.step(&model, u, y).unwrap().state.clone();
+            assert!((&x - &xr).amax() < 1e-8, "{arrival:?} step {k}: {x} vs {xr}");
+        }
+    }
+}
+
+/// A pendulum-like nonlinear model: `θ' = ω`, `ω' = −sin θ + u`, Euler at 0.1 s, measured
+/// `[sin θ, θ + ω²/10]`.
+struct Pendulum;
+
+impl DiscreteModel for Pendulum {
+    fn dims(&self) -> Dims {
+        Dims::new(2, 1, 2)
+    }
+    fn f(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0] + 0.1 * x[1];
+        out[1] = x[1] + 0.1 * (-x[0].sin() + u[0]);
+        Ok(())
+    }
+    fn h(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0].sin();
+        out[1] = x[0] + x[1] * x[1] / 10.0;
+        Ok(())
+    }
+}
+
+impl DifferentiableModel for Pendulum {
+    fn f_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out[(0, 0)] = 1.0;
+        out[(0, 1)] = 0.1;
+        out[(1, 0)] = -0.1 * x[0].cos();
+        out[(1, 1)] = 1.0;
+        Ok(())
+    }
+    fn h_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out[(0, 0)] = x[0].cos();
+        out[(0, 1)] = 0.0;
+        out[(1, 0)] = 1.0;
+        out[(1, 1)] = x[1] / 5.0;
+        Ok(())
+    }
+}
+
+/// The window cost written independently of the estimator (full information, prior (x̄0, P0)).
+fn window_cost(s: &NonlinearMheSettings, xs: &[DVector<f64>], us: &[DVector<f64>], ys: &[DVector<f64>]) -> f64 {
+    let (p0i, qi, ri) =
+        (s.p0.clone().try_inverse().unwrap(), s.q.clone().try_inverse().unwrap(), s.r.clone().try_inverse().unwrap());
+    let m = Pendulum;
+    let d0 = &xs[0] - &s.x0;
+    let mut c = (d0.transpose() * &p0i * &d0)[0];
+    let mut f = DVector::zeros(2);
+    let mut h = DVector::zeros(2);
+    for j in 0..xs.len() - 1 {
+        m.f(&xs[j], &us[j], &mut f).unwrap();
+        let d = &xs[j + 1] - &f;
+        c += (d.transpose() * &qi * &d)[0];
+        m.h(&xs[j + 1], &us[j], &mut h).unwrap();
+        let e = &ys[j] - &h;
+        c += (e.transpose() * &ri * &e)[0];
+    }
+    c
+}
+
+#[test]
+fn the_window_solution_satisfies_the_optimality_conditions_on_a_nonlinear_model() {
+    let s = settings(2, 2, 12, NonlinearArrival::Ukf(UkfParams { alpha: 1.0, beta: 2.0, kappa: 1.0 }));
+    let mut mhe = NonlinearMhe::new(s.clone(), 1).unwrap();
+    let (us, ys) = data(&Pendulum, 10, 3);
+    for t in 0..us.len() {
+        mhe.step(&Pendulum, &us[t], &ys[t]).unwrap();
+        let traj: Vec<DVector<f64>> = mhe.trajectory().to_vec();
+        assert_eq!(traj.len(), t + 2);
+        let base = window_cost(&s, &traj, &us[..=t], &ys[..=t]);
+        let h = 1e-6;
+        let mut worst: f64 = 0.0;
+        for j in 0..traj.len() {
+            for i in 0..2 {
+                let mut plus = traj.clone();
+                plus[j][i] += h;
+                let mut minus = traj.clone();
+                minus[j][i] -= h;
+                let grad = (window_cost(&s, &plus, &us[..=t], &ys[..=t])
+                    - window_cost(&s, &minus, &us[..=t], &ys[..=t]))
+                    / (2.0 * h);
+                worst = worst.max(grad.abs());
+            }
+        }
+        assert!(worst < 1e-5 * base.max(1.0), "T = {}: gradient {worst:e} at cost {base}", t + 1);
+    }
+}
+
+#[test]
+fn an_iteration_limit_is_an_outcome_and_bad_input_leaves_the_estimator_unchanged() {
+    let mut s = settings(2, 2, 4, NonlinearArrival::Ukf(UkfParams { alpha: 1.0, beta: 2.0, kappa: 1.0 }));
+    s.max_iterations = 1;
+    s.x0 = DVector::from_vec(vec![2.5, -1.0]);
+    let mut mhe = NonlinearMhe::new(s, 1).unwrap();
+    let (us, ys) = data(&Pendulum, 12, 4);
+    let mut limited = 0;
+    for (u, y) in us.iter().zip(&ys).take(10) {
+        let e = mhe.step(&Pendulum, u, y).unwrap();
+        limited += usize::from(e.report.unwrap().status == WindowStatus::NotConverged);
+        assert!(e.state.iter().all(|v| v.is_finite()));
+    }
+    assert!(limited > 0);
+    let before = mhe.clone();
+    assert!(matches!(
+        mhe.step(&Pendulum, &us[10], &DVector::from_element(2, f64::NAN)),
+        Err(EstimatorError::NonFinite { .. })
+    ));
+    assert!(mhe.step(&Pendulum, &DVector::zeros(3), &ys[10]).is_err());
+    assert!(mhe.step(&linear(), &us[10], &ys[10]).is_err());
+    assert_eq!(mhe.time(), before.time());
+    let mut twin = before;
+    let a = mhe.step(&Pendulum, &us[10], &ys[10]).unwrap().state.clone();
+    let b = twin.step(&Pendulum, &us[10], &ys[10]).unwrap().state.clone();
+    assert_eq!(a, b);
+    // Settings.
+    let mut bad = settings(2, 2, 0, NonlinearArrival::Fixed);
+    assert!(matches!(NonlinearMhe::new(bad.clone(), 1), Err(EstimatorError::InvalidConfiguration { .. })));
+    bad.horizon = 3;
+    bad.q[(0, 0)] = -1.0;
+    assert!(NonlinearMhe::new(bad, 1).is_err());
+}
+
+#[test]
+fn updates_do_not_allocate() {
+    let model = linear();
+    let (us, ys) = data(&model, 30, 5);
+    for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper()), NonlinearArrival::Fixed] {
+        let mut mhe = NonlinearMhe::new(settings(3, 2, 10, arrival), 1).unwrap();
+        let (_, allocations) = count(|| {
+            for k in 0..30 {
+                if k % 5 == 2 {
+                    mhe.predict(&model, &us[k]).unwrap();
+                } else {
+                    mhe.step(&model, &us[k], &ys[k]).unwrap();
+                }
+            }
+        });
+        assert_eq!(allocations, 0, "{arrival:?}");
+    }
+}
+
+#[test]
+fn with_the_arrival_filters_own_mean_and_the_ekf_arrival_it_is_the_kalman_filter_on_a_linear_model() {
+    let model = linear();
+    let mut s = settings(3, 2, 4, NonlinearArrival::Ekf);
+    s.prior = estimators::mhe::NonlinearPrior::ArrivalFilter;
+    let mut kf = KalmanFilter::new(s.x0.clone(), s.p0.clone(), s.q.clone(), s.r.clone(), 1).unwrap();
+    let mut mhe = NonlinearMhe::new(s.clone(), 1).unwrap();
+    s.arrival = NonlinearArrival::Ukf(UkfParams::paper());
+    let mut mhe_ukf = NonlinearMhe::new(s, 1).unwrap();
+    let (us, ys) = data(&model, 30, 6);
+    for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
+        let xk = kf.step(&model, u, y).unwrap().mean.clone();
+        let x = mhe.step(&model, u, y).unwrap().state.clone();
+        let xu = mhe_ukf.step(&model, u, y).unwrap().state.clone();
+        assert!((&x - &xk).amax() < 1e-8, "step {k}: {x} vs {xk}");
+        assert!((&xu - &xk).amax() < 1e-8, "UKF arrival, step {k}: {xu} vs {xk}");
+    }
+}

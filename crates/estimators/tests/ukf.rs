@@ -1,0 +1,303 @@
+//! The unscented Kalman filter: equal to the Kalman filter on linear models (sigma points are
+//! exact for first and second moments), close to the EKF on a mildly nonlinear model and on the
+//! supply vessel, the positive-definiteness guard against an independent formula, bad input
+//! refused with the state unchanged, and no allocation per step.
+
+use counting_allocator::{Counting, count};
+use estimators::{
+    EstimatorError, ExtendedKalmanFilter, KalmanFilter, StepModel, UkfParams, UnscentedKalmanFilter,
+    registry::{self, GaussianSetup, NonlinearSetup},
+};
+use models::{DifferentiableModel, Dims, DiscreteModel, ModelError, Xoshiro256StarStar};
+use nalgebra::{DMatrix, DVector};
+use vessel_dynamics::{DiscreteVessel, VesselParams};
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn random(rng: &mut Xoshiro256StarStar, r: usize, c: usize) -> DMatrix<f64> {
+    DMatrix::from_fn(r, c, |_, _| rng.uniform(-1.0, 1.0))
+}
+
+#[test]
+fn equals_the_kalman_filter_on_linear_models() {
+    let mut rng = Xoshiro256StarStar::seed_from_u64(3);
+    let mut worst = 0.0f64;
+    for trial in 0..16 {
+        let (n, m, p) = (3 + trial % 4, 1 + trial % 3, 1 + trial % 2);
+        // The paper's parameters (negative weights) and the default ones.
+        let params = if trial % 2 == 0 { UkfParams::paper() } else { UkfParams::default() };
+        let a = random(&mut rng, n, n) * 0.7;
+        let b = random(&mut rng, n, p);
+        let c = random(&mut rng, m, n);
+        let g = random(&mut rng, n, n);
+        let q = &g * g.transpose() + DMatrix::identity(n, n) * 0.1;
+        let r = DMatrix::identity(m, m) * 0.3;
+        let p0 = DMatrix::identity(n, n) * 2.0;
+        let x0 = DVector::from_fn(n, |i, _| i as f64 * 0.1);
+        let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), p).unwrap();
+        let mut ukf = UnscentedKalmanFilter::new(x0, p0, q, r, p, params).unwrap();
+        let model = StepModel::new(&a, &b, &c);
+        for k in 0..30 {
+            let u = random(&mut rng, p, 1).column(0).into_owned();
+            let y = random(&mut rng, m, 1).column(0).into_owned();
+            let (km, kp) = if k % 5 == 4 {
+                let e = kf.predict(&model, &u).unwrap();
+                (e.mean.clone(), e.covariance.clone())
+            } else {
+                let e = kf.step(&model, &u, &y).unwrap();
+                (e.mean.clone(), e.covariance.clone())
+            };
+            let e = if k % 5 == 4 { ukf.predict(&model, &u).unwrap() } else { ukf.step(&model, &u, &y).unwrap() };
+            let scale = kp.amax().max(1.0);
+            worst = worst.max((&e.mean - &km).amax() / scale).max((&e.covariance - &kp).amax() / scale);
+        }
+        assert_eq!(ukf.report().guard_total, 0);
+    }
+    assert!(worst <= 1e-9, "largest relative difference {worst:e}");
+}
+
+/// A mildly nonlinear oscillator with a range-like sensor.
+struct Mild;
+impl DiscreteModel for Mild {
+    fn dims(&self) -> Dims {
+        Dims::new(3, 1, 2)
+    }
+    fn f(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0] + 0.1 * x[1];
+        out[1] = x[1] - 0.1 * x[0].sin() + 0.1 * u[0];
+        out[2] = 0.95 * x[2] + 0.02 * x[0] * x[1];
+        Ok(())
+    }
+    fn h(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0] + 0.05 * x[2] * x[2];
+        out[1] = (1.0 + x[1] * x[1]).sqrt();
+        Ok(())
+    }
+}
+impl DifferentiableModel for Mild {
+    fn f_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out.fill(0.0);
+        out[(0, 0)] = 1.0;
+        out[(0, 1)] = 0.1;
+        out[(1, 0)] = -0.1 * x[0].cos();
+        out[(1, 1)] = 1.0;
+        out[(2, 0)] = 0.02 * x[1];
+        out[(2, 1)] = 0.02 * x[0];
+        out[(2, 2)] = 0.95;
+        Ok(())
+    }
+    fn h_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out.fill(0.0);
+        out[(0, 0)] = 1.0;
+        out[(0, 2)] = 0.1 * x[2];
+        out[(1, 1)] = x[1] / (1.0 + x[1] * x[1]).sqrt();
+        Ok(())
+    }
+}
+
+#[test]
+fn close_to_the_ekf_on_a_mildly_nonlinear_model() {
+    let check = models::check_jacobians(&Mild, &DVector::from_vec(vec![0.3, 0.8, -0.2]), &DVector::from_vec(vec![0.1]))
+        .unwrap();
+    assert!(check.f_error < 1e-8 && check.h_error < 1e-8, "{check:?}");
+    let x0 = DVector::from_vec(vec![0.5, 1.0, 0.2]);
+    let p0 = DMatrix::identity(3, 3) * 1e-3;
+    let q = DMatrix::identity(3, 3) * 1e-5;
+    let r = DMatrix::identity(2, 2) * 1e-3;
+    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 1).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(x0.clone(), p0, q, r, 1, UkfParams::paper()).unwrap();
+    let mut rng = Xoshiro256StarStar::seed_from_u64(8);
+    let mut x = x0;
+    let (mut xn, mut y) = (DVector::zeros(3), DVector::zeros(2));
+    let mut worst = 0.0f64;
+    for k in 0..200 {
+        let u = DVector::from_vec(vec![(k as f64 * 0.05).sin()]);
+        Mild.f(&x, &u, &mut xn).unwrap();
+        x.copy_from(&xn);
+        x.iter_mut().for_each(|v| *v += 3e-3 * rng.standard_normal());
+        Mild.h(&x, &u, &mut y).unwrap();
+        y.iter_mut().for_each(|v| *v += 3e-2 * rng.standard_normal());
+        let e = ekf.step(&Mild, &u, &y).unwrap().clone();
+        let s = ukf.step(&Mild, &u, &y).unwrap();
+        // Differences in units of the EKF's own standard deviation.
+        for i in 0..3 {
+            worst = worst.max((s.mean[i] - e.mean[i]).abs() / e.std_dev[i]);
+            worst = worst.max((s.std_dev[i] / e.std_dev[i] - 1.0).abs());
+        }
+    }
+    // Not equal (the UKF sees the curvature), but within a small fraction of a standard deviation.
+    assert!(worst < 0.1, "largest difference {worst} (in EKF standard deviations)");
+    assert!(worst > 1e-6, "suspiciously equal: {worst}");
+}
+
+/// The digest's vessel settings: `Q = 1e-2 I`, `R = diag(1, 1, 0.1)`, `P₀ = diag(1, 1, 0.1, 0.1, 0.1, 0.01)`.
+fn vessel_setup() -> (DVector<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    (
+        DVector::zeros(6),
+        DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1, 0.1, 0.1, 0.01])),
+        DMatrix::identity(6, 6) * 1e-2,
+        DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1])),
+    )
+}
+
+#[test]
+fn tracks_the_vessel_like_the_ekf_without_the_guard() {
+    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let (x0, p0, q, r) = vessel_setup();
+    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(x0.clone(), p0, q, r, 3, UkfParams::paper()).unwrap();
+    assert_eq!(ukf.weights(), (-5.0, -2.25, 0.5));
+    let mut rng = Xoshiro256StarStar::seed_from_u64(21);
+    let mut x = x0;
+    let (mut xn, mut y) = (DVector::zeros(6), DVector::zeros(3));
+    let (mut se, mut su) = (0.0, 0.0);
+    let steps = 600;
+    for k in 0..steps {
+        // A turning manoeuvre: the heading sweeps through ±1 rad.
+        let u = DVector::from_vec(vec![2e5, 5e4 * (k as f64 * 0.02).sin(), 3e6 * (k as f64 * 0.01).cos()]);
+        model.f(&x, &u, &mut xn).unwrap();
+        x.copy_from(&xn);
+        model.h(&x, &u, &mut y).unwrap();
+        for (i, s) in [1.0, 1.0, 0.1f64.sqrt()].into_iter().enumerate() {
+            y[i] += s * rng.standard_normal();
+        }
+        let e = ekf.step(&model, &u, &y).unwrap();
+        se += (&e.mean - &x).rows(0, 3).norm_squared();
+        let s = ukf.step(&model, &u, &y).unwrap();
+        su += (&s.mean - &x).rows(0, 3).norm_squared();
+    }
+    let (re, ru) = ((se / steps as f64).sqrt(), (su / steps as f64).sqrt());
+    assert!((ru / re - 1.0).abs() < 0.05, "RMSE of position/heading: EKF {re}, UKF {ru}");
+    // β ≥ −α²κ/n: the sample covariances are positive semidefinite without the guard.
+    assert_eq!(ukf.report().guard_total, 0);
+}
+
+/// `f(x) = [x₀, x₁ + x₀², x₂]` with `β = −10 < −α²κ/n`: the unguarded `P⁻` is indefinite.
+struct Bend;
+impl DiscreteModel for Bend {
+    fn dims(&self) -> Dims {
+        Dims::new(3, 1, 1)
+    }
+    fn f(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0];
+        out[1] = x[1] + x[0] * x[0];
+        out[2] = x[2];
+        Ok(())
+    }
+    fn h(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0];
+        Ok(())
+    }
+}
+
+#[test]
+fn guard_keeps_the_prediction_positive_definite() {
+    let params = UkfParams { alpha: 1.0, beta: -10.0, kappa: 0.0 };
+    let q = DMatrix::identity(3, 3) * 1e-6;
+    let mut ukf = UnscentedKalmanFilter::new(
+        DVector::zeros(3),
+        DMatrix::identity(3, 3),
+        q.clone(),
+        DMatrix::identity(1, 1),
+        1,
+        params,
+    )
+    .unwrap();
+    let u = DVector::zeros(1);
+    let e = ukf.predict(&Bend, &u).unwrap().clone();
+    assert!(ukf.report().guarded_prediction);
+    assert_eq!(ukf.report().guard_total, 1);
+    // Independent formula: γ = √3, points ±√3 e_j; about the central point Y₀ = 0 with weights 1/6:
+    // the (1, 1) entry gets 2 · (1/6) · (3)² from x₀ = ±√3, plus 2 · (1/6) · 3 from x₁ = ±√3.
+    let mut want = q.clone();
+    want[(0, 0)] += 2.0 / 6.0 * 3.0;
+    want[(1, 1)] += 2.0 / 6.0 * 9.0 + 2.0 / 6.0 * 3.0;
+    want[(2, 2)] += 2.0 / 6.0 * 3.0;
+    assert!((&e.covariance - &want).amax() < 1e-12, "{}", e.covariance);
+    // The mean is Y₀ + S with S = Σ W_i d_i = [0, 1, 0], and the unguarded (1, 1) entry would be
+    // Σ W_i d_i,1² + (β − α²) S₁² = 4 − 11 = −7 < 0.
+    assert!((e.mean[1] - 1.0).abs() < 1e-12);
+    assert!(e.covariance.clone().cholesky().is_some());
+}
+
+#[test]
+fn bad_input_is_refused_and_leaves_the_filter_unchanged() {
+    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let (x0, p0, q, r) = vessel_setup();
+    let mut ukf =
+        UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper()).unwrap();
+    let u = DVector::from_vec(vec![1e5, 0.0, 0.0]);
+    let y = DVector::from_vec(vec![0.5, -0.2, 0.01]);
+    ukf.step(&model, &u, &y).unwrap();
+    let before = ukf.estimate().clone();
+    let mut nan_y = y.clone();
+    nan_y[1] = f64::NAN;
+    let cases: Vec<(DVector<f64>, DVector<f64>)> = vec![
+        (DVector::zeros(2), y.clone()),
+        (u.clone(), DVector::zeros(4)),
+        (u.clone(), nan_y),
+        (DVector::from_vec(vec![f64::INFINITY, 0.0, 0.0]), y.clone()),
+    ];
+    for (uu, yy) in &cases {
+        assert!(ukf.step(&model, uu, yy).is_err());
+        let bad_u = uu.len() != 3 || uu.iter().any(|v| !v.is_finite());
+        if bad_u {
+            assert!(ukf.predict(&model, uu).is_err());
+        }
+        assert_eq!(ukf.estimate(), &before);
+    }
+    // A model of the wrong size.
+    let e = ukf.step(&Bend, &DVector::zeros(1), &DVector::zeros(1)).unwrap_err();
+    assert!(matches!(e, EstimatorError::DimensionMismatch { what: "model states", .. }), "{e}");
+    assert_eq!(ukf.estimate(), &before);
+    // Construction.
+    assert!(matches!(
+        UnscentedKalmanFilter::new(
+            x0.clone(),
+            p0.clone(),
+            q.clone(),
+            r.clone(),
+            3,
+            UkfParams { kappa: -6.0, ..UkfParams::paper() }
+        ),
+        Err(EstimatorError::InvalidSetting { .. })
+    ));
+    let mut bad_p0 = p0.clone();
+    bad_p0[(0, 0)] = -1.0;
+    assert!(matches!(
+        UnscentedKalmanFilter::new(x0.clone(), bad_p0, q.clone(), r.clone(), 3, UkfParams::paper()),
+        Err(EstimatorError::NotPositiveDefinite { what: "P0" })
+    ));
+    assert!(ukf.set_process_noise(&DMatrix::zeros(6, 6)).is_err());
+    assert_eq!(ukf.estimate(), &before);
+    // The registry builds it by name.
+    let setup = NonlinearSetup {
+        gaussian: GaussianSetup { x0, p0, noise: estimators::NoiseSettings::new(q, r), inputs: 3 },
+        ukf: UkfParams::paper(),
+    };
+    let mut boxed = registry::nonlinear("ukf", &setup).unwrap();
+    assert!(boxed.step_dyn(&model, &u, &y).is_ok());
+    assert!(matches!(registry::nonlinear("mhe?", &setup), Err(EstimatorError::UnknownEstimator { .. })));
+}
+
+#[test]
+fn a_step_does_not_allocate() {
+    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let (x0, p0, q, r) = vessel_setup();
+    let mut ukf = UnscentedKalmanFilter::new(x0, p0, q, r, 3, UkfParams::paper()).unwrap();
+    let u = DVector::from_vec(vec![1e5, 2e4, 1e6]);
+    let ys: Vec<DVector<f64>> = (0..50).map(|k| DVector::from_fn(3, |i, _| ((k * 3 + i) as f64).sin())).collect();
+    ukf.step(&model, &u, &ys[0]).unwrap();
+    let (_, n) = count(|| {
+        for y in &ys {
+            ukf.step(&model, &u, y).unwrap();
+        }
+        ukf.predict(&model, &u).unwrap();
+    });
+    assert_eq!(n, 0, "UKF step allocated");
+    // Also through the object-safe face.
+    let dynamic: &mut dyn estimators::DynEstimator<dyn DiscreteModel> = &mut ukf;
+    let (_, n) = count(|| dynamic.step_dyn(&model, &u, &ys[1]).map(|_| ()));
+    assert_eq!(n, 0, "UKF step through DynEstimator allocated");
+}

@@ -1,0 +1,92 @@
+//! `port-est filter --estimator rmhe|mhe`: the `[mhe]` table of the model file, its errors at
+//! `file:line:column`, and a missing table named as such.
+
+use std::path::{Path, PathBuf};
+
+use port_est::{FilterOptions, GapPolicy, filter};
+
+const MODEL: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
+b  = [[0.0], [0.01]]
+c  = [[1.0, 0.0]]
+q  = [[1e-6, 0.0], [0.0, 1e-4]]
+r  = [[4e-4]]
+p0 = [[0.25, 0.0], [0.0, 0.25]]
+x0 = [0.0, 0.0]
+";
+
+const TABLE: &str = "[mhe]
+horizon = 6
+blocks = [5, 1]
+lambda_v = 10.0
+w_lower = [-1e-3, -1e-2]
+w_upper = [1e-3, 1e-2]
+v_lower = [-0.02]
+v_upper = [0.02]
+";
+
+fn dir() -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-mhe");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
+    let d = dir();
+    let model_path = d.join(format!("{name}.toml"));
+    std::fs::write(&model_path, model).unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter/data.csv");
+    let output = d.join(format!("{name}.csv"));
+    let _ = std::fs::remove_file(&output);
+    let r = filter(&FilterOptions {
+        model: model_path,
+        input: data,
+        output: output.clone(),
+        estimator: estimator.into(),
+        solver: None,
+        gaps: GapPolicy::Error,
+    })
+    .map(|s| s.steps)
+    .map_err(|e| e.to_string());
+    if r.is_err() {
+        assert!(!output.exists(), "{name}: no output on error");
+    }
+    r
+}
+
+#[test]
+fn both_moving_horizon_estimators_run_with_a_table() {
+    for est in ["rmhe", "mhe"] {
+        assert_eq!(run(&format!("ok-{est}"), &format!("{MODEL}{TABLE}"), est), Ok(40));
+    }
+    let alpha = format!(
+        "{MODEL}{}",
+        TABLE.replace("lambda_v = 10.0", "alpha = 0.9\nalpha_map = \"one-over-alpha\"\nsolver = \"exact-saddle\"")
+    );
+    assert_eq!(run("alpha", &alpha, "rmhe"), Ok(40));
+}
+
+#[test]
+fn a_missing_table_is_named() {
+    let e = run("missing", MODEL, "rmhe").unwrap_err();
+    assert!(e.contains("needs an `[mhe]` table"), "{e}");
+}
+
+#[test]
+fn bad_settings_point_at_their_key() {
+    let cases = [
+        // (replacement of a line of TABLE, expected location and words)
+        ("blocks = [5, 1]", "blocks = [4, 1]", "missing.toml:10:10", "sum to 5"),
+        ("lambda_v = 10.0", "lambda_v = 1.0", ":11:12", "lambda_v"),
+        ("v_lower = [-0.02]", "v_lower = [0.5]", ":14:11", "box V"),
+        ("w_lower = [-1e-3, -1e-2]", "w_lower = [-1e-3]", ":12:11", "expected 2 entries"),
+        ("blocks = [5, 1]", "preset = \"rmhe-xx\"", ":10:10", "unknown value"),
+        ("lambda_v = 10.0", "lambda_v = 10.0\nsolver = \"newton\"", ":12:10", "unknown value"),
+        ("horizon = 6", "horizon = 6\nmystery = 1", ":", "unknown field"),
+    ];
+    for (i, (from, to, at, words)) in cases.into_iter().enumerate() {
+        let text = format!("{MODEL}{}", TABLE.replace(from, to));
+        let e = run(&format!("bad{i}"), &text, "rmhe").unwrap_err();
+        let at = at.replace("missing", &format!("bad{i}"));
+        assert!(e.contains(&at) && e.contains(words), "case {i}: {e}");
+    }
+}

@@ -1,0 +1,299 @@
+//! `cargo xtask reproduce --paper dp-vessel`: the closed-loop experiment of the supply-vessel
+//! paper (Su & Zhao, *Journal of Harbin Engineering University* 37(10), 2016; digest
+//! `shared/papers/dp-vessel-ukf-mhe.md`, note `docs/dp-vessel.md`): the vessel moves from
+//! (0, 0, 0°) to (50 m, 50 m, 0°) and holds there for 500 s, with the NSAMPC controller fed by
+//! an estimator, in run A (the literal step) and run B (reference filter), 20 seeds each,
+//! with the heading noise read as 0.1 rad² and as 0.1 deg².
+//!
+//! The paper's estimator, an MHE with a UKF arrival cost (`estimators::mhe::NonlinearMhe`), runs
+//! beside the EKF and the UKF as baselines ([`run::ESTIMATORS`]). Every formula,
+//! Table 1 and Figs 2–3 of the paper are lost: no number here is the paper's.
+
+pub mod figures;
+pub mod report;
+pub mod run;
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use vessel_control::{NsampcParams, ReferenceFilter};
+use vessel_dynamics::{ForceNoise, VesselParams};
+
+use super::outputs;
+use run::{Aggregate, FilterSettings, RunMetrics, SCENARIOS, Scenario, StepTiming};
+
+/// Sizes of a run: the full reproduction or the few-second `--quick` mode.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Sizes {
+    /// Duration \[s\] (the paper's 500 s; 300 s in `--quick`).
+    pub duration_s: f64,
+    /// Steps per run (`duration / δ`).
+    pub steps: usize,
+    /// Start of the steady-state window \[s\] (200 s, digest §4; the window ends with the run).
+    pub steady_from_s: f64,
+    /// Seeds per scenario and estimator (20; 2 in `--quick`; `--runs` overrides).
+    pub seeds: usize,
+}
+
+impl Sizes {
+    /// The sizes of a full or `--quick` run; `runs` overrides the number of seeds.
+    #[must_use]
+    pub fn new(quick: bool, runs: Option<usize>) -> Self {
+        let (duration_s, seeds) = if quick { (300.0, 2) } else { (500.0, 20) };
+        let steps = (duration_s / vessel_dynamics::PAPER_SAMPLE_PERIOD).round() as usize;
+        Self { duration_s, steps, steady_from_s: 200.0, seeds: runs.unwrap_or(seeds) }
+    }
+}
+
+/// One (scenario, estimator) pair over the seeds.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResultSummary {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Estimator identifier.
+    pub estimator: String,
+    /// Estimator label.
+    pub estimator_label: String,
+    /// Metrics of each seed.
+    pub seeds: Vec<RunMetrics>,
+    /// Over the seeds.
+    pub aggregate: Aggregate,
+    /// Wall time of one estimator update, pooled over the seeds.
+    pub timing: StepTiming,
+    /// Figures of the first seed, `(file, caption)`.
+    pub figures: Vec<(String, String)>,
+    /// CSV of the first seed (relative to `csv/`).
+    pub csv: String,
+}
+
+/// The controller's and the plant's settings, for the record.
+#[derive(Debug, Clone, Serialize)]
+pub struct LoopSettings {
+    /// `[Tp, μ1, μ2, μ3]` **\[P\]** (roles of μ assumed).
+    pub nsampc: [f64; 4],
+    /// `[k0, k1]` from them.
+    pub gains: [f64; 2],
+    /// `[m, L, g]`.
+    pub vessel: [f64; 3],
+    /// Thrust limits.
+    pub thrust_limits: [f64; 3],
+    /// Force-noise standard deviations **\[A\]**.
+    pub force_noise_sigma: [f64; 3],
+    /// Reference-filter bandwidth of run B \[rad/s\] **\[A\]**.
+    pub reference_omega: f64,
+    /// Plant: Euler at δ = 0.1 s, the paper's discrete model.
+    pub plant: String,
+}
+
+impl LoopSettings {
+    fn digest() -> Result<Self, String> {
+        let p = NsampcParams::paper();
+        let g = p.gains().map_err(|e| e.to_string())?;
+        let v = VesselParams::paper();
+        Ok(Self {
+            nsampc: [p.tp, p.mu1, p.mu2, p.mu3],
+            gains: [g.k0, g.k1],
+            vessel: [v.mass, v.length, v.gravity],
+            thrust_limits: v.thrust.max,
+            force_noise_sigma: ForceNoise::digest().sigma,
+            reference_omega: ReferenceFilter::DIGEST_OMEGA,
+            plant: "Euler at 0.1 s (the paper's discrete model (16)-(20)); the estimators use the same model".into(),
+        })
+    }
+}
+
+/// Everything `summary.json` holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Whether this was a `--quick` run.
+    pub quick: bool,
+    /// Base seed; seed `i` of every pair is `seed + i`.
+    pub seed: u64,
+    /// Run sizes.
+    pub sizes: Sizes,
+    /// The estimators' settings (heading noise of the rad² scenarios).
+    pub filter: FilterSettings,
+    /// `diag(Q)` of the matched-`Q` scenario.
+    pub matched_q_diag: Vec<f64>,
+    /// Controller and plant.
+    pub loop_settings: LoopSettings,
+    /// What is the paper's: no number.
+    pub paper_numbers: String,
+    /// Every (scenario, estimator), scenario-major.
+    pub results: Vec<ResultSummary>,
+    /// Comparison figures, `(file, caption)`.
+    pub figures: Vec<(String, String)>,
+    /// The paper's claims and verdicts.
+    pub claims: Vec<report::Claim>,
+    /// CPU model and core count.
+    pub machine: String,
+    /// `release`, or `debug` when built with debug assertions.
+    pub build: String,
+    /// `/proc/loadavg` when the run started.
+    pub load_average: String,
+    /// Total wall-clock seconds.
+    pub total_seconds: f64,
+}
+
+/// What `summary.json` says about the paper's own numbers.
+pub const PAPER_NUMBERS: &str = "none: the paper's formulas (1)-(61), Table 1 and Figs. 2-3 are lost; the model, \
+                                 controller and estimator settings are the digest's reconstructions and assumptions, \
+                                 and every number here comes from this reconstruction";
+
+/// Runs the whole reproduction into `out` (`report.md`, `summary.json`, `figures/`, `csv/`).
+///
+/// # Errors
+/// A failed run, or an output that cannot be written.
+pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Result<Summary, String> {
+    let sizes = Sizes::new(quick, runs);
+    if sizes.seeds == 0 {
+        return Err("no seed to run (--runs 0?)".into());
+    }
+    let t0 = Instant::now();
+    let load_average = std::fs::read_to_string("/proc/loadavg").map_or_else(|_| "unknown".into(), |s| s.trim().into());
+    for sub in ["figures", "csv"] {
+        std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
+    }
+    let limits = VesselParams::paper().thrust.max;
+    let total = SCENARIOS.len() * run::ESTIMATORS.len() * sizes.seeds;
+    let bar = super::progress_bar(total as u64, "dp-vessel closed-loop runs");
+    let mut results = Vec::new();
+    for scenario in &SCENARIOS {
+        for spec in run::ESTIMATORS {
+            let mut seeds = Vec::with_capacity(sizes.seeds);
+            let mut step_ns = Vec::new();
+            let mut first = None;
+            for i in 0..sizes.seeds {
+                let s = seed.wrapping_add(i as u64);
+                let rec = run::run_one(scenario, spec, sizes.steps, s)?;
+                let mut m = run::metrics(&rec, s, sizes.steady_from_s, limits);
+                step_ns.append(&mut m.step_ns);
+                seeds.push(m);
+                if first.is_none() {
+                    first = Some(rec);
+                }
+                bar.inc(1);
+            }
+            let first = first.ok_or("no seed")?;
+            let csv = format!("{}_{}.csv", scenario.id, spec.id);
+            figures::write_csv(&out.join("csv").join(&csv), &first).map_err(|e| format!("writing {csv}: {e}"))?;
+            let figs = if scenario.figures {
+                figures::run_figures(&out.join("figures"), scenario, spec, &first, seed)
+                    .map_err(|e| format!("figures of {} / {}: {e}", scenario.id, spec.id))?
+            } else {
+                Vec::new()
+            };
+            results.push(ResultSummary {
+                scenario: *scenario,
+                estimator: spec.id.to_owned(),
+                estimator_label: spec.label.to_owned(),
+                aggregate: run::aggregate(&seeds),
+                seeds,
+                timing: StepTiming::of(step_ns),
+                figures: figs,
+                csv,
+            });
+        }
+    }
+    bar.finish_and_clear();
+    let figures = figures::comparison_figures(&out.join("figures"), &results)
+        .map_err(|e| format!("writing the comparison figures: {e}"))?;
+    let claims = report::claims(&results);
+    let summary = Summary {
+        quick,
+        seed,
+        sizes,
+        filter: FilterSettings::digest(0.1),
+        matched_q_diag: run::matched_q_diag()?,
+        loop_settings: LoopSettings::digest()?,
+        paper_numbers: PAPER_NUMBERS.to_owned(),
+        results,
+        figures,
+        claims,
+        machine: outputs::machine(),
+        build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
+        load_average,
+        total_seconds: t0.elapsed().as_secs_f64(),
+    };
+    let json = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    outputs::write_atomic(&out.join("summary.json"), json.as_bytes()).map_err(|e| format!("summary.json: {e}"))?;
+    let md = report::markdown(&summary);
+    outputs::write_atomic(&out.join("report.md"), md.as_bytes()).map_err(|e| format!("report.md: {e}"))?;
+    Ok(summary)
+}
+
+impl Summary {
+    /// The deterministic part of the summary (no timings, no machine), numbers rounded to 5
+    /// significant digits: what snapshot tests compare.
+    #[must_use]
+    pub fn deterministic_view(&self) -> serde_json::Value {
+        use serde_json::json;
+        let r = |v: f64| -> serde_json::Value {
+            if v.is_finite() && v != 0.0 {
+                let e = v.abs().log10().floor() as i32;
+                let f = 10f64.powi(4 - e);
+                json!((v * f).round() / f)
+            } else if v.is_finite() {
+                json!(0.0)
+            } else {
+                json!(null)
+            }
+        };
+        let sp = |s: &run::Spread| json!({"mean": r(s.mean), "min": r(s.min), "max": r(s.max), "missing": s.missing});
+        let sp3 = |s: &run::Spread3| s.iter().map(sp).collect::<Vec<_>>();
+        let mv =
+            |m: &[run::MeanVar; 3]| m.iter().map(|v| json!({"mean": r(v.mean), "var": r(v.var)})).collect::<Vec<_>>();
+        let results: Vec<_> = self
+            .results
+            .iter()
+            .map(|res| {
+                let a = &res.aggregate;
+                json!({
+                    "scenario": res.scenario.id,
+                    "estimator": res.estimator,
+                    "seeds": res.seeds.iter().map(|s| s.seed).collect::<Vec<_>>(),
+                    "arrival_s": sp(&a.arrival_s),
+                    "settling_s": sp3(&a.settling_s),
+                    "overshoot": sp3(&a.overshoot),
+                    "saturation": sp3(&a.saturation),
+                    "total_variation": sp3(&a.total_variation),
+                    "rmse_xy_psi": a.rmse[..3].iter().map(sp).collect::<Vec<_>>(),
+                    "table1_raw": mv(&a.raw),
+                    "table1_filtered": mv(&a.filtered),
+                    "figures": res.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
+                    "csv": res.csv,
+                })
+            })
+            .collect();
+        json!({
+            "quick": self.quick,
+            "seed": self.seed,
+            "sizes": self.sizes,
+            "filter": self.filter,
+            "matched_q_diag": self.matched_q_diag.iter().map(|v| r(*v)).collect::<Vec<_>>(),
+            "paper_numbers": self.paper_numbers,
+            "results": results,
+            "figures": self.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
+            "claims": self.claims.iter().map(|c| json!({"claim": c.claim, "verdict": c.verdict})).collect::<Vec<_>>(),
+        })
+    }
+}
+
+/// The supply-vessel paper in the multi-paper reproduction.
+pub struct DpVesselPaper;
+
+impl super::Paper for DpVesselPaper {
+    fn name(&self) -> &'static str {
+        "dp-vessel"
+    }
+    fn title(&self) -> &'static str {
+        "Supply vessel, dynamic positioning with NSAMPC and the UKF-arrival-cost MHE (Su & Zhao 2016)"
+    }
+    fn run(&self, opts: &super::Options, out: &Path) -> Result<super::PaperOutcome, String> {
+        let summary = reproduce(opts.quick, out, opts.seed, opts.runs)?;
+        println!("{}", report::console(&summary));
+        let verdicts = summary.claims.iter().map(|c| c.verdict.clone()).collect();
+        Ok(super::PaperOutcome { claims: summary.claims.len(), verdicts })
+    }
+}
