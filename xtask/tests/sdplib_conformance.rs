@@ -73,4 +73,9 @@ fn known_deviations_are_backed_by_strictly_feasible_points() {
     let (obj, min_eig) = solve("hinf2");
     assert!(min_eig > 0.0, "hinf2: x is not strictly feasible ({min_eig:e})");
     assert!((obj - 10.967).abs() <= 5e-4, "hinf2: c'x = {obj}");
+    // hinf4: a strictly feasible point inside the reference interval 274.764 ± 5e-4, below
+    // Clarabel's answer.
+    let (obj, min_eig) = solve("hinf4");
+    assert!(min_eig > 0.0, "hinf4: x is not strictly feasible ({min_eig:e})");
+    assert!((obj - 274.764).abs() <= 5e-4, "hinf4: c'x = {obj}");
 }

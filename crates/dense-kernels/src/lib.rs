@@ -124,12 +124,30 @@ pub fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
     let m = s.nrows();
     debug_assert_eq!(s.ncols(), m);
     let g = s.as_mut_slice();
+    if !cholesky_slice(g, m, 0.0) {
+        return false;
+    }
     for j in 0..m {
-        let mut d = g[j * m + j];
+        for i in 0..j {
+            g[j * m + i] = 0.0;
+        }
+    }
+    true
+}
+
+/// In-place lower Cholesky factor of the `m × m` column-major matrix in `g` (lower triangle read
+/// and written, strict upper triangle untouched). A pivot is accepted when it is finite and
+/// exceeds `rel_tol` times the original diagonal entry (`rel_tol = 0`: positive); returns `false`
+/// at the first pivot that is not.
+pub fn cholesky_slice(g: &mut [f64], m: usize, rel_tol: f64) -> bool {
+    debug_assert!(g.len() >= m * m);
+    for j in 0..m {
+        let diag = g[j * m + j];
+        let mut d = diag;
         for k in 0..j {
             d -= g[k * m + j] * g[k * m + j];
         }
-        if !(d > 0.0 && d.is_finite()) {
+        if !(d > rel_tol * diag.abs() && d > 0.0 && d.is_finite()) {
             return false;
         }
         let d = d.sqrt();
@@ -140,9 +158,6 @@ pub fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
                 v -= g[k * m + i] * g[k * m + j];
             }
             g[j * m + i] = v / d;
-        }
-        for i in 0..j {
-            g[j * m + i] = 0.0;
         }
     }
     true

@@ -130,16 +130,7 @@ impl ExtendedKalmanFilter {
 
     /// The model's dimensions must be the filter's.
     fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
-        for (what, expected, found) in [
-            ("model states", self.n, d.states),
-            ("model inputs", self.p, d.inputs),
-            ("model outputs", self.m, d.outputs),
-        ] {
-            if expected != found {
-                return Err(EstimatorError::DimensionMismatch { what, expected, found });
-            }
-        }
-        Ok(())
+        crate::validate::check_dims(d, self.n, self.p, self.m)
     }
 
     /// (7), (8): `x⁻ = f(x̂, u)`, `F = ∂f/∂x`, `P⁻ = F P Fᵀ + Q` into the prediction buffers.

@@ -299,16 +299,7 @@ impl UnscentedKalmanFilter {
     }
 
     fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
-        for (what, expected, found) in [
-            ("model states", self.n, d.states),
-            ("model inputs", self.p, d.inputs),
-            ("model outputs", self.m, d.outputs),
-        ] {
-            if expected != found {
-                return Err(EstimatorError::DimensionMismatch { what, expected, found });
-            }
-        }
-        Ok(())
+        crate::validate::check_dims(d, self.n, self.p, self.m)
     }
 
     /// Sigma points (24) of `mean` with the lower factor `l` into `sig`.

@@ -34,6 +34,18 @@ pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), Estimato
     }
 }
 
+/// The model's dimensions are the estimator's `(n, p, m)`.
+pub(crate) fn check_dims(found: models::Dims, n: usize, p: usize, m: usize) -> Result<(), EstimatorError> {
+    for (what, expected, found) in
+        [("model states", n, found.states), ("model inputs", p, found.inputs), ("model outputs", m, found.outputs)]
+    {
+        if expected != found {
+            return Err(EstimatorError::DimensionMismatch { what, expected, found });
+        }
+    }
+    Ok(())
+}
+
 pub(crate) fn check_vec(what: &'static str, v: &DVector<f64>, len: usize) -> Result<(), EstimatorError> {
     if v.len() != len {
         return Err(EstimatorError::DimensionMismatch { what, expected: len, found: v.len() });

@@ -256,3 +256,83 @@ fn with_the_arrival_filters_own_mean_and_the_ekf_arrival_it_is_the_kalman_filter
         assert!((&xu - &xk).amax() < 1e-8, "UKF arrival, step {k}: {xu} vs {xk}");
     }
 }
+
+#[test]
+fn boxes_on_the_disturbances_give_the_linear_mhes_box_constrained_solution() {
+    // Full information on a linear model: the same convex QP, solved by the linear MHE's active
+    // set on the condensed problem and by Clarabel on the states here.
+    let model = linear();
+    let w = 0.01;
+    let mut s = settings(3, 2, 30, NonlinearArrival::Ekf);
+    s.w_box = Some((DVector::repeat(3, -w), DVector::repeat(3, w)));
+    let mut wide = s.clone();
+    wide.w_box = Some((DVector::repeat(3, -1e3), DVector::repeat(3, 1e3)));
+    wide.v_box = Some((DVector::repeat(2, -1e3), DVector::repeat(2, 1e3)));
+    let mut lin = MheSettings::new(
+        s.x0.clone(),
+        s.p0.clone(),
+        s.q.clone(),
+        s.r.clone(),
+        (DVector::repeat(3, -w), DVector::repeat(3, w)),
+        (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
+    );
+    lin.horizon = 30;
+    lin.blocks = vec![1; 30];
+    lin.cost = MheCost::LeastSquares;
+    lin.solver = WindowSolver::exact_saddle();
+    let mut reference = MovingHorizonEstimator::new(lin, 1).unwrap();
+    let mut boxed = NonlinearMhe::new(s.clone(), 1).unwrap();
+    let mut inactive = NonlinearMhe::new(wide, 1).unwrap();
+    let mut free = NonlinearMhe::new(settings(3, 2, 30, NonlinearArrival::Ekf), 1).unwrap();
+    let (us, ys) = data(&model, 12, 7);
+    let mut active = 0;
+    for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
+        let xr = reference.step(&model, u, y).unwrap().state.clone();
+        let xb = boxed.step(&model, u, y).unwrap().state.clone();
+        let xi = inactive.step(&model, u, y).unwrap().state.clone();
+        let xf = free.step(&model, u, y).unwrap().state.clone();
+        assert!((&xb - &xr).amax() < 1e-6, "step {k}: {xb} vs {xr}");
+        assert!((&xi - &xf).amax() < 1e-6, "inactive boxes change nothing, step {k}: {xi} vs {xf}");
+        active += usize::from((&xf - &xb).amax() > 1e-4);
+        // The estimated disturbances respect the box.
+        let traj = boxed.trajectory();
+        let mut f = DVector::zeros(3);
+        for j in 0..traj.len() - 1 {
+            model.f(&traj[j], &us[j], &mut f).unwrap();
+            assert!((&traj[j + 1] - &f).amax() <= w + 1e-7, "ω beyond the box at j = {j}");
+        }
+    }
+    assert!(active > 0, "the box never bound: the test does not exercise it");
+}
+
+#[test]
+fn boxes_on_the_measurement_residuals_hold_at_the_solution_and_infeasibility_is_an_outcome() {
+    let v = 0.08;
+    let mut s = settings(2, 2, 6, NonlinearArrival::Ukf(UkfParams { alpha: 1.0, beta: 2.0, kappa: 1.0 }));
+    s.v_box = Some((DVector::repeat(2, -v), DVector::repeat(2, v)));
+    let mut mhe = NonlinearMhe::new(s.clone(), 1).unwrap();
+    let (us, ys) = data(&Pendulum, 15, 8);
+    let mut h = DVector::zeros(2);
+    for (u, y) in us.iter().zip(&ys) {
+        let e = mhe.step(&Pendulum, u, y).unwrap();
+        assert_eq!(e.report.unwrap().status, WindowStatus::Converged);
+        // The last sample's residual (measured with input u) is inside the box.
+        let x = e.state.clone();
+        Pendulum.h(&x, u, &mut h).unwrap();
+        assert!((y - &h).amax() <= v + 1e-6, "ν = {} beyond {v}", y - &h);
+    }
+    // Boxes that cannot hold together (no disturbance allowed, tiny residuals, noisy data).
+    s.w_box = Some((DVector::repeat(2, -1e-9), DVector::repeat(2, 1e-9)));
+    s.v_box = Some((DVector::repeat(2, -1e-6), DVector::repeat(2, 1e-6)));
+    let mut tight = NonlinearMhe::new(s, 1).unwrap();
+    let mut infeasible = 0;
+    for (u, y) in us.iter().zip(&ys) {
+        let e = tight.step(&Pendulum, u, y).unwrap();
+        assert!(e.state.iter().all(|v| v.is_finite()));
+        infeasible += usize::from(e.report.unwrap().status == WindowStatus::Infeasible);
+    }
+    assert!(infeasible > 0);
+    let mut bad = settings(2, 2, 6, NonlinearArrival::Fixed);
+    bad.w_box = Some((DVector::repeat(2, 1.0), DVector::repeat(2, -1.0)));
+    assert!(matches!(NonlinearMhe::new(bad, 1), Err(EstimatorError::InvalidConfiguration { .. })));
+}

@@ -362,6 +362,15 @@ pub const KNOWN_DEVIATIONS: &[KnownDeviation] = &[
         reason: "Clarabel stops up to 5e-5 relative above the strictly feasible point cᵀx = 10.967127 that faer-ipm \
                  finds (reference 10.967); its answer moves at this level with the BLAS threading",
     },
+    KnownDeviation {
+        problem: "hinf4",
+        backend: Some("clarabel"),
+        rel_tol: 1e-5,
+        reason: "Clarabel stops (almost solved) 3.3e-6 relative above the reference 274.764, which faer-ipm's strictly \
+                 feasible point meets (cᵀx = 274.76393); with OpenBLAS's kernels for some CPUs (seen on an AMD EPYC \
+                 with Debian's OpenBLAS 0.3.21, one thread) its answer is 274.76489, outside the reference's six \
+                 digits",
+    },
 ];
 
 /// The outcome of one problem for one backend.

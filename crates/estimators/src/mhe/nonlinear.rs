@@ -68,6 +68,12 @@ pub struct NonlinearMheSettings {
     pub tolerance: f64,
     /// The prior mean of a new window start (default: the paper's smoothed estimate).
     pub prior: NonlinearPrior,
+    /// Optional box `[lo, hi]` on the disturbances `ω_j = x_{j+1} − f(x_j, u_j)` (length `n`;
+    /// entries may be infinite). With a box (on `ω` or `ν`) each Gauss–Newton step is a QP with
+    /// the linearised constraints, solved by Clarabel's pure-Rust QP path (allocates per update).
+    pub w_box: Option<(DVector<f64>, DVector<f64>)>,
+    /// Optional box on the measurement residuals `ν_j = y_j − h(x_j)` (length `m`).
+    pub v_box: Option<(DVector<f64>, DVector<f64>)>,
 }
 
 /// Where the prior mean `x̄_{s+1}` of a new window start comes from, and about which point the
@@ -100,6 +106,8 @@ impl NonlinearMheSettings {
             max_iterations: 20,
             tolerance: 1e-10,
             prior: NonlinearPrior::Smoothed,
+            w_box: None,
+            v_box: None,
         }
     }
 }
@@ -228,6 +236,16 @@ impl NonlinearMhe {
                 settings.max_iterations, settings.tolerance
             )));
         }
+        for (what, b, len) in [("w_box", &settings.w_box, n), ("v_box", &settings.v_box, m)] {
+            if let Some((lo, hi)) = b {
+                if lo.len() != len || hi.len() != len {
+                    return Err(bad(format!("{what} must have {len} components, got {} and {}", lo.len(), hi.len())));
+                }
+                if let Some(i) = (0..len).find(|&i| lo[i].is_nan() || hi[i].is_nan() || lo[i] >= hi[i]) {
+                    return Err(bad(format!("{what} is empty or NaN at component {i}: [{}, {}]", lo[i], hi[i])));
+                }
+            }
+        }
         let cap = settings.horizon + 2;
         let len_max = settings.horizon + 1;
         let mut q_inv = DMatrix::zeros(n, n);
@@ -328,16 +346,7 @@ impl NonlinearMhe {
     }
 
     fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
-        for (what, expected, found) in [
-            ("model states", self.n, d.states),
-            ("model inputs", self.p, d.inputs),
-            ("model outputs", self.m, d.outputs),
-        ] {
-            if expected != found {
-                return Err(EstimatorError::DimensionMismatch { what, expected, found });
-            }
-        }
-        Ok(())
+        crate::validate::check_dims(d, self.n, self.p, self.m)
     }
 
     /// Adds a measurement of `x_0` (with input `u` for `h`, usually zeros) before the first step.
@@ -563,9 +572,38 @@ impl NonlinearMhe {
         // Whether `d` holds the undamped factor at the current `x` (then the covariance below
         // needs no new factorisation).
         let mut factor_current = false;
+        let mut constrained = self.settings.w_box.is_some() || self.settings.v_box.is_some();
+        let mut infeasible = false;
         while iterations < self.settings.max_iterations {
             iterations += 1;
             self.linearise(model, start, len)?;
+            if constrained {
+                // Sequential QP: the Gauss–Newton step with the linearised boxes (full steps).
+                match self.constrained_step(start, len) {
+                    ConstrainedStep::Solved => {
+                        let step = self.step[..len].iter().fold(0.0_f64, |a, s| a.max(s.amax()));
+                        let scale = self.x[..len].iter().fold(1.0_f64, |a, x| a.max(x.amax()));
+                        for j in 0..len {
+                            self.x[j] += &self.step[j];
+                        }
+                        cost = self.cost(model, start, len, false)?;
+                        if step <= self.settings.tolerance * scale {
+                            status = WindowStatus::Converged;
+                            break;
+                        }
+                    }
+                    ConstrainedStep::Infeasible => {
+                        // The boxes cannot all hold: publish the unconstrained estimate, say so.
+                        infeasible = true;
+                        constrained = false;
+                    }
+                    ConstrainedStep::Failed => {
+                        status = WindowStatus::InnerFailure;
+                        break;
+                    }
+                }
+                continue;
+            }
             // Damped solve; raise μ until the cost does not increase (beyond rounding).
             let mut accepted = false;
             for _ in 0..30 {
@@ -608,6 +646,9 @@ impl NonlinearMhe {
                 status = WindowStatus::Converged;
                 break;
             }
+        }
+        if infeasible {
+            status = WindowStatus::Infeasible;
         }
         if self.x[..len].iter().any(|x| x.iter().any(|v| !v.is_finite())) || !cost.is_finite() {
             return Err(EstimatorError::NumericalFailure("the window's solution is not finite"));
@@ -701,6 +742,144 @@ impl NonlinearMhe {
     /// (`d` receives the factors `L_j`, `w` the blocks `W_j = O_{j−1} L_{j−1}⁻ᵀ`) and solves
     /// `H Δ = −g` into `step`. False if a pivot block is not positive definite.
     fn factor_and_solve(&mut self, start: usize, len: usize, mu: f64) -> bool {
+        self.build_blocks(start, len, mu);
+        self.factor_and_back_substitute(len)
+    }
+
+    /// The Gauss–Newton step as a QP with the boxes on `ω_j ≈ d_j + Δ_{j+1} − A_j Δ_j` and
+    /// `ν_j ≈ e_j − C_j Δ_j` (linearised at the current `x`), solved by Clarabel; into `step`.
+    fn constrained_step(&mut self, start: usize, len: usize) -> ConstrainedStep {
+        use clarabel_qp::algebra::CscMatrix;
+        use clarabel_qp::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
+        let (n, m) = (self.n, self.m);
+        let nv = n * len;
+        self.build_blocks(start, len, 0.0);
+        // Upper triangle of H by columns: diagonal blocks D_j, and above them Oᵀ = −A_{j−1}ᵀ Q⁻¹
+        // (block (j−1, j)).
+        let mut cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nv];
+        for j in 0..len {
+            for c in 0..n {
+                let col = &mut cols[j * n + c];
+                if j > 0 {
+                    // (row block j−1, col block j) = (−Q⁻¹ A_{j−1})ᵀ = −A_{j−1}ᵀ Q⁻¹.
+                    for r in 0..n {
+                        let mut v = 0.0;
+                        for k in 0..n {
+                            v -= self.a[j - 1][(k, r)] * self.q_inv[(k, c)];
+                        }
+                        if v != 0.0 {
+                            col.push(((j - 1) * n + r, v));
+                        }
+                    }
+                }
+                for r in 0..=c {
+                    let v = self.d[j][(r, c)];
+                    if v != 0.0 {
+                        col.push((j * n + r, v));
+                    }
+                }
+            }
+        }
+        let q: Vec<f64> = self.g[..len].iter().flat_map(|g| g.iter().copied()).collect();
+        // Constraint rows a·Δ ≤ b.
+        let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+        if let Some((lo, hi)) = &self.settings.w_box {
+            for j in 0..len.saturating_sub(1) {
+                for i in 0..n {
+                    let dj = self.x[j + 1][i] - self.fx[j][i];
+                    let mut row: Vec<(usize, f64)> = vec![((j + 1) * n + i, 1.0)];
+                    for k in 0..n {
+                        let a = self.a[j][(i, k)];
+                        if a != 0.0 {
+                            row.push((j * n + k, -a));
+                        }
+                    }
+                    if hi[i].is_finite() {
+                        rows.push((row.clone(), hi[i] - dj));
+                    }
+                    if lo[i].is_finite() {
+                        rows.push((row.iter().map(|&(c, v)| (c, -v)).collect(), dj - lo[i]));
+                    }
+                }
+            }
+        }
+        if let Some((lo, hi)) = &self.settings.v_box {
+            for j in 0..len {
+                if !self.has_y[(start + j) % self.cap] {
+                    continue;
+                }
+                for i in 0..m {
+                    let e = self.y_ring[(start + j) % self.cap][i] - self.hx[j][i];
+                    // ν = e − C Δ ≤ hi  ⇔  −C Δ ≤ hi − e;   ν ≥ lo  ⇔  C Δ ≤ e − lo.
+                    let row: Vec<(usize, f64)> =
+                        (0..n).filter(|&k| self.c[j][(i, k)] != 0.0).map(|k| (j * n + k, self.c[j][(i, k)])).collect();
+                    if hi[i].is_finite() {
+                        rows.push((row.iter().map(|&(c, v)| (c, -v)).collect(), hi[i] - e));
+                    }
+                    if lo[i].is_finite() {
+                        rows.push((row, e - lo[i]));
+                    }
+                }
+            }
+        }
+        let to_csc = |nrows: usize, cols: &[Vec<(usize, f64)>]| {
+            let mut colptr = vec![0];
+            let mut rowval = Vec::new();
+            let mut nzval = Vec::new();
+            for col in cols {
+                let mut sorted = col.clone();
+                sorted.sort_by_key(|&(r, _)| r);
+                for (r, v) in sorted {
+                    rowval.push(r);
+                    nzval.push(v);
+                }
+                colptr.push(rowval.len());
+            }
+            CscMatrix::new(nrows, cols.len(), colptr, rowval, nzval)
+        };
+        let mut a_cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nv];
+        for (r, (row, _)) in rows.iter().enumerate() {
+            for &(c, v) in row {
+                a_cols[c].push((r, v));
+            }
+        }
+        let b: Vec<f64> = rows.iter().map(|r| r.1).collect();
+        let p = to_csc(nv, &cols);
+        let a = to_csc(rows.len(), &a_cols);
+        let cones = if rows.is_empty() { Vec::new() } else { vec![NonnegativeConeT(rows.len())] };
+        let Ok(settings) = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .tol_gap_abs(1e-12)
+            .tol_gap_rel(1e-12)
+            .tol_feas(1e-10)
+            .build()
+        else {
+            return ConstrainedStep::Failed;
+        };
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).ok()?;
+            solver.solve();
+            Some((solver.solution.status, solver.solution.x.clone()))
+        }));
+        match outcome {
+            Ok(Some((SolverStatus::Solved | SolverStatus::AlmostSolved, x))) if x.iter().all(|v| v.is_finite()) => {
+                for j in 0..len {
+                    for i in 0..n {
+                        self.step[j][i] = x[j * n + i];
+                    }
+                }
+                ConstrainedStep::Solved
+            }
+            Ok(Some((SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible, _))) => {
+                ConstrainedStep::Infeasible
+            }
+            _ => ConstrainedStep::Failed,
+        }
+    }
+
+    /// The diagonal blocks `D_j + μ I` of the Gauss–Newton matrix into `d` (the off-diagonal
+    /// blocks are `O_j = −Q⁻¹ A_j`, below the diagonal).
+    fn build_blocks(&mut self, start: usize, len: usize, mu: f64) {
         let n = self.n;
         for j in 0..len {
             let sl = (start + j) % self.cap;
@@ -724,6 +903,11 @@ impl NonlinearMhe {
                 dj[(i, i)] += mu;
             }
         }
+    }
+
+    /// Block Cholesky of the matrix whose diagonal blocks `build_blocks` left in `d`, and the
+    /// solve of `H Δ = −g` into `step`.
+    fn factor_and_back_substitute(&mut self, len: usize) -> bool {
         // Block Cholesky: S_0 = D_0; S_j = D_j − W_j W_jᵀ, W_j = O_{j−1} L_{j−1}⁻ᵀ, O_{j−1} = −Q⁻¹ A_{j−1}.
         for j in 0..len {
             if j > 0 {
@@ -756,6 +940,13 @@ impl NonlinearMhe {
         }
         self.step[..len].iter().all(|s| s.iter().all(|v| v.is_finite()))
     }
+}
+
+/// Outcome of a constrained Gauss–Newton step.
+enum ConstrainedStep {
+    Solved,
+    Infeasible,
+    Failed,
 }
 
 fn quad(a: &DMatrix<f64>, x: &DVector<f64>) -> f64 {

@@ -4,26 +4,7 @@
 /// Lower Cholesky factor of the `n × n` column-major `a` in place (lower triangle read and
 /// written); false if a pivot is not positive to working precision (relative `1e−14`).
 pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let diag = a[j * n + j];
-        let mut d = diag;
-        for k in 0..j {
-            d -= a[k * n + j] * a[k * n + j];
-        }
-        if d.is_nan() || d <= 1e-14 * diag.abs() || !d.is_finite() {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut s = a[j * n + i];
-            for k in 0..j {
-                s -= a[k * n + i] * a[k * n + j];
-            }
-            a[j * n + i] = s / d;
-        }
-    }
-    true
+    dense_kernels::cholesky_slice(a, n, 1e-14)
 }
 
 /// `out ← (L Lᵀ)⁻¹` (full symmetric) from the lower factor `l`.

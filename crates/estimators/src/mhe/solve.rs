@@ -19,6 +19,9 @@ pub enum WindowStatus {
     /// An inner box-QP reported a failure (iteration limit or a Hessian that is not positive
     /// definite); the last finite iterate is published.
     InnerFailure,
+    /// The constraints of the window cannot all hold (the nonlinear MHE's boxes on `ω` and `ν`):
+    /// the unconstrained estimate is published.
+    Infeasible,
 }
 
 /// Counters of one window solve.
