@@ -1,17 +1,21 @@
 //! SDP backends side by side: the filter LMI (28) for (n, m) = (4, 3), (4, 4), (8, 4) — setup +
 //! solve and solve only — and SDPLIB `hinf1`, `control1`, `truss1`, for every backend compiled in
 //! (`cargo bench --bench sdp_backends`; add `--features clarabel` for Clarabel).
+//!
+//! `faer-ipm-before-15` is the state before issue 15, in the same run: (28) as stated (with
+//! `Q⁻¹`, `R⁻¹` in the block, [`Formulation::AsStated`]) and `faer-ipm` in its legacy mode
+//! ([`lmi::FaerIpm::set_legacy`]); every other line uses the whitened statement of (28).
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use estimators::smf::lmi28::{FilterSdp, FilterSdpData};
-use lmi::{SdpSolution, SolverSettings, backend_by_name, backend_names};
+use estimators::smf::lmi28::{FilterSdp, FilterSdpData, Formulation};
+use lmi::{FaerIpm, SdpBackend, SdpSolution, SolverSettings, backend_by_name, backend_names};
 use nalgebra::{DMatrix, DVector};
 
 /// A deterministic stable `n × n` system with `m` outputs (the reference case of the `lmi` issue
 /// for n = 4, m = 3; otherwise a lightly coupled damped chain).
-fn filter_case(n: usize, m: usize) -> FilterSdp {
+fn filter_case(n: usize, m: usize, form: Formulation) -> FilterSdp {
     #[rustfmt::skip]
     let a4 = [
         0.755139296689566, -0.019699090506075354, -0.04774305144944732, -0.0018915821287349352,
@@ -35,13 +39,34 @@ fn filter_case(n: usize, m: usize) -> FilterSdp {
     let r = DMatrix::identity(m, m) * 0.05;
     let p = DMatrix::identity(n, n) * 0.5;
     let x = DVector::zeros(n);
-    FilterSdp::new(&FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x }).expect("valid case")
+    FilterSdp::with_formulation(&FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x }, form)
+        .expect("valid case")
 }
 
 fn filter_lmi(crit: &mut Criterion) {
     let mut group = crit.benchmark_group("filter_lmi_28");
     for (n, m) in [(4, 3), (4, 4), (8, 4)] {
-        let sdp = filter_case(n, m);
+        // Before issue 15, in the same run: (28) as stated, faer-ipm in legacy mode.
+        let before = filter_case(n, m, Formulation::AsStated);
+        let legacy = || {
+            let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();
+            ipm.set_legacy(true);
+            ipm
+        };
+        let label = format!("faer-ipm-before-15/n{n}m{m}");
+        group.bench_function(BenchmarkId::new("setup+solve", &label), |b| {
+            b.iter(|| black_box(legacy().setup_and_solve(black_box(before.problem())).unwrap().status))
+        });
+        let mut backend = legacy();
+        backend.setup(before.problem()).unwrap();
+        let mut sol = SdpSolution::new(before.problem());
+        group.bench_function(BenchmarkId::new("solve", &label), |b| {
+            b.iter(|| {
+                backend.solve(black_box(before.problem()), &mut sol).unwrap();
+                black_box(sol.status)
+            })
+        });
+        let sdp = filter_case(n, m, Formulation::Whitened);
         let problem = sdp.problem();
         for name in backend_names() {
             let label = format!("{name}/n{n}m{m}");
@@ -74,6 +99,16 @@ fn sdplib(crit: &mut Criterion) {
     group.sample_size(20);
     for name in ["hinf1", "control1", "truss1"] {
         let problem = lmi::read_sdpa_file(&dir.join(format!("{name}.dat-s"))).expect("SDPLIB file");
+        let mut legacy = FaerIpm::new(SolverSettings::default()).unwrap();
+        legacy.set_legacy(true);
+        legacy.setup(&problem).unwrap();
+        let mut sol = SdpSolution::new(&problem);
+        group.bench_function(BenchmarkId::new("faer-ipm-before-15", name), |b| {
+            b.iter(|| {
+                legacy.solve(black_box(&problem), &mut sol).unwrap();
+                black_box(sol.status)
+            })
+        });
         for backend_name in backend_names() {
             let mut backend = backend_by_name(backend_name, SolverSettings::default()).unwrap();
             backend.setup(&problem).unwrap();

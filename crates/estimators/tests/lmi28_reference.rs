@@ -42,6 +42,9 @@ fn reference_case() -> Case {
     }
 }
 
+/// The optimum to 1e-7 relative needs solves to `1e-9`: at the default `1e-8` the whitened
+/// statement (issue 15) stops 9.5e-8 from the reference on faer-ipm, inside the tolerance by a
+/// margin that rounding on another machine could eat.
 #[test]
 fn every_backend_matches_the_reference_optimum() {
     let case = reference_case();
@@ -49,7 +52,7 @@ fn every_backend_matches_the_reference_optimum() {
     let sdp = FilterSdp::new(&data).unwrap();
     assert_eq!(sdp.problem().blocks()[0].size(), 16);
     for name in backend_names() {
-        let mut backend = backend_by_name(name, SolverSettings::default()).unwrap();
+        let mut backend = backend_by_name(name, SolverSettings::builder().tolerance(1e-9).build().unwrap()).unwrap();
         let sol = backend.setup_and_solve(sdp.problem()).unwrap();
         assert_eq!(sol.status, SolveStatus::Solved, "{name}");
         let f = sdp.read(&sol.x, &data).unwrap();

@@ -99,7 +99,30 @@ pub(crate) fn cholesky(a: &mut [f64], n: usize, stack: &mut MemStack) -> bool {
 }
 
 /// Solves `L Lᵀ v = rhs` in place, `L` the lower Cholesky factor (column-major `n × n`).
-pub(crate) fn cholesky_solve(l: &[f64], n: usize, v: &mut [f64]) {
+///
+/// Up to order 128 by two plain loops (a column update, then contiguous dot products: both
+/// vectorise), which at the Schur orders of the filter LMI (30–100) cost a fraction of faer's
+/// general triangular solves; `faer_only` forces faer's (the method before issue 15).
+#[inline(always)]
+pub(crate) fn cholesky_solve(l: &[f64], n: usize, v: &mut [f64], faer_only: bool) {
+    if n <= 128 && !faer_only {
+        // L z = v: column by column.
+        for j in 0..n {
+            let col = &l[j * n..j * n + n];
+            let zj = v[j] / col[j];
+            v[j] = zj;
+            for (x, a) in v[j + 1..n].iter_mut().zip(&col[j + 1..]) {
+                *x -= zj * a;
+            }
+        }
+        // Lᵀ x = z: row j of Lᵀ is column j of L.
+        for j in (0..n).rev() {
+            let col = &l[j * n..j * n + n];
+            let s: f64 = col[j + 1..].iter().zip(&v[j + 1..n]).map(|(a, x)| a * x).sum();
+            v[j] = (v[j] - s) / col[j];
+        }
+        return;
+    }
     let lv = view(l, n);
     solve_lower_triangular_in_place(lv, MatMut::from_column_major_slice_mut(&mut v[..n], n, 1), Par::Seq);
     solve_upper_triangular_in_place(lv.transpose(), MatMut::from_column_major_slice_mut(&mut v[..n], n, 1), Par::Seq);

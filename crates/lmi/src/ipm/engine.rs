@@ -715,7 +715,7 @@ impl Workspace {
             self.cb[i] = self.c[i] + b;
             self.q[i] = b - self.c[i];
         }
-        dense::cholesky_solve(&self.lfac, m, &mut self.q);
+        dense::cholesky_solve(&self.lfac, m, &mut self.q, self.legacy);
         // β − (b + c)ᵀq = ‖Tᵀ(F₀ − A(q))T‖², computed in that form (no cancellation).
         self.coef[0] = 1.0;
         for i in 0..m {
@@ -916,7 +916,7 @@ impl Workspace {
             self.p[i] = self.rhs[i] + self.tr[i + 1];
         }
         let g0 = self.tr[0];
-        dense::cholesky_solve(&self.lfac, m, &mut self.p);
+        dense::cholesky_solve(&self.lfac, m, &mut self.p, self.legacy);
         let cbp = dense::dot(&self.cb, &self.p);
         let num = dtau_rhs + cbp - g0 + dkappa / st.tau;
         let den = st.den0 + st.kappa / st.tau;
@@ -978,6 +978,10 @@ impl Workspace {
         if st.dkappa < 0.0 {
             alpha = alpha.min(-st.kappa / st.dkappa);
         }
+        // The predictor's step only sets σ: two halvings (step known to within 1/4) since issue
+        // 15 (fewer Cholesky tests, and on the filter LMI and SDPLIB as few or fewer iterations);
+        // three in legacy mode.
+        let halvings = if self.legacy { 3 } else { 2 };
         for blk in &mut self.blocks {
             let n = blk.n;
             for primal in [true, false] {
@@ -990,7 +994,7 @@ impl Workspace {
                         }
                     }
                     alpha = if coarse {
-                        max_step_coarse(&blk.tmp, &mut blk.tmp2, n, alpha, 3)
+                        max_step_coarse(&blk.tmp, &mut blk.tmp2, n, alpha, halvings)
                     } else {
                         max_step(&mut blk.tmp, &mut blk.tmp2, n, alpha, &mut blk.ev, &mut blk.ee)?
                     };

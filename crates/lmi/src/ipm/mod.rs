@@ -74,8 +74,9 @@
 //! this is the largest `α` with `I + αΛ^{-1/2}ΔΛ^{-1/2} ⪰ 0`: one Cholesky test of the full
 //! step first (usually enough near the end); otherwise a Householder tridiagonalisation and a
 //! bisection on Sturm counts for the smallest eigenvalue (relative accuracy `10⁻⁴`, rounded
-//! towards the shorter step). The predictor's step only sets `σ`, so it uses three Cholesky-test
-//! halvings instead (step known to within 1/8).
+//! towards the shorter step). The predictor's step only sets `σ`, so it uses two Cholesky-test
+//! halvings instead (step known to within 1/4; three, within 1/8, before issue 15 and in
+//! [`FaerIpm::set_legacy`] mode).
 //!
 //! **Starting point.** As in SDPT3: `x = 0`, `X = ξI`, `Y = ηI` with
 //! `ξ = max(10, √ν, ‖F₀‖, maxᵢ‖Fᵢ‖)`, `η = max(10, √ν, ν maxᵢ (1 + |cᵢ|)/(1 + ‖Fᵢ‖))` and
@@ -96,10 +97,13 @@
 //! eigensolver costs about 15 µs at order 16, this one about 5 µs with vectors.
 //!
 //! On the filter LMI for `(n, m) = (4, 3)` (one block of order 16, 29 variables, 12 iterations)
-//! a solve takes about 320 µs on the development machine, roughly 27 µs per iteration: the NT
-//! scaling (two Cholesky factorisations, the eigendecomposition, six products) about a third,
-//! the step lengths about a fifth, the Schur matrix and its factorisation about a fifth, the
-//! rest the right-hand sides and directions.
+//! a solve took about 320 µs on the development machine before issue 15, roughly 27 µs per
+//! iteration: the NT scaling (two Cholesky factorisations, the eigendecomposition, six products)
+//! about a quarter, the step lengths about a quarter, the Schur matrix and its factorisation
+//! about a fifth, the rest the right-hand sides and directions. Issue 15 changed the Schur solves
+//! (plain loops up to order 128 instead of faer's triangular solves) and the predictor's halvings;
+//! the main gain came from the statement of the filter LMI (fewer iterations; see `docs/sdp.md`).
+//! [`FaerIpm::set_legacy`] selects the method before issue 15, for comparisons in one run.
 //!
 //! # Allocation
 //!
@@ -182,6 +186,7 @@ pub struct FaerIpm {
     settings: SolverSettings,
     ws: Option<Workspace>,
     buf: Option<MemBuffer>,
+    legacy: bool,
 }
 
 impl std::fmt::Debug for FaerIpm {
@@ -197,12 +202,23 @@ impl FaerIpm {
     /// A backend with validated `settings`; call [`SdpBackend::setup`] before solving.
     pub fn new(settings: SolverSettings) -> Result<Self, LmiError> {
         settings.validate()?;
-        Ok(Self { settings, ws: None, buf: None })
+        Ok(Self { settings, ws: None, buf: None, legacy: false })
     }
 
     /// The settings in use.
     pub fn settings(&self) -> &SolverSettings {
         &self.settings
+    }
+
+    /// Selects the method as it was before the small-block work of issue 15 (kept so that
+    /// benchmarks can compare both in one run); off by default.
+    pub fn set_legacy(&mut self, legacy: bool) {
+        self.legacy = legacy;
+    }
+
+    /// Whether the pre-issue-15 method is selected ([`FaerIpm::set_legacy`]).
+    pub fn legacy(&self) -> bool {
+        self.legacy
     }
 }
 
@@ -259,6 +275,7 @@ impl SdpBackend for FaerIpm {
         let settings = &self.settings;
         let scale = Equilibration::compute(problem, settings.equilibrate);
         ws.load_values(problem, &scale);
+        ws.legacy = self.legacy;
         // The whole iteration is compiled for the best instruction set available (AVX2/FMA or
         // AVX-512 on x86-64), so that the hand-written kernels vectorise as well as faer's.
         faer::traits::pulp::Arch::new().dispatch(Run { ws, settings, start, solution, stack: MemStack::new(buf) });

@@ -309,6 +309,8 @@ pub(crate) struct Workspace {
     pub loss: f64,
     /// Dense scatter buffer for one `Fⱼ` (order of the largest block, squared).
     pub fbuf: Vec<f64>,
+    /// The method before issue 15 ([`FaerIpm::set_legacy`](super::FaerIpm::set_legacy)).
+    pub legacy: bool,
 }
 
 /// Blocks below this order keep the classic Schur strategies (pairwise, rank update, dense).
@@ -494,6 +496,7 @@ impl Workspace {
             qcoef: vec![0.0; qr_bs * m],
             qr_bs,
             loss: 0.0,
+            legacy: false,
         })
     }
 

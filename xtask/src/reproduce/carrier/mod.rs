@@ -61,6 +61,9 @@ pub struct ScenarioSummary {
     pub notes: Vec<String>,
     /// Per-estimator figures.
     pub estimators: Vec<Metrics>,
+    /// 99th percentile of the wall-clock step time per estimator, microseconds (over the same
+    /// timed steps as the median in `estimators`): the tail that matters for a 1 ms loop.
+    pub step_p99_us: Vec<(String, f64)>,
     /// Largest relative difference of `tr P` between the filter driven by each SDP backend and
     /// the one driven by the two-multiplier solver, along their own runs (their `P_k` histories
     /// are independent, so this measures trajectory divergence; per-step agreement of the solvers
@@ -195,12 +198,23 @@ fn run_scenario(sc: &Scenario, out: &Path) -> Result<(ScenarioSummary, Vec<Run>)
         seed: sc.sim.seed,
         notes: sc.notes.clone(),
         estimators: runs.iter().map(|r| metrics(r, &traj.states)).collect(),
+        step_p99_us: runs.iter().map(|r| (r.label.clone(), quantile_us(&r.step_ns, 0.99))).collect(),
         solver_agreement,
         proposed_inside_reference17: inside as f64 / total.max(1) as f64,
         width_ratio_reference17: ratio_sum / total.max(1) as f64,
         figures,
     };
     Ok((summary, runs))
+}
+
+/// The `p`-quantile (nearest rank) of a sample of nanoseconds, in microseconds.
+pub fn quantile_us(ns: &[u64], p: f64) -> f64 {
+    if ns.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = ns.to_vec();
+    v.sort_unstable();
+    v[((v.len() - 1) as f64 * p).round() as usize] as f64 / 1e3
 }
 
 fn quantiles(mut v: Vec<f64>) -> [f64; 5] {
