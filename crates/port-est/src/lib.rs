@@ -101,8 +101,8 @@ pub fn write_estimators(w: &mut dyn Write) -> io::Result<()> {
         writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, notes.join("; "))?;
     }
     writeln!(w)?;
-    writeln!(w, "Estimators of nonlinear vehicle models (port-est truck):")?;
-    for e in registry::DIFFERENTIABLE_ESTIMATORS {
+    writeln!(w, "Estimators of nonlinear models in the library's registry (port-est truck runs ekf):")?;
+    for e in registry::DIFFERENTIABLE_ESTIMATORS.iter().chain(registry::NONLINEAR_ESTIMATORS) {
         writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, e.kind.label())?;
     }
     writeln!(w)?;

@@ -550,7 +550,10 @@ fn report(s: &Summary) -> String {
         r,
         "Case (a): w ~ U(W) injected in the truth (paper-literal); case (b): w = 0 in the truth (CarSim-like). Correct \
          prior x̄0 = x(0); wrong prior x̄0 = 0 with the same P0 (2 m error at 0.1 m standard deviation). Units: m², \
-         rad², rad², (rad/s)².\n"
+         rad², rad², (rad/s)². In case (a) the paper-literal `W = [−0.1, 0.1]⁴` adds up to 0.1 rad (5.7°) of heading \
+         and 0.1 rad/s of yaw rate per 0.5 s step: the truth's heading random-walks by tens of degrees and its \
+         position by hundreds of metres, swamping the lane change (see the figures); case (b) is the lane change \
+         itself.\n"
     );
     for b in &s.blocks {
         let _ = writeln!(r, "### Case ({:?}), {:?} prior\n", b.case, b.prior);
