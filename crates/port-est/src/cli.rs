@@ -126,7 +126,12 @@ Files:
               `a` (n×n), `b` (n×p), `c` (m×n), `q` (n×n), `r` (m×m), `p0` (n×n) as arrays of rows and
               `x0` (length n); optional `u_lower`, `u_upper` (length p), the input range (yang-li).
               Set-membership filters read q, r, p0 as ellipsoid shapes, the Kalman filter as
-              covariances.
+              covariances. The moving-horizon estimators (rmhe, mhe) read them as weights (r
+              diagonal) and need a table `[mhe]` with the noise boxes `w_lower`, `w_upper` (length
+              n) and `v_lower`, `v_upper` (length m); optional `horizon`, `preset` (rmhe, rmhe-op,
+              rmhe-of) or `blocks`, `lambda_v` or `alpha`, `solver` (coordinate-rotation,
+              exact-saddle), `inner`, `max_sweeps`, `tolerance`, `arrival`, `theta`, `prior_mean`,
+              `block_weighting` (see crates/port-est/README.md).
   DATA.csv    header `k,u1,…,up,y1,…,ym`; row k holds the input u_k and the measurement y_{k+1}.
   OUT.csv     header `k,xhat1,…,xhatn,lo1,…,lon,hi1,…,hin,trace` (plus `tau1,tau2,tau3` for the
               set-membership filters); one row per step, labelled k+1. It is written to a temporary
@@ -141,7 +146,7 @@ Example:
 #[derive(Debug, Args)]
 #[command(after_long_help = FILE_FORMATS)]
 pub struct FilterArgs {
-    /// The model: a, b, c, q, r, p0, x0 and optionally u_lower, u_upper (TOML)
+    /// The model: a, b, c, q, r, p0, x0 and optionally u_lower, u_upper and an [mhe] table (TOML)
     #[arg(short, long, value_name = "MODEL.toml")]
     pub model: PathBuf,
     /// The logged data: header `k,u1,…,up,y1,…,ym` (CSV)
