@@ -482,27 +482,4 @@ pub fn aggregate(seeds: &[RunMetrics]) -> Aggregate {
     }
 }
 
-/// Wall time of the observer's update, pooled.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct StepTiming {
-    /// Steps timed.
-    pub steps_timed: usize,
-    /// Median \[µs\].
-    pub median_us: f64,
-    /// 99th percentile \[µs\].
-    pub p99_us: f64,
-    /// Mean \[µs\].
-    pub mean_us: f64,
-}
-
-impl StepTiming {
-    /// Statistics of per-step nanoseconds.
-    #[must_use]
-    pub fn of(mut ns: Vec<u64>) -> Self {
-        ns.sort_unstable();
-        let n = ns.len();
-        let q = |p: f64| if n == 0 { f64::NAN } else { ns[((n - 1) as f64 * p).round() as usize] as f64 / 1e3 };
-        let mean = if n == 0 { f64::NAN } else { ns.iter().map(|&v| v as f64).sum::<f64>() / n as f64 / 1e3 };
-        Self { steps_timed: n, median_us: q(0.5), p99_us: q(0.99), mean_us: mean }
-    }
-}
+pub use crate::reproduce::runner::StepTiming;

@@ -18,7 +18,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::outputs;
-use super::truck::run::StepTiming;
+use super::runner::StepTiming;
 use super::{Options, Paper, PaperOutcome};
 use crate::plot::{Chart, Grid, PALETTE, Series};
 use run::{Case, Experiment, Prior, Variant};
