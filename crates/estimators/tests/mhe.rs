@@ -185,6 +185,7 @@ fn coordinate_rotation_agrees_with_the_exact_saddle_where_it_converges() {
 /// (`g(e) = (e² + Huber_μ(e))/R` for V = [−1, 1]).
 fn clarabel_full_information(
     s: &MheSettings,
+    output_constraint: bool,
     a: &DMatrix<f64>,
     b: &DMatrix<f64>,
     c: &DMatrix<f64>,
@@ -275,6 +276,16 @@ fn clarabel_full_information(
             rows.push((vec![(ow + k * n + i, -1.0)], -s.w_box.0[i]));
         }
     }
+    if output_constraint {
+        // v_lo ≤ y_k − C x_k ≤ v_hi:  −C x ≤ v_hi − y,  C x ≤ y − v_lo.
+        for k in 0..t_len {
+            let xk = ox + (k + 1) * n;
+            for i in 0..m {
+                rows.push(((0..n).map(|p| (xk + p, -c[(i, p)])).collect(), s.v_box.1[i] - ys[k][i]));
+                rows.push(((0..n).map(|p| (xk + p, c[(i, p)])).collect(), ys[k][i] - s.v_box.0[i]));
+            }
+        }
+    }
     let a_dense =
         DMatrix::from_fn(rows.len(), nv, |r, col| rows[r].0.iter().filter(|(j, _)| *j == col).map(|(_, v)| v).sum());
     let bvec: Vec<f64> = rows.iter().map(|r| r.1).collect();
@@ -322,7 +333,7 @@ fn exact_saddle_matches_clarabel_on_an_uncondensed_formulation() {
         let (us, ys) = data(&a, &b, &c, 8, 0.05, 1.5, seed);
         for t in 0..us.len() {
             let x = mhe.step(&model, &us[t], &ys[t]).unwrap().state.clone();
-            let reference = clarabel_full_information(&s, &a, &b, &c, &us[..=t], &ys[..=t]);
+            let reference = clarabel_full_information(&s, false, &a, &b, &c, &us[..=t], &ys[..=t]);
             assert!((&x - &reference).amax() < 1e-6, "seed {seed} T = {}: {x} vs Clarabel {reference}", t + 1);
         }
     }
@@ -512,4 +523,52 @@ fn predictions_bridge_missing_measurements_and_the_initial_measurement_is_used()
         assert!(est.state.iter().all(|v| v.is_finite()));
     }
     assert_eq!(e.time(), 12);
+}
+
+#[test]
+fn output_constraints_match_clarabel_and_infeasibility_is_an_outcome() {
+    for seed in 0..3 {
+        let (a, b, c) = system(3, 1, 400 + seed);
+        let mut s = settings(3, 1, MheCost::MinMax { lambda_v: 1.5 }, 10, 0.05, 1.0);
+        s.r = DMatrix::identity(1, 1) * 0.2;
+        s.output_constraint = true;
+        let model = StepModel::new(&a, &b, &c);
+        let (us, ys) = data(&a, &b, &c, 8, 0.05, 1.0, seed);
+        for solver in [
+            WindowSolver::exact_saddle(),
+            WindowSolver::CoordinateRotation { max_sweeps: 200, tolerance: 1e-12, inner: InnerSolver::ActiveSet },
+        ] {
+            let mut s = s.clone();
+            s.solver = solver;
+            let mut mhe = MovingHorizonEstimator::new(s.clone(), 1).unwrap();
+            for t in 0..us.len() {
+                let e = mhe.step(&model, &us[t], &ys[t]).unwrap();
+                let x = e.state.clone();
+                let status = e.report.unwrap().solve.status;
+                assert!(((&c * &x)[0] - ys[t][0]).abs() <= 1.0 + 1e-6, "the output constraint at T");
+                if matches!(solver, WindowSolver::ExactSaddle { .. }) {
+                    assert_eq!(status, WindowStatus::Converged);
+                    let reference = clarabel_full_information(&s, true, &a, &b, &c, &us[..=t], &ys[..=t]);
+                    assert!((&x - &reference).amax() < 1e-6, "seed {seed} T = {}: {x} vs Clarabel {reference}", t + 1);
+                }
+            }
+        }
+    }
+    // An outlier no admissible trajectory explains: solved without the constraints, reported.
+    let (a, b, c) = system(3, 1, 9);
+    let model = StepModel::new(&a, &b, &c);
+    let mut s = settings(3, 1, MheCost::MinMax { lambda_v: 10.0 }, 4, 1e-3, 0.5);
+    s.output_constraint = true;
+    s.solver = WindowSolver::exact_saddle();
+    let mut mhe = MovingHorizonEstimator::new(s, 1).unwrap();
+    let u = DVector::zeros(1);
+    let mut statuses = Vec::new();
+    for k in 0..6 {
+        let y = DVector::from_element(1, if k == 3 { 50.0 } else { 0.0 });
+        let e = mhe.step(&model, &u, &y).unwrap();
+        assert!(e.state.iter().all(|v| v.is_finite()));
+        statuses.push(e.report.unwrap().solve.status);
+    }
+    assert!(statuses.contains(&WindowStatus::Infeasible), "{statuses:?}");
+    assert_eq!(statuses[0], WindowStatus::Converged);
 }

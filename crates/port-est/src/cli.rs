@@ -131,7 +131,7 @@ Files:
               n) and `v_lower`, `v_upper` (length m); optional `horizon`, `preset` (rmhe, rmhe-op,
               rmhe-of) or `blocks`, `lambda_v` or `alpha`, `solver` (coordinate-rotation,
               exact-saddle), `inner`, `max_sweeps`, `tolerance`, `arrival`, `theta`, `prior_mean`,
-              `block_weighting` (see crates/port-est/README.md).
+              `block_weighting`, `output_constraint` (see crates/port-est/README.md).
   DATA.csv    header `k,u1,…,up,y1,…,ym`; row k holds the input u_k and the measurement y_{k+1}.
   OUT.csv     header `k,xhat1,…,xhatn,lo1,…,lon,hi1,…,hin,trace` (plus `tau1,tau2,tau3` for the
               set-membership filters); one row per step, labelled k+1. It is written to a temporary

@@ -37,6 +37,7 @@ pub(crate) struct MheTable {
     arrival: Option<Spanned<String>>,
     theta: Option<Spanned<f64>>,
     prior_mean: Option<Spanned<String>>,
+    output_constraint: Option<Spanned<bool>>,
 }
 
 /// A complaint about a key: its span and the message.
@@ -154,6 +155,9 @@ impl MheTable {
         if let Some(p) = &self.prior_mean {
             s.prior_mean =
                 choice(p, "prior_mean", &[("smoothed", PriorMean::Smoothed), ("filtered", PriorMean::Filtered)])?;
+        }
+        if let Some(o) = &self.output_constraint {
+            s.output_constraint = *o.get_ref();
         }
         let mut keys: KeySpans = Vec::new();
         let mut key = |k: &'static str, span: Option<Range<usize>>| {

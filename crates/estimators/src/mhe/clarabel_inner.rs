@@ -7,9 +7,28 @@ use clarabel_qp::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, Nonne
 
 use crate::mhe::window::WindowProblem;
 
+/// Why a Clarabel QP gave no solution.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum QpFailure {
+    /// The constraints cannot all hold.
+    Infeasible,
+    /// Clarabel did not report a solution (or panicked).
+    Failed,
+}
+
 /// Solves `min ½ zᵀ H z − bᵀ z` over the window's box with Clarabel; `Ok(iterations)` with the
 /// solution in `z`, `Err(())` if Clarabel does not report a solution (or panics).
 pub(crate) fn solve_box_qp(w: &WindowProblem, z: &mut [f64]) -> Result<usize, ()> {
+    solve_qp(w, z, None).map_err(|_| ())
+}
+
+/// As [`solve_box_qp`], and with `outputs = Some((v_lo, v_hi))` also the output constraints
+/// `v_lo ≤ y − C x_j(z) ≤ v_hi` of every measured sample (the paper's (11) read literally).
+pub(crate) fn solve_qp(
+    w: &WindowProblem,
+    z: &mut [f64],
+    outputs: Option<(&[f64], &[f64])>,
+) -> Result<usize, QpFailure> {
     let nz = w.nz;
     let (h, b, lo, hi) = (&w.h[..nz * nz], &w.b[..nz], &w.lo[..nz], &w.hi[..nz]);
     // P: upper triangle of H (column c holds rows r ≤ c; H is stored by its lower triangle).
@@ -42,6 +61,28 @@ pub(crate) fn solve_box_qp(w: &WindowProblem, z: &mut [f64]) -> Result<usize, ()
             bb.push(-lo[i]);
         }
     }
+    if let Some((v_lo, v_hi)) = outputs {
+        let m = v_lo.len();
+        for j in 0..w.len {
+            if !w.measured[j] {
+                continue;
+            }
+            for i in 0..m {
+                // e = ỹ − a z ≤ v_hi  ⇔  −a z ≤ v_hi − ỹ;   e ≥ v_lo  ⇔  a z ≤ ỹ − v_lo.
+                let row = w.row(j, i);
+                let y = w.y_tilde[j * m + i];
+                let (r_hi, r_lo) = (bb.len(), bb.len() + 1);
+                for (c, &a) in row.iter().enumerate() {
+                    if a != 0.0 {
+                        a_col[c].push((r_hi, -a));
+                        a_col[c].push((r_lo, a));
+                    }
+                }
+                bb.push(v_hi[i] - y);
+                bb.push(y - v_lo[i]);
+            }
+        }
+    }
     let mut colptr = vec![0];
     let mut rowval = Vec::new();
     let mut nzval = Vec::new();
@@ -62,20 +103,24 @@ pub(crate) fn solve_box_qp(w: &WindowProblem, z: &mut [f64]) -> Result<usize, ()
         .tol_gap_rel(1e-12)
         .tol_feas(1e-12)
         .build()
-        .map_err(|_| ())?;
+        .map_err(|_| QpFailure::Failed)?;
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings).ok()?;
         solver.solve();
-        let ok = matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved);
-        ok.then(|| (solver.solution.x.clone(), solver.solution.iterations as usize))
+        Some((solver.solution.status, solver.solution.x.clone(), solver.solution.iterations as usize))
     }));
     match result {
-        Ok(Some((x, iterations))) if x.len() == nz && x.iter().all(|v| v.is_finite()) => {
+        Ok(Some((SolverStatus::Solved | SolverStatus::AlmostSolved, x, iterations)))
+            if x.len() == nz && x.iter().all(|v| v.is_finite()) =>
+        {
             for i in 0..nz {
                 z[i] = x[i].clamp(lo[i], hi[i]);
             }
             Ok(iterations)
         }
-        _ => Err(()),
+        Ok(Some((SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible, ..))) => {
+            Err(QpFailure::Infeasible)
+        }
+        _ => Err(QpFailure::Failed),
     }
 }

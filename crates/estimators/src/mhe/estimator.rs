@@ -117,6 +117,8 @@ pub struct MovingHorizonEstimator {
     scratch: SolverScratch,
     z: Vec<f64>,
     v: Vec<f64>,
+    z_start: Vec<f64>,
+    v_start: Vec<f64>,
     traj_work: Vec<f64>,
     p_next: Vec<f64>,
     prior_mean: Vec<f64>,
@@ -191,6 +193,8 @@ impl MovingHorizonEstimator {
             scratch: SolverScratch::new(nz_cap, max_len * m),
             z: vec![0.0; nz_cap],
             v: vec![0.0; max_len * m],
+            z_start: vec![0.0; nz_cap],
+            v_start: vec![0.0; max_len * m],
             traj_work: vec![0.0; max_len * n],
             p_next: vec![0.0; n * n],
             prior_mean: vec![0.0; n],
@@ -511,28 +515,30 @@ impl MovingHorizonEstimator {
                 self.v[j * m + i] = if k < big_t && k <= self.t { self.v_ring[sl * m + i] } else { 0.0 };
             }
         }
-        let noise = NoiseData { r_inv: &self.r_inv, v_lo: &self.v_lo, v_hi: &self.v_hi, cost: self.settings.cost };
-        let counters = match self.settings.solver {
-            WindowSolver::CoordinateRotation { max_sweeps, tolerance, inner } => coordinate_rotation(
-                &mut self.window,
-                &noise,
-                &mut self.scratch,
-                &mut self.z,
-                &mut self.v,
-                max_sweeps,
-                tolerance,
-                inner,
-            ),
-            WindowSolver::ExactSaddle { max_iterations, tolerance } => exact_saddle(
-                &mut self.window,
-                &noise,
-                &mut self.scratch,
-                &mut self.z,
-                &mut self.v,
-                max_iterations,
-                tolerance,
-            ),
+        let mut noise = NoiseData {
+            r_inv: &self.r_inv,
+            v_lo: &self.v_lo,
+            v_hi: &self.v_hi,
+            cost: self.settings.cost,
+            output_constraint: self.settings.output_constraint,
         };
+        // Warm start kept for a second attempt without the output constraints.
+        self.z_start[..nz].copy_from_slice(&self.z[..nz]);
+        self.v_start[..len * m].copy_from_slice(&self.v[..len * m]);
+        let mut counters =
+            run_solver(self.settings.solver, &mut self.window, &noise, &mut self.scratch, &mut self.z, &mut self.v);
+        if counters.status == WindowStatus::Infeasible {
+            // The output constraints cannot all hold (data beyond V for every admissible
+            // trajectory): solve without them and say so.
+            noise.output_constraint = false;
+            self.z[..nz].copy_from_slice(&self.z_start[..nz]);
+            self.v[..len * m].copy_from_slice(&self.v_start[..len * m]);
+            counters =
+                run_solver(self.settings.solver, &mut self.window, &noise, &mut self.scratch, &mut self.z, &mut self.v);
+            if counters.status == WindowStatus::Converged {
+                counters.status = WindowStatus::Infeasible;
+            }
+        }
         let objective = saddle_value(&mut self.window, &noise, &self.z[..nz], &mut self.scratch.e[..len * m]);
         for j in 0..len {
             self.window.state(j, &self.z[..nz], &mut self.traj_work[j * n..(j + 1) * n]);
@@ -579,6 +585,25 @@ impl MovingHorizonEstimator {
             objective,
             elapsed: start.elapsed(),
         });
+    }
+}
+
+/// Runs the configured window solver.
+fn run_solver(
+    solver: WindowSolver,
+    window: &mut WindowProblem,
+    noise: &NoiseData<'_>,
+    scratch: &mut SolverScratch,
+    z: &mut [f64],
+    v: &mut [f64],
+) -> SolveCounters {
+    match solver {
+        WindowSolver::CoordinateRotation { max_sweeps, tolerance, inner } => {
+            coordinate_rotation(window, noise, scratch, z, v, max_sweeps, tolerance, inner)
+        }
+        WindowSolver::ExactSaddle { max_iterations, tolerance } => {
+            exact_saddle(window, noise, scratch, z, v, max_iterations, tolerance)
+        }
     }
 }
 

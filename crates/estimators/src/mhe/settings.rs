@@ -201,6 +201,11 @@ pub struct MheSettings {
     pub prior_mean: PriorMean,
     /// Window solver.
     pub solver: WindowSolver,
+    /// The paper's (11) read literally: also require `y_k − C x_k ∈ V` for every measured sample
+    /// (off by default, digest §6.6). The window QPs then have linear inequalities and are solved
+    /// by Clarabel's QP path (allocating); when the constraints cannot all hold, the window is
+    /// solved without them and reported `WindowStatus::Infeasible`.
+    pub output_constraint: bool,
 }
 
 impl MheSettings {
@@ -229,6 +234,7 @@ impl MheSettings {
             arrival: ArrivalRecursion::Kalman,
             prior_mean: PriorMean::Smoothed,
             solver: WindowSolver::coordinate_rotation(),
+            output_constraint: false,
         }
     }
 

@@ -66,6 +66,16 @@ pub(crate) struct NoiseData<'a> {
     pub v_lo: &'a [f64],
     pub v_hi: &'a [f64],
     pub cost: MheCost,
+    /// Whether the output constraints `y − C x ∈ V` are imposed (Clarabel solves the QPs then).
+    pub output_constraint: bool,
+}
+
+/// Solves the window QP with Clarabel under the output constraints; maps the failure to a status.
+fn constrained_qp(w: &WindowProblem, noise: &NoiseData<'_>, z: &mut [f64]) -> Result<usize, WindowStatus> {
+    crate::mhe::clarabel_inner::solve_qp(w, z, Some((noise.v_lo, noise.v_hi))).map_err(|e| match e {
+        crate::mhe::clarabel_inner::QpFailure::Infeasible => WindowStatus::Infeasible,
+        crate::mhe::clarabel_inner::QpFailure::Failed => WindowStatus::InnerFailure,
+    })
 }
 
 impl NoiseData<'_> {
@@ -147,33 +157,45 @@ pub(crate) fn coordinate_rotation(
         }
         s.z_prev[..nz].copy_from_slice(&z[..nz]);
         // (44) the minimisation over (x_s, ω ∈ W) with v fixed.
-        match inner {
-            InnerSolver::ActiveSet => {
-                let o = s.qp.solve(
-                    &w.h[..nz * nz],
-                    &w.b[..nz],
-                    &w.lo[..nz],
-                    &w.hi[..nz],
-                    &mut z[..nz],
-                    20 * nz + 20,
-                    sweep > 0,
-                );
-                counters.inner_iterations += o.iterations;
-                if o.status != BoxQpStatus::Optimal {
-                    counters.status = WindowStatus::InnerFailure;
+        if noise.output_constraint {
+            match constrained_qp(w, noise, &mut z[..nz]) {
+                Ok(iterations) => counters.inner_iterations += iterations,
+                Err(status) => {
+                    z[..nz].copy_from_slice(&s.z_prev[..nz]);
+                    counters.status = status;
                     counters.sweeps = sweep + 1;
                     return counters;
                 }
             }
-            InnerSolver::Clarabel => match crate::mhe::clarabel_inner::solve_box_qp(w, &mut z[..nz]) {
-                Ok(iterations) => counters.inner_iterations += iterations,
-                Err(()) => {
-                    z[..nz].copy_from_slice(&s.z_prev[..nz]);
-                    counters.status = WindowStatus::InnerFailure;
-                    counters.sweeps = sweep + 1;
-                    return counters;
+        } else {
+            match inner {
+                InnerSolver::ActiveSet => {
+                    let o = s.qp.solve(
+                        &w.h[..nz * nz],
+                        &w.b[..nz],
+                        &w.lo[..nz],
+                        &w.hi[..nz],
+                        &mut z[..nz],
+                        20 * nz + 20,
+                        sweep > 0,
+                    );
+                    counters.inner_iterations += o.iterations;
+                    if o.status != BoxQpStatus::Optimal {
+                        counters.status = WindowStatus::InnerFailure;
+                        counters.sweeps = sweep + 1;
+                        return counters;
+                    }
                 }
-            },
+                InnerSolver::Clarabel => match crate::mhe::clarabel_inner::solve_box_qp(w, &mut z[..nz]) {
+                    Ok(iterations) => counters.inner_iterations += iterations,
+                    Err(()) => {
+                        z[..nz].copy_from_slice(&s.z_prev[..nz]);
+                        counters.status = WindowStatus::InnerFailure;
+                        counters.sweeps = sweep + 1;
+                        return counters;
+                    }
+                },
+            }
         }
         counters.sweeps = sweep + 1;
         counters.last_change = inf_norm_diff(&z[..nz], &s.z_prev[..nz]);
@@ -232,26 +254,41 @@ pub(crate) fn exact_saddle(
         set_piece_targets(w, noise, &s.e[..meas], &mut s.targets[..meas]);
         w.assemble(&s.targets);
         s.z_trial[..nz].copy_from_slice(&z[..nz]);
-        let o = s.qp.solve(
-            &w.h[..nz * nz],
-            &w.b[..nz],
-            &w.lo[..nz],
-            &w.hi[..nz],
-            &mut s.z_trial[..nz],
-            20 * nz + 20,
-            false,
-        );
-        counters.inner_iterations += o.iterations;
-        if o.status != BoxQpStatus::Optimal {
-            counters.status = WindowStatus::InnerFailure;
-            break;
+        if noise.output_constraint {
+            match constrained_qp(w, noise, &mut s.z_trial[..nz]) {
+                Ok(iterations) => counters.inner_iterations += iterations,
+                Err(status) => {
+                    counters.status = status;
+                    break;
+                }
+            }
+        } else {
+            let o = s.qp.solve(
+                &w.h[..nz * nz],
+                &w.b[..nz],
+                &w.lo[..nz],
+                &w.hi[..nz],
+                &mut s.z_trial[..nz],
+                20 * nz + 20,
+                false,
+            );
+            counters.inner_iterations += o.iterations;
+            if o.status != BoxQpStatus::Optimal {
+                counters.status = WindowStatus::InnerFailure;
+                break;
+            }
         }
         // Does the model's minimiser lie on the same pieces? Then it is optimal for F.
         let f_trial = saddle_value(w, noise, &s.z_trial[..nz], &mut s.e[..meas]);
         let same_pieces = pieces_match(w, noise, &s.e[..meas], &s.targets[..meas]);
         let mut t = 1.0;
         let mut f_new = f_trial;
-        // Backtracking on the convex F along z → z_trial (feasible: the box is convex).
+        // The warm start need not satisfy the output constraints; the first QP's minimiser does,
+        // and from then on every iterate is feasible.
+        if noise.output_constraint && it == 0 {
+            f = f64::INFINITY;
+        }
+        // Backtracking on the convex F along z → z_trial (feasible: the constraints are convex).
         while f_new > f && t > 1e-12 {
             t *= 0.5;
             for k in 0..nz {

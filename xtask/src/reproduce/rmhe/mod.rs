@@ -292,7 +292,8 @@ fn prior_tag(p: Prior) -> &'static str {
 /// rotating order, `reps` times; returns per-update statistics and the fraction of repetitions in
 /// which the mean update times were ordered RMHE > RMHE-OP > RMHE-OF.
 fn time_variants(exp: &Experiment, variants: &[Variant], reps: usize, seed: u64) -> Result<(Vec<Timing>, f64), String> {
-    let mut timed: Vec<Variant> = variants.iter().filter(|v| !v.id.ends_with("-alpha")).cloned().collect();
+    let mut timed: Vec<Variant> =
+        variants.iter().filter(|v| !v.id.ends_with("-alpha") && !v.output_constraint).cloned().collect();
     timed.push(run::clarabel_variant());
     let (_, ys) = exp.simulate(Case::A, seed)?;
     let mut ns: Vec<Vec<u64>> = vec![Vec::new(); timed.len()];

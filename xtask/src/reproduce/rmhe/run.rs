@@ -33,6 +33,8 @@ pub struct Variant {
     pub lambda_v: f64,
     /// Solver description.
     pub solver_name: &'static str,
+    /// Whether `y − C x ∈ V` is imposed too (the paper's (11) literally).
+    pub output_constraint: bool,
 }
 
 fn cr(inner: InnerSolver) -> WindowSolver {
@@ -52,6 +54,7 @@ pub fn variants() -> Vec<Variant> {
         solver,
         lambda_v,
         solver_name,
+        output_constraint: false,
     };
     vec![
         v(
@@ -117,6 +120,18 @@ pub fn variants() -> Vec<Variant> {
             LAMBDA_ALTERNATIVE,
             "exact saddle",
         ),
+        Variant {
+            output_constraint: true,
+            ..v(
+                "saddle-yc",
+                "exact saddle (RMHE), with y − Cx ∈ V",
+                BlockingPreset::Rmhe,
+                minmax,
+                WindowSolver::exact_saddle(),
+                LAMBDA_DEFAULT,
+                "exact saddle, Clarabel QPs",
+            )
+        },
     ]
 }
 
@@ -131,6 +146,7 @@ pub fn clarabel_variant() -> Variant {
         solver: cr(InnerSolver::Clarabel),
         lambda_v: LAMBDA_DEFAULT,
         solver_name: "coordinate rotation (Clarabel)",
+        output_constraint: false,
     }
 }
 
@@ -200,6 +216,7 @@ impl Experiment {
         s = s.with_preset(6, variant.preset).expect("N = 6 fits every preset");
         s.cost = variant.cost;
         s.solver = variant.solver;
+        s.output_constraint = variant.output_constraint;
         s
     }
 
