@@ -82,6 +82,31 @@ pub fn write_csv(path: &Path, run: &Run, truth: &[DVector<f64>], ts: f64) -> std
     write_atomic(path, out.as_bytes())
 }
 
+/// Writes `summary.json` (pretty JSON of `summary`) and `report.md` into `out`, each atomically.
+///
+/// # Errors
+/// A message naming the file that could not be written.
+pub fn write_summary_and_report<S: serde::Serialize>(out: &Path, summary: &S, report: &str) -> Result<(), String> {
+    let json = serde_json::to_string_pretty(summary).map_err(|e| e.to_string())?;
+    write_atomic(&out.join("summary.json"), json.as_bytes()).map_err(|e| format!("summary.json: {e}"))?;
+    write_atomic(&out.join("report.md"), report.as_bytes()).map_err(|e| format!("report.md: {e}"))
+}
+
+/// `v` rounded to five significant digits as JSON (0 as `0.0`, non-finite as `null`): the
+/// numbers of the snapshot tests' deterministic views.
+#[must_use]
+pub fn five_digits(v: f64) -> serde_json::Value {
+    if v.is_finite() && v != 0.0 {
+        let e = v.abs().log10().floor() as i32;
+        let f = 10f64.powi(4 - e);
+        serde_json::json!((v * f).round() / f)
+    } else if v.is_finite() {
+        serde_json::json!(0.0)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

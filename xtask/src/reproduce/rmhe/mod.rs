@@ -255,11 +255,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         total_seconds: 0.0,
     };
     summary.total_seconds = t0.elapsed().as_secs_f64();
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    outputs::write_atomic(&out.join("summary.json"), json.as_bytes())
-        .map_err(|e| format!("writing summary.json: {e}"))?;
-    outputs::write_atomic(&out.join("report.md"), report(&summary).as_bytes())
-        .map_err(|e| format!("writing report.md: {e}"))?;
+    outputs::write_summary_and_report(out, &summary, &report(&summary))?;
     Ok(summary)
 }
 

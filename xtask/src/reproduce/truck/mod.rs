@@ -242,10 +242,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         truth_seconds,
         total_seconds: t0.elapsed().as_secs_f64(),
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    outputs::write_atomic(&out.join("summary.json"), json.as_bytes()).map_err(|e| format!("summary.json: {e}"))?;
-    let md = report::markdown(&summary);
-    outputs::write_atomic(&out.join("report.md"), md.as_bytes()).map_err(|e| format!("report.md: {e}"))?;
+    outputs::write_summary_and_report(out, &summary, &report::markdown(&summary))?;
     Ok(summary)
 }
 
@@ -255,17 +252,7 @@ impl Summary {
     #[must_use]
     pub fn deterministic_view(&self) -> serde_json::Value {
         use serde_json::json;
-        let r = |v: f64| -> serde_json::Value {
-            if v.is_finite() && v != 0.0 {
-                let e = v.abs().log10().floor() as i32;
-                let f = 10f64.powi(4 - e);
-                json!((v * f).round() / f)
-            } else if v.is_finite() {
-                json!(0.0)
-            } else {
-                json!(null)
-            }
-        };
+        let r = outputs::five_digits;
         let spread = |s: &run::Spread| json!({"mean": r(s.mean), "min": r(s.min), "max": r(s.max)});
         let stats = |s: &run::StatsSpread| json!({"max_abs": spread(&s.max_abs), "rmse": spread(&s.rmse), "mean_abs": spread(&s.mean_abs)});
         let signal = |s: &run::SignalSpread| json!({"whole": stats(&s.whole), "first_2s": stats(&s.first_2s), "after_2s": stats(&s.after_2s)});
