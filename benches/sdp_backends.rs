@@ -5,12 +5,13 @@
 //! `faer-ipm-before-15` is the state before issue 15, in the same run: (28) as stated (with
 //! `Q⁻¹`, `R⁻¹` in the block, [`Formulation::AsStated`]) and `faer-ipm` in its legacy mode
 //! ([`lmi::FaerIpm::set_legacy`]); every other line uses the whitened statement of (28).
+//! `faer-ipm-hkm` is `faer-ipm` with the HKM direction ([`lmi::FaerIpm::set_direction`]).
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use estimators::smf::lmi28::{FilterSdp, FilterSdpData, Formulation};
-use lmi::{FaerIpm, SdpBackend, SdpSolution, SolverSettings, backend_by_name, backend_names};
+use lmi::{FaerIpm, SdpBackend, SdpSolution, SearchDirection, SolverSettings, backend_by_name, backend_names};
 use nalgebra::{DMatrix, DVector};
 
 /// A deterministic stable `n × n` system with `m` outputs (the reference case of the `lmi` issue
@@ -86,6 +87,17 @@ fn filter_lmi(crit: &mut Criterion) {
                 })
             });
         }
+        // The HKM direction on the same statement.
+        let mut hkm = FaerIpm::new(SolverSettings::default()).unwrap();
+        hkm.set_direction(SearchDirection::Hkm);
+        hkm.setup(problem).unwrap();
+        let mut sol = SdpSolution::new(problem);
+        group.bench_function(BenchmarkId::new("solve", format!("faer-ipm-hkm/n{n}m{m}")), |b| {
+            b.iter(|| {
+                hkm.solve(black_box(problem), &mut sol).unwrap();
+                black_box(sol.status)
+            })
+        });
     }
     group.finish();
 }

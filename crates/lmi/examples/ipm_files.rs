@@ -2,17 +2,18 @@
 //! for profiling (`valgrind --tool=callgrind`) and for comparing the method with its pre-issue-15
 //! variant ([`FaerIpm::set_legacy`]) on the same problems, side by side in one run.
 //!
-//! `cargo run --release -p lmi --example ipm_files -- [--reps N] [--legacy | --both] [--quiet]
-//! [--verbose] FILE_OR_DIR…`
+//! `cargo run --release -p lmi --example ipm_files -- [--reps N] [--legacy | --both | --hkm |
+//! --hkm-only] [--quiet] [--verbose] FILE_OR_DIR…`
 //!
 //! With `--both`, every file is solved by both variants, alternately, and the fastest of the
 //! `N` repetitions of each is kept (the minimum is the figure least disturbed by other processes
-//! on a shared machine).
+//! on a shared machine). `--hkm` compares the NT direction (the default) with the HKM direction
+//! ([`FaerIpm::set_direction`]) in the same way; `--hkm-only` runs HKM alone.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use lmi::{FaerIpm, SdpBackend, SdpSolution, SolverSettings, read_sdpa_file};
+use lmi::{FaerIpm, SdpBackend, SdpSolution, SearchDirection, SolverSettings, read_sdpa_file};
 
 /// Per-variant results over all files.
 #[derive(Default)]
@@ -40,7 +41,8 @@ impl Tally {
 
 fn main() {
     let mut reps = 1usize;
-    let mut variants = vec![false];
+    // 0: legacy, 1: new (NT), 2: new with the HKM direction.
+    let mut variants: Vec<u8> = vec![1];
     let mut quiet = false;
     let mut verbose = false;
     let mut files: Vec<PathBuf> = Vec::new();
@@ -48,8 +50,10 @@ fn main() {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--reps" => reps = args.next().and_then(|v| v.parse().ok()).expect("--reps N"),
-            "--legacy" => variants = vec![true],
-            "--both" => variants = vec![true, false],
+            "--legacy" => variants = vec![0],
+            "--both" => variants = vec![0, 1],
+            "--hkm" => variants = vec![1, 2],
+            "--hkm-only" => variants = vec![2],
             "--quiet" => quiet = true,
             "--verbose" => verbose = true,
             _ => {
@@ -74,9 +78,12 @@ fn main() {
         let problem = read_sdpa_file(f).expect("SDPA file");
         let mut solvers: Vec<(FaerIpm, SdpSolution, f64)> = variants
             .iter()
-            .map(|&legacy| {
+            .map(|&variant| {
                 let mut ipm = FaerIpm::new(settings.clone()).expect("settings");
-                ipm.set_legacy(legacy);
+                ipm.set_legacy(variant == 0);
+                if variant == 2 {
+                    ipm.set_direction(SearchDirection::Hkm);
+                }
                 ipm.setup(&problem).expect("setup");
                 (ipm, SdpSolution::new(&problem), f64::INFINITY)
             })
@@ -95,7 +102,7 @@ fn main() {
                 println!(
                     "{} {} {} it {} pobj {:.12e} dobj {:.12e} pres {:.1e} dres {:.1e} {:.1} us",
                     f.file_name().map_or(String::new(), |s| s.to_string_lossy().into_owned()),
-                    if ipm.legacy() { "legacy" } else { "new" },
+                    label(ipm),
                     sol.status,
                     sol.iterations,
                     sol.primal_objective,
@@ -107,7 +114,17 @@ fn main() {
             }
         }
     }
-    for (&legacy, tally) in variants.iter().zip(&tallies) {
-        println!("{}", tally.summary(if legacy { "legacy" } else { "new" }));
+    for (&variant, tally) in variants.iter().zip(&tallies) {
+        println!("{}", tally.summary(["legacy", "new", "hkm"][usize::from(variant)]));
+    }
+}
+
+fn label(ipm: &FaerIpm) -> &'static str {
+    if ipm.legacy() {
+        "legacy"
+    } else if ipm.direction() == SearchDirection::Hkm {
+        "hkm"
+    } else {
+        "new"
     }
 }

@@ -24,7 +24,7 @@ pub mod clarabel_backend;
 pub use clarabel_backend::ClarabelBackend;
 
 pub use error::LmiError;
-pub use ipm::FaerIpm;
+pub use ipm::{FaerIpm, SearchDirection};
 pub use problem::{Block, Entry, SdpProblem};
 pub use registry::{DEFAULT_BACKEND, backend_by_name, backend_names};
 pub use sdpa::{read_sdpa, read_sdpa_file, write_sdpa};

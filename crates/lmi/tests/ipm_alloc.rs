@@ -2,7 +2,7 @@
 
 use counting_allocator::{Counting, count};
 mod ipm_common;
-use lmi::{Block, Entry, FaerIpm, SdpBackend, SdpProblem, SdpSolution, SolverSettings};
+use lmi::{Block, Entry, FaerIpm, SdpBackend, SdpProblem, SdpSolution, SearchDirection, SolverSettings};
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -54,18 +54,21 @@ fn scaled(mut p: SdpProblem, s: f64) -> SdpProblem {
 fn solves_after_setup_do_not_allocate() {
     // The second problem (the filter LMI) ends in the QR-based precision mode; the third is
     // badly scaled, so that the solve scales it and maps the answer back.
-    for p in [problem(), ipm_common::filter_lmi(), scaled(ipm_common::filter_lmi(), 1e-12)] {
+    // Both search directions (HKM may fall back to NT within a solve).
+    let cases = [problem(), ipm_common::filter_lmi(), scaled(ipm_common::filter_lmi(), 1e-12)];
+    for (p, direction) in cases.iter().flat_map(|p| [(p, SearchDirection::NesterovTodd), (p, SearchDirection::Hkm)]) {
         let mut ipm =
             FaerIpm::new(SolverSettings::builder().verbose(std::env::var_os("IPM_VERBOSE").is_some()).build().unwrap())
                 .unwrap();
-        ipm.setup(&p).unwrap();
-        let mut sol = SdpSolution::new(&p);
-        ipm.solve(&p, &mut sol).unwrap();
+        ipm.set_direction(direction);
+        ipm.setup(p).unwrap();
+        let mut sol = SdpSolution::new(p);
+        ipm.solve(p, &mut sol).unwrap();
         assert!(sol.status.is_optimal(), "{}", sol.status);
         let first = sol.primal_objective;
         let ((), allocations) = count(|| {
             for _ in 0..10 {
-                ipm.solve(&p, &mut sol).unwrap();
+                ipm.solve(p, &mut sol).unwrap();
             }
         });
         assert_eq!(allocations, 0, "solve allocated {allocations} times in 10 solves");

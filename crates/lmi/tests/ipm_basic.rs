@@ -4,10 +4,20 @@
 mod ipm_common;
 
 use ipm_common::{filter_lmi, problem};
-use lmi::{Block, FaerIpm, LmiError, SdpBackend, SdpProblem, SdpSolution, SolveStatus, SolverSettings};
+use lmi::{
+    Block, FaerIpm, LmiError, SdpBackend, SdpProblem, SdpSolution, SearchDirection, SolveStatus, SolverSettings,
+};
 
 fn solve(p: &SdpProblem) -> SdpSolution {
     let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();
+    ipm.setup_and_solve(p).unwrap()
+}
+
+/// Solves with the HKM direction.
+fn solve_hkm(p: &SdpProblem) -> SdpSolution {
+    let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();
+    ipm.set_direction(SearchDirection::Hkm);
+    assert_eq!(ipm.direction(), SearchDirection::Hkm);
     ipm.setup_and_solve(p).unwrap()
 }
 
@@ -190,4 +200,37 @@ fn filter_lmi_matches_reference() {
         times[reps / 2],
         times[0]
     );
+}
+
+/// The HKM direction on the same problems: the same statuses, the known optima (closed forms and
+/// the reference of the filter LMI) and, on the filter LMI, the NT answer.
+#[test]
+fn hkm_direction_solves_the_same_problems() {
+    for a in [0.0, 0.5, -2.0, 3.0] {
+        let p = problem(vec![Block::Psd(2)], vec![1.0], &[(1, 0, 0, 0, 1.0), (0, 0, 0, 1, -a), (0, 0, 1, 1, -1.0)]);
+        let s = solve_hkm(&p);
+        check_optimal(&p, &s);
+        assert_close(s.x[0], a * a, 1e-8, "t");
+    }
+    let p = problem(
+        vec![Block::Psd(2), Block::Nonneg(1)],
+        vec![1.0, 1.0],
+        &[(1, 0, 0, 0, 1.0), (2, 0, 1, 1, 1.0), (0, 0, 0, 1, -1.0), (1, 1, 0, 0, 1.0), (0, 1, 0, 0, 2.0)],
+    );
+    let s = solve_hkm(&p);
+    check_optimal(&p, &s);
+    assert_close(s.primal_objective, 2.5, 1e-8, "objective");
+    let p = problem(vec![Block::Psd(2)], vec![1.0], &[(1, 0, 0, 0, 1.0), (1, 0, 1, 1, -1.0), (0, 0, 1, 1, 1.0)]);
+    assert_eq!(solve_hkm(&p).status, SolveStatus::PrimalInfeasible);
+    let p = problem(vec![Block::Psd(2)], vec![-1.0, -1.0], &[(1, 0, 0, 0, 1.0), (2, 0, 1, 1, 1.0)]);
+    assert_eq!(solve_hkm(&p).status, SolveStatus::DualInfeasible);
+    let p = filter_lmi();
+    let s = solve_hkm(&p);
+    check_optimal(&p, &s);
+    assert_close(s.primal_objective, 0.98464424, 1e-6, "tr P");
+    let nt = solve(&p);
+    assert_close(s.primal_objective, nt.primal_objective, 1e-7, "HKM vs NT");
+    for (h, n) in s.x.iter().zip(&nt.x).skip(p.num_vars() - 3) {
+        assert!((h - n).abs() < 1e-4, "τ: {h} vs {n}");
+    }
 }

@@ -12,7 +12,7 @@
 
 use std::path::PathBuf;
 
-use lmi::{FaerIpm, SdpBackend, SdpProblem, SdpSolution, SolveStatus, SolverSettings};
+use lmi::{FaerIpm, SdpBackend, SdpProblem, SdpSolution, SearchDirection, SolveStatus, SolverSettings};
 
 fn sdplib_dir() -> PathBuf {
     std::env::var_os("SDPLIB_DIR")
@@ -43,8 +43,9 @@ fn min_eig(m: &nalgebra::DMatrix<f64>) -> f64 {
     m.clone().symmetric_eigen().eigenvalues.min()
 }
 
-fn solve(p: &SdpProblem) -> SdpSolution {
+fn solve(p: &SdpProblem, direction: SearchDirection) -> SdpSolution {
     let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();
+    ipm.set_direction(direction);
     ipm.setup(p).unwrap();
     let mut s = SdpSolution::new(p);
     ipm.solve(p, &mut s).unwrap();
@@ -61,6 +62,16 @@ fn solve(p: &SdpProblem) -> SdpSolution {
 
 #[test]
 fn sdplib_conformance() {
+    conformance(SearchDirection::NesterovTodd);
+}
+
+/// The same with the HKM direction (`docs/sdp.md` §3.6).
+#[test]
+fn sdplib_conformance_hkm() {
+    conformance(SearchDirection::Hkm);
+}
+
+fn conformance(direction: SearchDirection) {
     let dir = sdplib_dir();
     if !dir.is_dir() {
         println!("SDPLIB directory {} not found: skipping the SDPLIB conformance test", dir.display());
@@ -71,7 +82,7 @@ fn sdplib_conformance() {
     println!("|---|---|---:|---:|---:|---:|---:|");
     for &(name, reference, digits) in OPTIMAL {
         let p = lmi::read_sdpa_file(&dir.join(format!("{name}.dat-s"))).unwrap();
-        let s = solve(&p);
+        let s = solve(&p, direction);
         let rel = (s.primal_objective - reference).abs() / reference.abs();
         let tol = if digits >= 7 { 1e-6 } else { 0.5 * 10f64.powi(1 - digits as i32) };
         println!(
@@ -94,7 +105,7 @@ fn sdplib_conformance() {
     }
     // infp1: primal infeasible in this crate's naming (certificate Y ⪰ 0, tr(FᵢY) = 0, tr(F₀Y) > 0).
     let p = lmi::read_sdpa_file(&dir.join("infp1.dat-s")).unwrap();
-    let s = solve(&p);
+    let s = solve(&p, direction);
     println!("| infp1 | {} | | primal infeasible | | {} | {:?} |", s.status, s.iterations, s.solve_time);
     if s.status == SolveStatus::PrimalInfeasible {
         let t = p.traces(&s.dual).unwrap();
@@ -110,7 +121,7 @@ fn sdplib_conformance() {
     }
     // infd1: dual infeasible in this crate's naming (certificate x: Σ xᵢFᵢ ⪰ 0, cᵀx < 0).
     let p = lmi::read_sdpa_file(&dir.join("infd1.dat-s")).unwrap();
-    let s = solve(&p);
+    let s = solve(&p, direction);
     println!("| infd1 | {} | | dual infeasible | | {} | {:?} |", s.status, s.iterations, s.solve_time);
     if s.status == SolveStatus::DualInfeasible {
         let cx: f64 = p.c().iter().zip(&s.x).map(|(c, x)| c * x).sum();

@@ -68,6 +68,25 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// `out ← L⁻¹` for a lower triangular `L` with a nonzero diagonal (column-major `n × n`;
+/// the strict upper triangle of `out` is zero).
+#[inline(always)]
+pub(crate) fn invert_lower(l: &[f64], out: &mut [f64], n: usize) {
+    out[..n * n].fill(0.0);
+    for j in 0..n {
+        let z = &mut out[j * n..j * n + n];
+        z[j] = 1.0;
+        for k in j..n {
+            let col = &l[k * n..k * n + n];
+            let zk = z[k] / col[k];
+            z[k] = zk;
+            for (zi, a) in z[k + 1..].iter_mut().zip(&col[k + 1..]) {
+                *zi -= zk * a;
+            }
+        }
+    }
+}
+
 /// Frobenius norm squared.
 #[inline(always)]
 pub(crate) fn norm2(a: &[f64]) -> f64 {

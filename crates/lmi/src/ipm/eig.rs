@@ -336,6 +336,49 @@ pub(crate) fn max_step_coarse(a: &[f64], w: &mut [f64], n: usize, cap: f64, halv
     lo
 }
 
+/// Largest `α ∈ (0, cap]` with `X + αΔ ≻ 0` (lower triangles of `x` and `dir`), found by
+/// Cholesky tests alone (HKM direction: no scaled matrix is formed): `cap` first, then at least
+/// `halvings` bisections of `[0, cap]`, continued until the bracket `[lo, hi]` has
+/// `hi − lo ≤ rtol·hi` (`rtol ≥ 1` stops after the halvings). Returns the feasible end `lo`.
+#[inline(always)]
+pub(crate) fn max_step_pencil(
+    x: &[f64],
+    dir: &[f64],
+    w: &mut [f64],
+    n: usize,
+    cap: f64,
+    halvings: u32,
+    rtol: f64,
+) -> f64 {
+    #[inline(always)]
+    fn pd(x: &[f64], dir: &[f64], w: &mut [f64], n: usize, alpha: f64) -> bool {
+        for j in 0..n {
+            let r = j * n + j..j * n + n;
+            for ((o, a), d) in w[r.clone()].iter_mut().zip(&x[r.clone()]).zip(&dir[r]) {
+                *o = a + alpha * d;
+            }
+        }
+        cholesky_lower_ok(w, n)
+    }
+    if n == 0 || pd(x, dir, w, n, cap) {
+        return cap;
+    }
+    let (mut lo, mut hi) = (0.0, cap);
+    // 60 bisections reach the resolution of f64 (a step below 1e-18·cap is no step).
+    for k in 0..60 {
+        if k >= halvings && hi - lo <= rtol * hi {
+            break;
+        }
+        let mid = 0.5 * (lo + hi);
+        if pd(x, dir, w, n, mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
 /// Number of eigenvalues below `x` of the symmetric tridiagonal matrix (`d`, `e`).
 #[inline(always)]
 fn sturm_below(d: &[f64], e: &[f64], n: usize, x: f64) -> usize {

@@ -8,7 +8,7 @@ use faer::dyn_stack::MemStack;
 use crate::solver::{SdpSolution, SolveStatus, SolverSettings};
 
 use super::dense::{self, view};
-use super::eig::{max_step, max_step_coarse, sym_eig};
+use super::eig::{max_step, max_step_coarse, max_step_pencil, sym_eig};
 use super::workspace::{BlockWs, Ent, SchurKind, Workspace};
 
 /// `out ← Σᵢ coefᵢ Fᵢ` in one block (dense symmetric, or the diagonal of a nonnegative block),
@@ -101,6 +101,116 @@ fn assemble_grouped(blk: &mut BlockWs, mhat: &mut [f64], mp: usize) {
     }
 }
 
+/// Schur contributions `Σ_r Fᵢ[r] d_r² Fⱼ[r]` of a nonnegative block (NT and HKM alike).
+#[inline(always)]
+fn assemble_diag(blk: &BlockWs, mhat: &mut [f64], fbuf: &mut [f64], mp: usize) {
+    let w = &mut fbuf[..blk.n];
+    w.fill(0.0); // the dense path of another block may have left values here
+    for j in 0..mp {
+        let rj = blk.range(j);
+        if rj.is_empty() {
+            continue;
+        }
+        for k in rj.clone() {
+            let r = blk.ents[k].row;
+            w[r] = blk.val[k] * blk.d[r] * blk.d[r];
+        }
+        for i in j..mp {
+            let mut s = 0.0;
+            for k in blk.range(i) {
+                s += blk.val[k] * w[blk.ents[k].row];
+            }
+            mhat[i + j * mp] += s;
+        }
+        for k in rj {
+            w[blk.ents[k].row] = 0.0;
+        }
+    }
+}
+
+/// Diagonal (NT = HKM) scaling of a nonnegative block; `false` if an iterate is not positive.
+#[inline(always)]
+fn scale_diag(blk: &mut BlockWs) -> bool {
+    for i in 0..blk.n {
+        let (x, y) = (blk.x[i], blk.y[i]);
+        if !(x > 0.0 && y > 0.0) {
+            return false;
+        }
+        blk.lam[i] = (x * y).sqrt();
+        blk.d[i] = (y / x).sqrt();
+        blk.t[i] = blk.d[i].sqrt();
+        blk.drd[i] = blk.d[i] * blk.d[i] * blk.rz[i];
+    }
+    true
+}
+
+/// HKM version of [`assemble_grouped`]: with `ξ_a = X⁻¹ w_a`, `η_a = Y w_a`,
+/// `Zˣ = Wᵀ X⁻¹ W`, `Zʸ = Wᵀ Y W`, a pair of active groups `a ∈ i`, `h ∈ j` adds
+/// `ξ_h[c_a] η_a[c_h] + ξ_a[c_h] η_h[c_a] + Zˣ_ah Y[c_a, c_h] + Zʸ_ah X⁻¹[c_a, c_h]` to `M̂ᵢⱼ`.
+#[inline(always)]
+fn assemble_grouped_hkm(blk: &mut BlockWs, mhat: &mut [f64], mp: usize) {
+    let n = blk.n;
+    let na = blk.ag_row.len();
+    let (yy, xi) = (&blk.y, &blk.xinv);
+    for a in 0..na {
+        let xa = &mut blk.gy[a * n..a * n + n];
+        let ya = &mut blk.gy2[a * n..a * n + n];
+        xa.fill(0.0);
+        ya.fill(0.0);
+        for e in blk.ag_ent[a]..blk.ag_ent[a + 1] {
+            let (o, v) = (blk.ag_idx[e], blk.ag_val[e]);
+            for ((p, q), (s, t)) in
+                xa.iter_mut().zip(ya.iter_mut()).zip(xi[o * n..o * n + n].iter().zip(&yy[o * n..o * n + n]))
+            {
+                *p += v * s;
+                *q += v * t;
+            }
+        }
+        for o in 0..n {
+            blk.yt[o * na + a] = xa[o];
+            blk.yt2[o * na + a] = ya[o];
+        }
+    }
+    for a in 0..na {
+        let hend = blk.ag_start[blk.ag_mat[a] + 1];
+        let zx = &mut blk.zg[a * na..a * na + hend];
+        let zy = &mut blk.zg2[a * na..a * na + hend];
+        zx.fill(0.0);
+        zy.fill(0.0);
+        for e in blk.ag_ent[a]..blk.ag_ent[a + 1] {
+            let (o, v) = (blk.ag_idx[e], blk.ag_val[e]);
+            for ((p, q), (s, t)) in zx
+                .iter_mut()
+                .zip(zy.iter_mut())
+                .zip(blk.yt[o * na..o * na + hend].iter().zip(&blk.yt2[o * na..o * na + hend]))
+            {
+                *p += v * s;
+                *q += v * t;
+            }
+        }
+    }
+    for a in 0..na {
+        let i = blk.ag_mat[a];
+        let c = blk.ag_row[a];
+        let (xa, ya) = (&blk.gy[a * n..a * n + n], &blk.gy2[a * n..a * n + n]);
+        let (yc, xic) = (&yy[c * n..c * n + n], &xi[c * n..c * n + n]);
+        let (xtc, ytc) = (&blk.yt[c * na..c * na + na], &blk.yt2[c * na..c * na + na]);
+        let (zx, zy) = (&blk.zg[a * na..a * na + na], &blk.zg2[a * na..a * na + na]);
+        let mut h0 = 0;
+        while h0 < blk.ag_start[i + 1] {
+            let j = blk.ag_mat[h0];
+            let h1 = blk.ag_start[j + 1];
+            let mut s = 0.0;
+            for h in h0..h1 {
+                let ch = blk.ag_row[h];
+                s += xtc[h] * ya[ch] + xa[ch] * ytc[h] + zx[h] * yc[ch] + zy[h] * xic[ch];
+            }
+            mhat[i + j * mp] += s;
+            h0 = h1;
+        }
+    }
+}
+
 /// Frobenius norm of `Fᵢ` (all blocks).
 fn matrix_norm(ws: &Workspace, i: usize) -> f64 {
     let mut s = 0.0;
@@ -177,6 +287,7 @@ impl Workspace {
         st.norm_c = dense::norm2(&self.c).sqrt();
         let mut iterations = 0u32;
         self.precise = false;
+        self.hkm_on = self.hkm;
         let status = if self.initialize(stack) {
             self.iterate(settings, start, &mut st, &mut iterations, stack)
         } else {
@@ -230,21 +341,48 @@ impl Workspace {
             if settings.time_limit.is_some_and(|limit| limit < start.elapsed()) {
                 break Stop::TimeLimit;
             }
-            if !self.scaling(stack) {
-                if settings.verbose {
-                    eprintln!("faer-ipm: an iterate is not numerically positive definite");
+            let mut result = None;
+            if self.hkm_on {
+                // HKM: Cholesky factors only. Any breakdown falls back to NT for the rest of the
+                // solve (below, from the same iterate).
+                if self.scaling_hkm(stack) {
+                    self.assemble_schur_hkm();
+                    if self.factor_schur(stack) {
+                        result = self.step(st);
+                    }
                 }
-                break Stop::Trouble;
-            }
-            self.assemble_schur();
-            let factored = if self.precise { self.factor_qr(stack) } else { self.factor_schur(stack) };
-            if !factored {
-                if settings.verbose {
-                    eprintln!("faer-ipm: the Schur matrix could not be factorised");
+                if result.is_none() || result == Some(NEED_PRECISION) {
+                    if !(st.tau > 0.0 && st.kappa > 0.0) {
+                        // The failed step was already taken (τ or κ left the cone): as in NT.
+                        if settings.verbose {
+                            eprintln!("faer-ipm: no valid search direction");
+                        }
+                        break Stop::Trouble;
+                    }
+                    if settings.verbose {
+                        eprintln!("faer-ipm: HKM direction failed, NT from here");
+                    }
+                    self.hkm_on = false;
+                    result = None;
                 }
-                break Stop::Trouble;
             }
-            let mut result = self.step(st);
+            if !self.hkm_on {
+                if !self.scaling(stack) {
+                    if settings.verbose {
+                        eprintln!("faer-ipm: an iterate is not numerically positive definite");
+                    }
+                    break Stop::Trouble;
+                }
+                self.assemble_schur();
+                let factored = if self.precise { self.factor_qr(stack) } else { self.factor_schur(stack) };
+                if !factored {
+                    if settings.verbose {
+                        eprintln!("faer-ipm: the Schur matrix could not be factorised");
+                    }
+                    break Stop::Trouble;
+                }
+                result = self.step(st);
+            }
             if result == Some(NEED_PRECISION) {
                 // The normal equations lost too much accuracy: switch to the QR-based factor for
                 // the rest of this solve and redo the step.
@@ -411,15 +549,8 @@ impl Workspace {
         for blk in &mut self.blocks {
             let n = blk.n;
             if !blk.psd {
-                for i in 0..n {
-                    let (x, y) = (blk.x[i], blk.y[i]);
-                    if !(x > 0.0 && y > 0.0) {
-                        return false;
-                    }
-                    blk.lam[i] = (x * y).sqrt();
-                    blk.d[i] = (y / x).sqrt();
-                    blk.t[i] = blk.d[i].sqrt();
-                    blk.drd[i] = blk.d[i] * blk.d[i] * blk.rz[i];
+                if !scale_diag(blk) {
+                    return false;
                 }
                 continue;
             }
@@ -459,6 +590,124 @@ impl Workspace {
         true
     }
 
+    /// HKM scaling of every block (`docs/sdp.md` §3.6): Cholesky factors `X = L₁L₁ᵀ`,
+    /// `Y = L₂L₂ᵀ`, their inverses (`l1`, `l2`), `X⁻¹` and `sym(Y r_z X⁻¹)` (`drd`); `false` if
+    /// an iterate is not numerically positive definite.
+    #[inline(always)]
+    fn scaling_hkm(&mut self, stack: &mut MemStack) -> bool {
+        for blk in &mut self.blocks {
+            let n = blk.n;
+            if !blk.psd {
+                if !scale_diag(blk) {
+                    return false;
+                }
+                continue;
+            }
+            blk.k.copy_from_slice(&blk.x);
+            if !dense::cholesky(&mut blk.k, n, stack) {
+                return false;
+            }
+            dense::invert_lower(&blk.k, &mut blk.l1, n);
+            blk.k.copy_from_slice(&blk.y);
+            if !dense::cholesky(&mut blk.k, n, stack) {
+                return false;
+            }
+            dense::invert_lower(&blk.k, &mut blk.l2, n);
+            dense::mul(&mut blk.xinv, n, view(&blk.l1, n).transpose(), view(&blk.l1, n));
+            dense::symmetrize(&mut blk.xinv, n);
+            dense::mul(&mut blk.k, n, view(&blk.rz, n), view(&blk.xinv, n));
+            dense::mul(&mut blk.drd, n, view(&blk.y, n), view(&blk.k, n));
+            dense::symmetrize(&mut blk.drd, n);
+            if !blk.xinv.iter().chain(&blk.l2).all(|v| v.is_finite()) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// HKM Schur matrix `M̂ᵢⱼ = tr(Fᵢ Y Fⱼ X⁻¹)` for `0 ≤ j ≤ i ≤ m` (symmetric in `i, j`), from
+    /// the groups of the entries: every `Fᵢ` is a sum over its groups `e_c wᵀ + w e_cᵀ`, and with
+    /// `ξ_g = X⁻¹ w_g`, `η_g = Y w_g`, a pair of groups `h ∈ i`, `g ∈ j` adds
+    /// `ξ_g[c_h] η_h[c_g] + ξ_h[c_g] η_g[c_h] + (w_hᵀξ_g) Y[c_h, c_g] + (w_hᵀη_g) X⁻¹[c_h, c_g]`.
+    #[inline(always)]
+    fn assemble_schur_hkm(&mut self) {
+        let mp = self.m + 1;
+        self.mhat.fill(0.0);
+        for blk in &mut self.blocks {
+            let n = blk.n;
+            if !blk.psd {
+                assemble_diag(blk, &mut self.mhat, &mut self.fbuf, mp);
+                continue;
+            }
+            if blk.grouped {
+                assemble_grouped_hkm(blk, &mut self.mhat, mp);
+                continue;
+            }
+            let (y, xi) = (&blk.y, &blk.xinv);
+            for g in 0..blk.grp_row.len() {
+                let xg = &mut blk.gy[g * n..g * n + n];
+                let yg = &mut blk.gy2[g * n..g * n + n];
+                xg.fill(0.0);
+                yg.fill(0.0);
+                for e in blk.grp_ent_start[g]..blk.grp_ent_start[g + 1] {
+                    let (o, v) = (blk.gw_idx[e], blk.gw_val[e]);
+                    for ((a, b), (xx, yy)) in
+                        xg.iter_mut().zip(yg.iter_mut()).zip(xi[o * n..o * n + n].iter().zip(&y[o * n..o * n + n]))
+                    {
+                        *a += v * xx;
+                        *b += v * yy;
+                    }
+                }
+            }
+            let (gx, gy) = (&blk.gy, &blk.gy2);
+            for j in 0..mp {
+                if matches!(blk.kind[j], SchurKind::Dense | SchurKind::RankUpdate) {
+                    // Many groups (a dense Fⱼ): Y Fⱼ X⁻¹ by two products, then the traces.
+                    let f = &mut self.fbuf[..n * n];
+                    f.fill(0.0);
+                    for k in blk.range(j) {
+                        let Ent { row, col } = blk.ents[k];
+                        f[row + col * n] = blk.val[k];
+                        f[col + row * n] = blk.val[k];
+                    }
+                    dense::mul(&mut blk.tmp, n, view(f, n), view(xi, n));
+                    dense::mul(&mut blk.tmp2, n, view(y, n), view(&blk.tmp, n));
+                    let g = &blk.tmp2;
+                    for i in j..mp {
+                        let mut s = 0.0;
+                        for k in blk.range(i) {
+                            let Ent { row, col } = blk.ents[k];
+                            s += blk.val[k]
+                                * if row == col { g[row + row * n] } else { g[row + col * n] + g[col + row * n] };
+                        }
+                        self.mhat[i + j * mp] += s;
+                    }
+                    continue;
+                }
+                for g in blk.grp_start[j]..blk.grp_start[j + 1] {
+                    let cg = blk.grp_row[g];
+                    let (xg, yg) = (&gx[g * n..g * n + n], &gy[g * n..g * n + n]);
+                    let (ycg, xcg) = (&y[cg * n..cg * n + n], &xi[cg * n..cg * n + n]);
+                    for i in j..mp {
+                        let mut s = 0.0;
+                        for h in blk.grp_start[i]..blk.grp_start[i + 1] {
+                            let ch = blk.grp_row[h];
+                            let mut t = 0.0;
+                            let mut u = 0.0;
+                            for e in blk.grp_ent_start[h]..blk.grp_ent_start[h + 1] {
+                                let (o, v) = (blk.gw_idx[e], blk.gw_val[e]);
+                                t += v * xg[o];
+                                u += v * yg[o];
+                            }
+                            s += xg[ch] * gy[h * n + cg] + gx[h * n + cg] * yg[ch] + t * ycg[ch] + u * xcg[ch];
+                        }
+                        self.mhat[i + j * mp] += s;
+                    }
+                }
+            }
+        }
+    }
+
     /// `M̂ᵢⱼ = tr(Fᵢ D Fⱼ D)` for `0 ≤ j ≤ i ≤ m` (lower triangle, column-major `(m+1)²`).
     #[inline(always)]
     fn assemble_schur(&mut self) {
@@ -467,28 +716,7 @@ impl Workspace {
         for blk in &mut self.blocks {
             let n = blk.n;
             if !blk.psd {
-                let w = &mut self.fbuf[..n];
-                w.fill(0.0); // the dense path of another block may have left values here
-                for j in 0..mp {
-                    let rj = blk.range(j);
-                    if rj.is_empty() {
-                        continue;
-                    }
-                    for k in rj.clone() {
-                        let r = blk.ents[k].row;
-                        w[r] = blk.val[k] * blk.d[r] * blk.d[r];
-                    }
-                    for i in j..mp {
-                        let mut s = 0.0;
-                        for k in blk.range(i) {
-                            s += blk.val[k] * w[blk.ents[k].row];
-                        }
-                        self.mhat[i + j * mp] += s;
-                    }
-                    for k in rj {
-                        w[blk.ents[k].row] = 0.0;
-                    }
-                }
+                assemble_diag(blk, &mut self.mhat, &mut self.fbuf, mp);
                 continue;
             }
             let d = &blk.d;
@@ -725,7 +953,12 @@ impl Workspace {
         for blk in &mut self.blocks {
             let n = blk.n;
             combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.tmp2);
-            if blk.psd {
+            if blk.psd && self.hkm_on {
+                // HKM: ⟨H, sym(Y H X⁻¹)⟩ = ‖L₁⁻¹ H L₂‖² (`l1 = L₁⁻¹`, `Y = L₂L₂ᵀ`) = ⟨H Y, X⁻¹ H⟩.
+                dense::mul(&mut blk.tmp, n, view(&blk.tmp2, n), view(&blk.y, n));
+                dense::mul(&mut blk.g, n, view(&blk.xinv, n), view(&blk.tmp2, n));
+                st.den0 += dense::dot(&blk.tmp, &blk.g);
+            } else if blk.psd {
                 dense::congruence(&mut blk.g, &mut blk.tmp, &blk.t, &blk.tmp2, n, true);
                 st.den0 += dense::norm2(&blk.g);
             } else {
@@ -738,7 +971,12 @@ impl Workspace {
         // Predictor (affine scaling): w_s = −Λ.
         for blk in &mut self.blocks {
             let n = blk.n;
-            if blk.psd {
+            if blk.psd && self.hkm_on {
+                // HKM keeps `w_s` unscaled: the affine right-hand side is `−Y`.
+                for (w, y) in blk.ws.iter_mut().zip(&blk.y) {
+                    *w = -y;
+                }
+            } else if blk.psd {
                 blk.ws.fill(0.0);
                 for i in 0..n {
                     blk.ws[i + i * n] = -blk.lam[i];
@@ -763,7 +1001,16 @@ impl Workspace {
         // Corrector: λ ∘ (Δx̃ + Δỹ) = −λ∘λ + σμI − Δx̃ₐ∘Δỹₐ.
         for blk in &mut self.blocks {
             let n = blk.n;
-            if blk.psd {
+            if blk.psd && self.hkm_on {
+                // HKM: (Y + ΔY)(X + ΔX) = σμI linearised with the predictor's second-order
+                // term, times X⁻¹: ΔY = σμX⁻¹ − Y − sym(ΔYₐ ΔXₐ X⁻¹) − sym(Y ΔX X⁻¹).
+                dense::mul(&mut blk.k, n, view(&blk.dxs_a, n), view(&blk.xinv, n));
+                dense::mul(&mut blk.tmp, n, view(&blk.dys_a, n), view(&blk.k, n));
+                dense::symmetrize(&mut blk.tmp, n);
+                for ((w, t), (xi, y)) in blk.ws.iter_mut().zip(&blk.tmp).zip(blk.xinv.iter().zip(&blk.y)) {
+                    *w = smu * xi - y - t;
+                }
+            } else if blk.psd {
                 dense::mul(&mut blk.tmp, n, view(&blk.dxs_a, n), view(&blk.dys_a, n));
                 for j in 0..n {
                     for i in 0..n {
@@ -893,6 +1140,11 @@ impl Workspace {
             // G = T w_s Tᵀ + D d_z D.
             match ws {
                 Ws::Zero => blk.g.fill(0.0),
+                Ws::Given if blk.psd && self.hkm_on => {
+                    for (g, (w, r)) in blk.g.iter_mut().zip(blk.ws.iter().zip(&blk.drd)) {
+                        *g = w - eta * r;
+                    }
+                }
                 Ws::Affine if blk.psd => {
                     for (g, (y, r)) in blk.g.iter_mut().zip(blk.y.iter().zip(&blk.drd)) {
                         *g = -y - eta * r;
@@ -937,6 +1189,26 @@ impl Workspace {
                 for (e, r) in blk.e.iter_mut().zip(&blk.rz) {
                     *e += eta * r;
                 }
+            }
+            if blk.psd && self.hkm_on {
+                // HKM, unscaled: Δx̃ = ΔX, Δỹ = ΔY = w_s − sym(Y ΔX X⁻¹).
+                blk.dxs.copy_from_slice(&blk.e);
+                dense::mul(&mut blk.k, n, view(&blk.e, n), view(&blk.xinv, n));
+                dense::mul(&mut blk.tmp, n, view(&blk.y, n), view(&blk.k, n));
+                dense::symmetrize(&mut blk.tmp, n);
+                if ws == Ws::Zero {
+                    for (dy, t) in blk.dys.iter_mut().zip(&blk.tmp) {
+                        *dy = -t;
+                    }
+                } else {
+                    for (dy, (w, t)) in blk.dys.iter_mut().zip(blk.ws.iter().zip(&blk.tmp)) {
+                        *dy = w - t;
+                    }
+                }
+                if with_dy {
+                    blk.dy.copy_from_slice(&blk.dys);
+                }
+                continue;
             }
             if blk.psd {
                 dense::congruence(&mut blk.dxs, &mut blk.tmp, &blk.t, &blk.e, n, true);
@@ -986,7 +1258,16 @@ impl Workspace {
             let n = blk.n;
             for primal in [true, false] {
                 let dir = if primal { &blk.dxs } else { &blk.dys };
-                if blk.psd {
+                if blk.psd && self.hkm_on {
+                    // Cholesky tests of X + αΔX (Y + αΔY) directly; the corrector's step to
+                    // within HKM_STEP_RTOL.
+                    let base = if primal { &blk.x } else { &blk.y };
+                    alpha = if coarse {
+                        max_step_pencil(base, dir, &mut blk.tmp2, n, alpha, halvings, f64::INFINITY)
+                    } else {
+                        max_step_pencil(base, dir, &mut blk.tmp2, n, alpha, 0, HKM_STEP_RTOL)
+                    };
+                } else if blk.psd {
                     for j in 0..n {
                         let sj = blk.lis[j];
                         for i in j..n {
@@ -1088,6 +1369,10 @@ const NEED_PRECISION: f64 = -1.0;
 /// beyond which the QR-based factor is used.
 const PRECISION_LOSS: f64 = 1e-6;
 
+/// Relative accuracy of the HKM corrector's step length (Cholesky bisection; the step taken is
+/// the feasible end of the bracket, so at worst this fraction shorter than the boundary's).
+const HKM_STEP_RTOL: f64 = 1.0 / 64.0;
+
 /// Fraction of the step to the boundary of the cone that is taken.
 const STEP_FRACTION: f64 = 0.99;
 
@@ -1122,6 +1407,112 @@ fn classify(st: &State, tol: &Tols, relaxed: bool) -> Option<SolveStatus> {
 mod tests {
     use super::*;
     use crate::problem::{Block, Entry, SdpProblem};
+
+    /// The HKM Schur matrix (group by group, and with the whole-block grouping) against the
+    /// definition `tr(Fᵢ Y Fⱼ X⁻¹)` summed over dense matrices.
+    #[test]
+    fn hkm_schur_matches_definition() {
+        let n = 9;
+        let m = 5;
+        let mut seed = 11u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let mut entries = vec![];
+        for mat in 0..=m {
+            for col in 0..n {
+                for row in 0..=col {
+                    if (row * 3 + col * 5 + mat * 7) % (mat + 3) == 0 {
+                        entries.push(Entry { mat, block: 0, row, col, value: rnd() });
+                    }
+                }
+            }
+        }
+        let p = SdpProblem::new(vec![Block::Psd(n)], vec![1.0; m], entries.clone()).unwrap();
+        let mut ws = Workspace::new(&p, u128::MAX).unwrap();
+        let unit = crate::scaling::Equilibration::IDENTITY;
+        ws.load_values(&p, &unit);
+        // Symmetric Y and X⁻¹ (definiteness does not matter for the identity).
+        let mut sym = |shift: f64| {
+            let mut a = vec![0.0; n * n];
+            for j in 0..n {
+                for i in 0..=j {
+                    let v = rnd() + if i == j { shift } else { 0.0 };
+                    a[i + j * n] = v;
+                    a[j + i * n] = v;
+                }
+            }
+            a
+        };
+        let (y, xi) = (sym(3.0), sym(2.0));
+        let dense_f = |mat: usize| {
+            let mut f = vec![0.0; n * n];
+            for e in entries.iter().filter(|e| e.mat == mat) {
+                f[e.row + e.col * n] = e.value;
+                f[e.col + e.row * n] = e.value;
+            }
+            f
+        };
+        let mul = |a: &[f64], b: &[f64]| {
+            let mut c = vec![0.0; n * n];
+            for j in 0..n {
+                for k in 0..n {
+                    for i in 0..n {
+                        c[i + j * n] += a[i + k * n] * b[k + j * n];
+                    }
+                }
+            }
+            c
+        };
+        let mp = m + 1;
+        let mut reference = vec![0.0; mp * mp];
+        for j in 0..mp {
+            let g = mul(&mul(&y, &dense_f(j)), &xi);
+            for i in j..mp {
+                let fi = dense_f(i);
+                reference[i + j * mp] = (0..n * n).map(|k| fi[k] * g[(k % n) * n + k / n]).sum();
+            }
+        }
+        for (grouped, dense_columns) in [(false, false), (false, true), (true, false)] {
+            let blk = &mut ws.blocks[0];
+            blk.y.copy_from_slice(&y);
+            blk.xinv.copy_from_slice(&xi);
+            for j in 0..=m {
+                if blk.kind[j] != SchurKind::Empty {
+                    blk.kind[j] = if dense_columns { SchurKind::Dense } else { SchurKind::Pairwise };
+                }
+            }
+            if grouped {
+                let ng = blk.grp_row.len();
+                blk.grouped = true;
+                blk.gmat =
+                    (0..=m).flat_map(|j| std::iter::repeat_n(j, blk.grp_start[j + 1] - blk.grp_start[j])).collect();
+                blk.yt = vec![0.0; ng * n];
+                blk.yt2 = vec![0.0; ng * n];
+                blk.zg = vec![0.0; ng * ng];
+                blk.zg2 = vec![0.0; ng * ng];
+                blk.ag_row = Vec::with_capacity(ng);
+                blk.ag_mat = Vec::with_capacity(ng);
+                blk.ag_ent = Vec::with_capacity(ng + 1);
+                blk.ag_idx = Vec::with_capacity(blk.grp_ents.len());
+                blk.ag_val = Vec::with_capacity(blk.grp_ents.len());
+                ws.load_values(&p, &unit);
+            } else {
+                blk.grouped = false;
+            }
+            ws.assemble_schur_hkm();
+            for j in 0..mp {
+                for i in j..mp {
+                    let (a, b) = (ws.mhat[i + j * mp], reference[i + j * mp]);
+                    assert!(
+                        (a - b).abs() < 1e-12 * (1.0 + b.abs()),
+                        "grouped {grouped} dense {dense_columns} ({i}, {j}): {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
 
     /// All three Schur strategies give the same matrix.
     #[test]

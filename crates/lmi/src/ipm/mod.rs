@@ -105,6 +105,13 @@
 //! the main gain came from the statement of the filter LMI (fewer iterations; see `docs/sdp.md`).
 //! [`FaerIpm::set_legacy`] selects the method before issue 15, for comparisons in one run.
 //!
+//! **HKM direction** ([`FaerIpm::set_direction`], [`SearchDirection::Hkm`]; `docs/sdp.md` §3.6).
+//! Instead of the NT scaling, the Helmberg–Kojima–Monteiro direction linearises `YX = σμI` and
+//! symmetrises `ΔY = σμX⁻¹ − Y − sym(Y ΔX X⁻¹)`: the Schur matrix is `tr(Fᵢ Y Fⱼ X⁻¹)` and every
+//! quantity comes from the Cholesky factors of `X` and `Y` (no eigendecomposition); step lengths
+//! are Cholesky tests of `X + αΔX`, `Y + αΔY` by bisection. A breakdown (or the need for
+//! precision mode) switches the rest of the solve to NT. NT stays the default.
+//!
 //! # Allocation
 //!
 //! [`SdpBackend::setup`] copies the problem (to check the structure of later problems), builds
@@ -181,12 +188,28 @@ impl faer::traits::pulp::WithSimd for Run<'_> {
     }
 }
 
+/// Search direction of [`FaerIpm`] on the dense (semidefinite) blocks; nonnegative blocks are
+/// the same under both.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum SearchDirection {
+    /// Nesterov–Todd (`docs/sdp.md` §3.2): symmetric scaling from an eigendecomposition per
+    /// block. The default.
+    #[default]
+    NesterovTodd,
+    /// Helmberg–Kojima–Monteiro (XZ) direction (`docs/sdp.md` §3.6): Schur matrix
+    /// `tr(Fᵢ Y Fⱼ X⁻¹)` and step lengths from Cholesky factors only, no eigendecomposition.
+    /// Falls back to NT for the rest of a solve if it breaks down or needs precision mode.
+    Hkm,
+}
+
 /// The pure-Rust interior-point backend (`"faer-ipm"`); see the [module documentation](self).
 pub struct FaerIpm {
     settings: SolverSettings,
     ws: Option<Workspace>,
     buf: Option<MemBuffer>,
     legacy: bool,
+    direction: SearchDirection,
 }
 
 impl std::fmt::Debug for FaerIpm {
@@ -202,7 +225,7 @@ impl FaerIpm {
     /// A backend with validated `settings`; call [`SdpBackend::setup`] before solving.
     pub fn new(settings: SolverSettings) -> Result<Self, LmiError> {
         settings.validate()?;
-        Ok(Self { settings, ws: None, buf: None, legacy: false })
+        Ok(Self { settings, ws: None, buf: None, legacy: false, direction: SearchDirection::NesterovTodd })
     }
 
     /// The settings in use.
@@ -219,6 +242,16 @@ impl FaerIpm {
     /// Whether the pre-issue-15 method is selected ([`FaerIpm::set_legacy`]).
     pub fn legacy(&self) -> bool {
         self.legacy
+    }
+
+    /// Selects the search direction (NT by default). Ignored in legacy mode (always NT).
+    pub fn set_direction(&mut self, direction: SearchDirection) {
+        self.direction = direction;
+    }
+
+    /// The selected search direction ([`FaerIpm::set_direction`]).
+    pub fn direction(&self) -> SearchDirection {
+        self.direction
     }
 }
 
@@ -276,6 +309,7 @@ impl SdpBackend for FaerIpm {
         let scale = Equilibration::compute(problem, settings.equilibrate);
         ws.load_values(problem, &scale);
         ws.legacy = self.legacy;
+        ws.hkm = !self.legacy && self.direction == SearchDirection::Hkm;
         // The whole iteration is compiled for the best instruction set available (AVX2/FMA or
         // AVX-512 on x86-64), so that the hand-written kernels vectorise as well as faer's.
         faer::traits::pulp::Arch::new().dispatch(Run { ws, settings, start, solution, stack: MemStack::new(buf) });

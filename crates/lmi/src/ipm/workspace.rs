@@ -13,7 +13,7 @@ use super::dense;
 /// Computed in `u128` from the sizes alone, in `O(blocks)`: it allocates nothing.
 ///
 /// Per block: five index vectors of length `m + 2`, one row `m + 1` of the entry counts and
-/// about 25 dense matrices of its order (`n²`, or `n` for a diagonal block); per entry about
+/// about 26 dense matrices of its order (`n²`, or `n` for a diagonal block); per entry about
 /// 120 bytes of analysis (positions, values, groups); globally the `(m+1)²` Schur matrix, its
 /// `m²` factor, the `ls_rows × m` matrix of precision mode, the dense scatter buffer and the
 /// copy of the problem.
@@ -27,7 +27,7 @@ pub(crate) fn base_bytes(problem: &SdpProblem) -> u128 {
         let n = b.size() as u128;
         nmax = nmax.max(n);
         let len = if matches!(b, Block::Psd(_)) { n * n } else { n };
-        dense_blocks += 8 * (25 * len + 5 * n);
+        dense_blocks += 8 * (26 * len + 5 * n);
     }
     let rows = (ls_rows(problem) as u128).max(m);
     let per_block_index = nb * (8 * (5 * (m + 2)) + (m + 1) + 8);
@@ -128,8 +128,10 @@ pub(crate) struct BlockWs {
     /// coefficient in `w` (the value, halved on the diagonal).
     pub gw_idx: Vec<usize>,
     pub gw_val: Vec<f64>,
-    /// `y_g = D w_g` per group (`n` each), for the low-rank strategy.
+    /// `y_g = D w_g` per group (`n` each), for the low-rank strategy (HKM: `X⁻¹ w_g`).
     pub gy: Vec<f64>,
+    /// HKM only: `Y w_g` per group (`n` each).
+    pub gy2: Vec<f64>,
     /// First matrix index whose Schur column uses the low-rank strategy (`m + 1` if none).
     pub lr_first: usize,
     /// Whole-block low-rank assembly: all pairs of groups at once (see `assemble_schur`),
@@ -150,6 +152,10 @@ pub(crate) struct BlockWs {
     /// `Yᵀ` (`n × G`, row `o` holds `y_h[o]` for every group `h`) and `Z = Wᵀ D W` (`G × G`).
     pub yt: Vec<f64>,
     pub zg: Vec<f64>,
+    /// HKM only, like `yt` and `zg` for `η_h = Y w_h` (`yt`, `zg`, `gy` then hold those of
+    /// `ξ_h = X⁻¹ w_h`).
+    pub yt2: Vec<f64>,
+    pub zg2: Vec<f64>,
     // Iterates and residual.
     pub x: Vec<f64>,
     pub y: Vec<f64>,
@@ -166,8 +172,11 @@ pub(crate) struct BlockWs {
     pub lam: Vec<f64>,
     /// `λ^{-1/2}`.
     pub lis: Vec<f64>,
-    /// `D r_z D`.
+    /// `D r_z D` (HKM: `sym(Y r_z X⁻¹)`).
     pub drd: Vec<f64>,
+    /// HKM direction only: `X⁻¹` (with `l1 ← L₁⁻¹`, `l2 ← L₂⁻¹`, the inverse Cholesky factors
+    /// of `X` and `Y`).
+    pub xinv: Vec<f64>,
     // Directions (scaled `Δx̃`, `Δỹ`; unscaled `ΔX = E`, `ΔY`), predictor copies, rhs `w_s`.
     pub e: Vec<f64>,
     pub dxs: Vec<f64>,
@@ -218,6 +227,7 @@ impl BlockWs {
             gw_idx: Vec::new(),
             gw_val: Vec::new(),
             gy: Vec::new(),
+            gy2: Vec::new(),
             lr_first: m + 1,
             grouped: false,
             gmat: Vec::new(),
@@ -229,6 +239,8 @@ impl BlockWs {
             ag_val: Vec::new(),
             yt: Vec::new(),
             zg: Vec::new(),
+            yt2: Vec::new(),
+            zg2: Vec::new(),
             x: z(),
             y: z(),
             rz: z(),
@@ -242,6 +254,7 @@ impl BlockWs {
             lam: vec![0.0; n],
             lis: vec![0.0; n],
             drd: z(),
+            xinv: z(),
             e: z(),
             dxs: z(),
             dys: z(),
@@ -311,6 +324,10 @@ pub(crate) struct Workspace {
     pub fbuf: Vec<f64>,
     /// The method before issue 15 ([`FaerIpm::set_legacy`](super::FaerIpm::set_legacy)).
     pub legacy: bool,
+    /// The HKM direction is selected ([`FaerIpm::set_direction`](super::FaerIpm::set_direction)).
+    pub hkm: bool,
+    /// The HKM direction is in use in this solve (cleared when the solve falls back to NT).
+    pub hkm_on: bool,
 }
 
 /// Blocks below this order keep the classic Schur strategies (pairwise, rank update, dense).
@@ -441,8 +458,8 @@ impl Workspace {
             .iter()
             .map(|blk| {
                 let (g, n, e) = (blk.grp_row.len() as u128, blk.n as u128, blk.grp_ents.len() as u128);
-                let always = 8 * (e + g * n);
-                let grouped = if blk.grouped { 8 * (g + g * n + g * g + 3 * g + 1 + 2 * e) } else { 0 };
+                let always = 8 * (e + 2 * g * n);
+                let grouped = if blk.grouped { 8 * (g + 2 * g * n + 2 * g * g + 3 * g + 1 + 2 * e) } else { 0 };
                 always + grouped
             })
             .sum();
@@ -452,17 +469,20 @@ impl Workspace {
         for blk in &mut blocks {
             blk.gw_val = vec![0.0; blk.grp_ents.len()];
             blk.gy = vec![0.0; blk.grp_row.len() * blk.n];
+            blk.gy2 = vec![0.0; blk.grp_row.len() * blk.n];
             if blk.grouped {
                 let g = blk.grp_row.len();
                 blk.gmat =
                     (0..=m).flat_map(|j| std::iter::repeat_n(j, blk.grp_start[j + 1] - blk.grp_start[j])).collect();
                 blk.yt = vec![0.0; g * blk.n];
+                blk.yt2 = vec![0.0; g * blk.n];
                 blk.ag_row = Vec::with_capacity(g);
                 blk.ag_mat = Vec::with_capacity(g);
                 blk.ag_ent = Vec::with_capacity(g + 1);
                 blk.ag_idx = Vec::with_capacity(blk.grp_ents.len());
                 blk.ag_val = Vec::with_capacity(blk.grp_ents.len());
                 blk.zg = vec![0.0; g * g];
+                blk.zg2 = vec![0.0; g * g];
             }
         }
         let nmax = problem.blocks().iter().map(|b| b.size()).max().unwrap_or(0);
@@ -497,6 +517,8 @@ impl Workspace {
             qr_bs,
             loss: 0.0,
             legacy: false,
+            hkm: false,
+            hkm_on: false,
         })
     }
 
