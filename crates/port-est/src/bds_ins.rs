@@ -100,31 +100,8 @@ struct Settings {
     p0: DMatrix<f64>,
 }
 
-fn line_column(text: &str, offset: usize) -> (u64, u64) {
-    let before = &text[..offset.min(text.len())];
-    let line = before.matches('\n').count() as u64 + 1;
-    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) as u64 + 1;
-    (line, column)
-}
-
 fn read_config(path: Option<&Path>) -> Result<Settings, Error> {
-    let file = match path {
-        None => ConfigFile::default(),
-        Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
-            let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-            toml::from_str(text).map_err(|e| {
-                let message = e.message().to_owned();
-                match e.span() {
-                    Some(span) => {
-                        let (line, column) = line_column(text, span.start);
-                        Error::At { at: crate::error::Location::new(p, line, column), message }
-                    }
-                    None => Error::File { path: p.to_owned(), message },
-                }
-            })?
-        }
-    };
+    let file: ConfigFile = crate::model::read_settings_toml(path)?;
     let p = path.unwrap_or(Path::new("<defaults>"));
     let bad = |message: String| Error::File { path: p.to_owned(), message };
     let positive = |key: &str, v: f64| {

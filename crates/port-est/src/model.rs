@@ -153,6 +153,30 @@ pub(crate) fn line_col(text: &str, offset: usize) -> (u64, u64) {
     (line as u64, col as u64)
 }
 
+/// Reads an optional TOML settings file into `T` (`T::default()` without a file); a syntax or
+/// type error is reported at its `file:line:column`. A leading UTF-8 byte-order mark is ignored.
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read; [`Error::At`] (or [`Error::File`] without a
+/// position) for what TOML or the settings' types refuse.
+pub(crate) fn read_settings_toml<T: serde::de::DeserializeOwned + Default>(path: Option<&Path>) -> Result<T, Error> {
+    let Some(p) = path else {
+        return Ok(T::default());
+    };
+    let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    toml::from_str(text).map_err(|e| {
+        let message = e.message().to_owned();
+        match e.span() {
+            Some(span) => {
+                let (line, column) = line_col(text, span.start);
+                Error::At { at: Location::new(p, line, column), message }
+            }
+            None => Error::File { path: p.to_owned(), message },
+        }
+    })
+}
+
 /// Reading context: the file's text and name.
 struct Ctx<'t> {
     text: &'t str,
