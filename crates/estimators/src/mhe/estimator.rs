@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector};
 use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
-use crate::mhe::settings::{ArrivalRecursion, BlockWeighting, MheCost, MheSettings, PriorMean, WindowSolver};
+use crate::mhe::settings::{ArrivalRecursion, BlockWeighting, MheSettings, PriorMean, WindowSolver};
 use crate::mhe::small::{chol_inverse, cholesky};
 use crate::mhe::solve::{
     NoiseData, SolveCounters, SolverScratch, WindowStatus, coordinate_rotation, exact_saddle, saddle_value,
@@ -443,12 +443,9 @@ impl MovingHorizonEstimator {
                     }
                 }
             }
+            // s = T − N ≤ T − 1 (N ≥ 1): P_s was committed to the ring at time s.
             let sl = s % cap;
-            if big_t == self.t + 1 && sl == (big_t % cap) {
-                self.mat_a.copy_from_slice(&self.p_next);
-            } else {
-                self.mat_a.copy_from_slice(&self.p_ring[sl * n * n..(sl + 1) * n * n]);
-            }
+            self.mat_a.copy_from_slice(&self.p_ring[sl * n * n..(sl + 1) * n * n]);
         }
         if !cholesky(&mut self.mat_a, n) {
             return Err(EstimatorError::NumericalFailure("the arrival-cost weight lost positive definiteness"));
@@ -634,20 +631,5 @@ impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
 
     fn dims(&self) -> Dims {
         Dims::new(self.n, self.p, self.m)
-    }
-}
-
-/// Whether a report's window solve met its tolerance.
-#[must_use]
-pub fn converged(report: &MheReport) -> bool {
-    report.solve.status == WindowStatus::Converged
-}
-
-/// `λv` of a cost (`∞` for least squares).
-#[must_use]
-pub fn lambda_v(cost: MheCost) -> f64 {
-    match cost {
-        MheCost::MinMax { lambda_v } => lambda_v,
-        MheCost::LeastSquares => f64::INFINITY,
     }
 }

@@ -29,7 +29,7 @@ mod small;
 mod solve;
 mod window;
 
-pub use estimator::{ArrivalStatus, MheEstimate, MheReport, MovingHorizonEstimator, converged, lambda_v};
+pub use estimator::{ArrivalStatus, MheEstimate, MheReport, MovingHorizonEstimator};
 pub use nonlinear::{
     NonlinearArrival, NonlinearMhe, NonlinearMheEstimate, NonlinearMheReport, NonlinearMheSettings, NonlinearPrior,
 };
