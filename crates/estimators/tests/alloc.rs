@@ -114,24 +114,28 @@ fn sdp_step_with_the_default_backend_does_not_allocate_after_setup() {
     let model = StepModel::new(&a, &b, &c);
     let u = DVector::from_vec(vec![0.2, -0.1]);
     let ys: Vec<DVector<f64>> = (0..20).map(|k| DVector::from_fn(3, |i, _| ((k * 7 + i) as f64).sin() * 0.1)).collect();
-    let solver = SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, lmi::SolverSettings::default()).unwrap();
-    let mut smf = SetMembershipFilter::new(
-        DVector::zeros(4),
-        DMatrix::identity(4, 4) * 0.5,
-        DMatrix::identity(4, 4) * 0.01,
-        DMatrix::identity(3, 3) * 0.05,
-        2,
-        solver,
-    )
-    .unwrap();
-    smf.step(&model, &u, &ys[0]).unwrap();
-    let (_, n) = count(|| {
-        for y in &ys {
-            let e = smf.step(&model, &u, y).unwrap();
-            assert!(e.report.fallback.is_none());
-        }
-    });
-    assert_eq!(n, 0, "SDP-backed step allocated");
+    // Cold and warm-started solves (the filters' default through `LinearSetup`).
+    for warm_start in [false, true] {
+        let settings = lmi::SolverSettings { warm_start, ..lmi::SolverSettings::default() };
+        let solver = SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, settings).unwrap();
+        let mut smf = SetMembershipFilter::new(
+            DVector::zeros(4),
+            DMatrix::identity(4, 4) * 0.5,
+            DMatrix::identity(4, 4) * 0.01,
+            DMatrix::identity(3, 3) * 0.05,
+            2,
+            solver,
+        )
+        .unwrap();
+        smf.step(&model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                let e = smf.step(&model, &u, y).unwrap();
+                assert!(e.report.fallback.is_none());
+            }
+        });
+        assert_eq!(n, 0, "SDP-backed step allocated (warm start {warm_start})");
+    }
 }
 
 #[test]

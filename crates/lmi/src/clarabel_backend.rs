@@ -39,7 +39,7 @@ use clarabel::solver::{
 use crate::error::{LmiError, saturate_bytes};
 use crate::problem::{Block, SdpProblem};
 use crate::scaling::Equilibration;
-use crate::solver::{SdpBackend, SdpSolution, SolveStatus, SolverSettings};
+use crate::solver::{SdpBackend, SdpSolution, SolveStart, SolveStatus, SolverSettings};
 use crate::svec::{smat_into, svec_index, svec_len, svec_scale};
 
 const NAME: &str = "clarabel";
@@ -368,6 +368,8 @@ impl ClarabelBackend {
             }
         }
         solution.iterations = sol.iterations;
+        // Clarabel's Rust API has no warm start: every solve starts cold.
+        solution.start = SolveStart::Cold;
         solution.primal_residual = sol.r_prim;
         solution.dual_residual = sol.r_dual;
         st.solver = Some(solver);
@@ -391,6 +393,7 @@ impl ClarabelBackend {
         solution.primal_objective = f64::NAN;
         solution.dual_objective = f64::NAN;
         solution.iterations = 0;
+        solution.start = SolveStart::Cold;
         solution.primal_residual = f64::NAN;
         solution.dual_residual = f64::NAN;
         solution.solve_time = start.elapsed();

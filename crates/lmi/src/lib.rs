@@ -28,4 +28,6 @@ pub use ipm::{FaerIpm, SearchDirection};
 pub use problem::{Block, Entry, SdpProblem};
 pub use registry::{DEFAULT_BACKEND, backend_by_name, backend_names};
 pub use sdpa::{read_sdpa, read_sdpa_file, write_sdpa};
-pub use solver::{DEFAULT_MEMORY_LIMIT, SdpBackend, SdpSolution, SolveStatus, SolverSettings, SolverSettingsBuilder};
+pub use solver::{
+    DEFAULT_MEMORY_LIMIT, SdpBackend, SdpSolution, SolveStart, SolveStatus, SolverSettings, SolverSettingsBuilder,
+};

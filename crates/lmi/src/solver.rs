@@ -65,6 +65,20 @@ impl std::fmt::Display for SolveStatus {
     }
 }
 
+/// Where a solve started (see [`SolverSettings::warm_start`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum SolveStart {
+    /// The backend's default starting point.
+    #[default]
+    Cold,
+    /// The previous solve's solution, blended with the default starting point.
+    Warm,
+    /// A warm start that did not end `Solved` or with an infeasibility certificate, repeated
+    /// from the default starting point; `iterations` counts both attempts.
+    ColdAfterWarm,
+}
+
 /// The result of a solve. Allocated once per structure ([`SdpSolution::new`]) and overwritten by
 /// every solve, so that repeated solves need not allocate.
 #[derive(Debug, Clone)]
@@ -80,8 +94,10 @@ pub struct SdpSolution {
     pub primal_objective: f64,
     /// `tr(F₀ Y)`.
     pub dual_objective: f64,
-    /// Interior-point iterations performed.
+    /// Interior-point iterations performed (by both attempts after [`SolveStart::ColdAfterWarm`]).
     pub iterations: u32,
+    /// Where the solve started.
+    pub start: SolveStart,
     /// Relative primal residual reported by the backend (infeasibility of `x`).
     pub primal_residual: f64,
     /// Relative dual residual reported by the backend (`‖tr(Fᵢ Y) − cᵢ‖` scaled).
@@ -100,6 +116,7 @@ impl SdpSolution {
             primal_objective: f64::NAN,
             dual_objective: f64::NAN,
             iterations: 0,
+            start: SolveStart::Cold,
             primal_residual: f64::NAN,
             dual_residual: f64::NAN,
             solve_time: Duration::ZERO,
@@ -179,6 +196,14 @@ pub struct SolverSettings {
     /// workspace and the solution). `setup` computes the requirement first and returns
     /// [`LmiError::MemoryLimit`] instead of allocating beyond it.
     pub memory_limit_bytes: u64,
+    /// Start each solve from the previous solve's solution (same structure, same setup) instead
+    /// of the default point, for sequences of nearby problems such as a filter's SDP at
+    /// consecutive steps. Off by default. `faer-ipm` blends the two as Skajaa, Andersen and Ye
+    /// do for the homogeneous embedding (`docs/sdp.md` §3.7); a warm solve that ends neither
+    /// `Solved` nor with an infeasibility certificate is repeated cold, so the outcome is judged
+    /// by the same tests either way. Backends that cannot warm start (Clarabel) solve cold;
+    /// [`SdpSolution::start`] tells which start was used.
+    pub warm_start: bool,
 }
 
 /// Default of [`SolverSettings::memory_limit_bytes`]: 2 GiB.
@@ -197,6 +222,7 @@ impl Default for SolverSettings {
             verbose: false,
             equilibrate: true,
             memory_limit_bytes: DEFAULT_MEMORY_LIMIT,
+            warm_start: false,
         }
     }
 }
@@ -284,6 +310,12 @@ impl SolverSettingsBuilder {
     /// [`DEFAULT_MEMORY_LIMIT`]; must be positive).
     pub fn memory_limit_bytes(mut self, bytes: u64) -> Self {
         self.settings.memory_limit_bytes = bytes;
+        self
+    }
+    /// Whether to warm-start each solve from the previous one (default `false`; see
+    /// [`SolverSettings::warm_start`]).
+    pub fn warm_start(mut self, warm_start: bool) -> Self {
+        self.settings.warm_start = warm_start;
         self
     }
     /// Validates and returns the settings.

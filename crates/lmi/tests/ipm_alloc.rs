@@ -2,7 +2,7 @@
 
 use counting_allocator::{Counting, count};
 mod ipm_common;
-use lmi::{Block, Entry, FaerIpm, SdpBackend, SdpProblem, SdpSolution, SearchDirection, SolverSettings};
+use lmi::{Block, Entry, FaerIpm, SdpBackend, SdpProblem, SdpSolution, SearchDirection, SolveStart, SolverSettings};
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -74,5 +74,31 @@ fn solves_after_setup_do_not_allocate() {
         assert_eq!(allocations, 0, "solve allocated {allocations} times in 10 solves");
         assert!(sol.status.is_optimal(), "{}", sol.status);
         assert_eq!(sol.primal_objective, first);
+    }
+}
+
+#[test]
+fn warm_started_solves_do_not_allocate() {
+    // Two nearby problems of one structure, solved alternately: every solve after the first
+    // starts from the other's solution.
+    let a = ipm_common::filter_lmi();
+    let mut b = a.clone();
+    let values: Vec<f64> =
+        a.entries().iter().enumerate().map(|(k, e)| e.value * (1.0 + 1e-3 * (k as f64).sin())).collect();
+    b.set_values(a.c(), &values).unwrap();
+    for direction in [SearchDirection::NesterovTodd, SearchDirection::Hkm] {
+        let mut ipm = FaerIpm::new(SolverSettings::builder().warm_start(true).build().unwrap()).unwrap();
+        ipm.set_direction(direction);
+        ipm.setup(&a).unwrap();
+        let mut sol = SdpSolution::new(&a);
+        ipm.solve(&a, &mut sol).unwrap();
+        let ((), allocations) = count(|| {
+            for k in 0..10 {
+                ipm.solve(if k % 2 == 0 { &b } else { &a }, &mut sol).unwrap();
+                assert_eq!(sol.start, SolveStart::Warm);
+            }
+        });
+        assert_eq!(allocations, 0, "warm-started solves allocated {allocations} times in 10 solves");
+        assert!(sol.status.is_optimal(), "{}", sol.status);
     }
 }

@@ -13,7 +13,7 @@ use super::dense;
 /// Computed in `u128` from the sizes alone, in `O(blocks)`: it allocates nothing.
 ///
 /// Per block: five index vectors of length `m + 2`, one row `m + 1` of the entry counts and
-/// about 26 dense matrices of its order (`n²`, or `n` for a diagonal block); per entry about
+/// about 28 dense matrices of its order (`n²`, or `n` for a diagonal block); per entry about
 /// 120 bytes of analysis (positions, values, groups); globally the `(m+1)²` Schur matrix, its
 /// `m²` factor, the `ls_rows × m` matrix of precision mode, the dense scatter buffer and the
 /// copy of the problem.
@@ -27,7 +27,7 @@ pub(crate) fn base_bytes(problem: &SdpProblem) -> u128 {
         let n = b.size() as u128;
         nmax = nmax.max(n);
         let len = if matches!(b, Block::Psd(_)) { n * n } else { n };
-        dense_blocks += 8 * (26 * len + 5 * n);
+        dense_blocks += 8 * (28 * len + 5 * n);
     }
     let rows = (ls_rows(problem) as u128).max(m);
     let per_block_index = nb * (8 * (5 * (m + 2)) + (m + 1) + 8);
@@ -163,6 +163,9 @@ pub(crate) struct BlockWs {
     /// Best iterate so far (restored when the method stops early).
     pub best_x: Vec<f64>,
     pub best_y: Vec<f64>,
+    /// Warm start: the last solved `X/τ`, `Y/τ` of this block.
+    pub warm_x: Vec<f64>,
+    pub warm_y: Vec<f64>,
     // Scaling: Y = T Λ Tᵀ, X = T⁻ᵀ Λ T⁻¹, D = T Tᵀ (D X D = Y).
     pub l1: Vec<f64>,
     pub l2: Vec<f64>,
@@ -246,6 +249,8 @@ impl BlockWs {
             rz: z(),
             best_x: z(),
             best_y: z(),
+            warm_x: z(),
+            warm_y: z(),
             l1: z(),
             l2: z(),
             k: z(),
@@ -297,6 +302,11 @@ pub(crate) struct Workspace {
     pub c: Vec<f64>,
     pub x: Vec<f64>,
     pub best_x: Vec<f64>,
+    /// Warm start: the last solved `x/τ` (the blocks' `warm_x`, `warm_y` hold `X/τ`, `Y/τ`),
+    /// whether one is stored, and whether this solve should start from it.
+    pub warm_xv: Vec<f64>,
+    pub has_warm: bool,
+    pub warm_wanted: bool,
     /// `(τ, κ)` of the best iterate.
     pub best_tk: (f64, f64),
     pub dx: Vec<f64>,
@@ -499,6 +509,9 @@ impl Workspace {
             c: vec![0.0; m],
             x: vec![0.0; m],
             best_x: vec![0.0; m],
+            warm_xv: vec![0.0; m],
+            has_warm: false,
+            warm_wanted: false,
             best_tk: (1.0, 1.0),
             dx: vec![0.0; m],
             dx2: vec![0.0; m],

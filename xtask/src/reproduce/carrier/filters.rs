@@ -10,6 +10,9 @@ use crate::reproduce::runner::Filter;
 pub const PROPOSED: &str = "improved SMF";
 /// Prefix of the improved filter solved by an SDP backend (`"improved SMF via <backend>"`).
 pub const PROPOSED_VIA: &str = "improved SMF via ";
+/// Suffix of the same filter with every SDP solved from the backend's default start (the SDP
+/// filters warm-start each solve from the previous step's solution by default).
+pub const COLD_START: &str = ", cold start";
 /// Reconstruction (a) of [17]: the input is not used.
 pub const YANG_LI_NO_INPUT: &str = "[17] without input";
 /// Reconstruction (b) of [17]: the input in the predictor (the improved filter's update).
@@ -51,6 +54,12 @@ pub fn for_scenario(sc: &Scenario) -> Result<Vec<ScheduledFilter>, String> {
         let mut s = setup(sc);
         s.solver = name.to_owned();
         out.push((Filter::new(&format!("{PROPOSED_VIA}{name}"), "smf", &s)?, sc.sdp_steps.min(n)));
+        if name == lmi::DEFAULT_BACKEND {
+            // Side by side in one run: the same backend without the warm start.
+            let mut cold = s.clone();
+            cold.sdp_settings.warm_start = false;
+            out.push((Filter::new(&format!("{PROPOSED_VIA}{name}{COLD_START}"), "smf", &cold)?, sc.sdp_steps.min(n)));
+        }
     }
     let two = setup(sc);
     debug_assert_eq!(two.solver, TWO_MULTIPLIER);
