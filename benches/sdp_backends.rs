@@ -6,6 +6,10 @@
 //! `Q⁻¹`, `R⁻¹` in the block, [`Formulation::AsStated`]) and `faer-ipm` in its legacy mode
 //! ([`lmi::FaerIpm::set_legacy`]); every other line uses the whitened statement of (28).
 //! `faer-ipm-hkm` is `faer-ipm` with the HKM direction ([`lmi::FaerIpm::set_direction`]).
+//! `faer-ipm-warm` solves, in turn, 8 nearby problems of the same structure (the case's values
+//! moved by up to 0.1 % along a smooth path, as the filter's SDP moves from one step to the
+//! next), each warm-started from the previous one's solution ([`SolverSettings::warm_start`]);
+//! `faer-ipm-cold-path` solves the same 8 problems from the default start, for the ratio.
 
 use std::hint::black_box;
 
@@ -42,6 +46,25 @@ fn filter_case(n: usize, m: usize, form: Formulation) -> FilterSdp {
     let x = DVector::zeros(n);
     FilterSdp::with_formulation(&FilterSdpData { a: &a, c: &c, q: &q, r: &r, p: &p, x_hat: &x }, form)
         .expect("valid case")
+}
+
+/// `count` problems of `p`'s structure along a closed smooth path: value `k` of problem `j` is
+/// multiplied by `1 + 10⁻³ sin(2πj/count + 0.7k)`.
+fn nearby_path(p: &lmi::SdpProblem, count: usize) -> Vec<lmi::SdpProblem> {
+    (0..count)
+        .map(|j| {
+            let phase = std::f64::consts::TAU * j as f64 / count as f64;
+            let values: Vec<f64> = p
+                .entries()
+                .iter()
+                .enumerate()
+                .map(|(k, e)| e.value * (1.0 + 1e-3 * (phase + 0.7 * k as f64).sin()))
+                .collect();
+            let mut q = p.clone();
+            q.set_values(p.c(), &values).expect("same structure");
+            q
+        })
+        .collect()
 }
 
 fn filter_lmi(crit: &mut Criterion) {
@@ -83,6 +106,22 @@ fn filter_lmi(crit: &mut Criterion) {
             group.bench_function(BenchmarkId::new("solve", &label), |b| {
                 b.iter(|| {
                     backend.solve(black_box(problem), &mut sol).unwrap();
+                    black_box(sol.status)
+                })
+            });
+        }
+        // Warm starts along a path of nearby problems, and the same path solved cold.
+        let path = nearby_path(problem, 8);
+        for (label, warm_start) in [("faer-ipm-warm", true), ("faer-ipm-cold-path", false)] {
+            let settings = SolverSettings::builder().warm_start(warm_start).build().unwrap();
+            let mut backend = FaerIpm::new(settings).unwrap();
+            backend.setup(problem).unwrap();
+            let mut sol = SdpSolution::new(problem);
+            let mut k = 0;
+            group.bench_function(BenchmarkId::new("solve", format!("{label}/n{n}m{m}")), |b| {
+                b.iter(|| {
+                    k = (k + 1) % path.len();
+                    backend.solve(black_box(&path[k]), &mut sol).unwrap();
                     black_box(sol.status)
                 })
             });
