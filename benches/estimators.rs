@@ -1,6 +1,7 @@
 //! One filter step, side by side: the Kalman filter, the improved set-membership filter with the
 //! exact two-multiplier solver, and with each SDP backend compiled in, for (n, m) = (4, 3) (no
 //! sideslip sensor) and (4, 4) (the paper's C = I), on the Table 1 carrier at 6 m/s, T_s = 1 ms.
+//! `faer-ipm` is timed cold (`smf-faer-ipm`) and warm-started from the previous step (`smf-faer-ipm-warm`).
 //! `cargo bench --bench estimators` (add `--features clarabel` for Clarabel).
 //!
 //! Also the truck paper's EKF step (3 states, 6 tyre positions, 7 inputs, 3 measurements) beside a
@@ -98,13 +99,23 @@ fn steps(crit: &mut Criterion) {
             })
         });
 
-        for name in lmi::backend_names() {
-            let solver = SdpUpdateSolver::by_name(name, SolverSettings::default()).unwrap();
+        // Each backend cold (`smf-NAME`) and warm-started from the previous step's solution
+        // (`smf-NAME-warm`, the default of filters built through `LinearSetup`; Clarabel cannot
+        // warm start and solves cold either way, so only faer-ipm gets the second line).
+        let names = lmi::backend_names();
+        let variants = names
+            .iter()
+            .flat_map(|&name| [(name, false), (name, true)])
+            .filter(|&(name, warm)| !warm || name == "faer-ipm");
+        for (name, warm_start) in variants {
+            let settings = SolverSettings { warm_start, ..SolverSettings::default() };
+            let solver = SdpUpdateSolver::by_name(name, settings).unwrap();
             let mut f =
                 SetMembershipFilter::new(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8, solver).unwrap();
             k = 0;
-            // An SDP step takes ~0.5 ms: the run never wraps within a benchmark.
-            group.bench_function(BenchmarkId::new(format!("smf-{name}"), &label), |b| {
+            let id = if warm_start { format!("smf-{name}-warm") } else { format!("smf-{name}") };
+            // An SDP step takes 0.1–0.5 ms: the run never wraps within a benchmark.
+            group.bench_function(BenchmarkId::new(id, &label), |b| {
                 b.iter(|| {
                     k = (k + 1) % cs.ys.len();
                     black_box(f.step(&model, &cs.u, &cs.ys[k]).unwrap().center[0])
