@@ -148,3 +148,22 @@ fn a_rescaled_problem_or_a_new_setup_starts_cold() {
     warm.set_settings(SolverSettings::default()).unwrap();
     assert_eq!(solve(&mut warm, &base).start, SolveStart::Cold);
 }
+
+#[cfg(feature = "clarabel")]
+#[test]
+fn clarabel_solves_cold_whatever_the_setting() {
+    let base = ipm_common::filter_lmi();
+    let settings = SolverSettings::builder().warm_start(true).build().unwrap();
+    let mut clarabel = lmi::ClarabelBackend::new(settings).unwrap();
+    clarabel.setup(&base).unwrap();
+    let mut faer = ipm(false, 100);
+    faer.setup(&base).unwrap();
+    for step in 0..3 {
+        let p = perturbed(&base, step, 1e-3);
+        let mut s = SdpSolution::new(&p);
+        clarabel.solve(&p, &mut s).unwrap();
+        assert_eq!((s.status, s.start), (SolveStatus::Solved, SolveStart::Cold), "step {step}");
+        let c = solve(&mut faer, &p);
+        assert!((s.primal_objective - c.primal_objective).abs() < 1e-6 * c.primal_objective.abs());
+    }
+}
