@@ -104,7 +104,7 @@ pub struct LinearSetup {
     pub solver: String,
     /// Settings of an SDP backend. [`LinearSetup::new`] turns
     /// [`SolverSettings::warm_start`] on: a filter's SDPs at consecutive steps are nearby
-    /// problems, and `faer-ipm` solves them in about a third of the iterations from the previous
+    /// problems, and `faer-ipm` solves them in a third to a half of the iterations from the previous
     /// step's solution (the filter certifies its `P_{k+1}` whatever the solver returns).
     pub sdp_settings: SolverSettings,
     /// Settings of the moving-horizon estimators (`rmhe`, `mhe`); their `x0`, `p0`, `q`, `r`

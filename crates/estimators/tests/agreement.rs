@@ -237,8 +237,16 @@ fn warm_started_sdp_solves_agree_with_cold_ones_in_fewer_iterations() {
         return;
     }
     let case = reference_case();
+    // The warm solver gets the settings a filter built through the registry gets.
+    let setup = estimators::registry::LinearSetup::new(
+        case.x.clone(),
+        case.p.clone(),
+        estimators::NoiseSettings::new(case.q.clone(), case.r.clone()),
+        1,
+    );
+    assert!(setup.sdp_settings.warm_start, "LinearSetup warm-starts SDP-backed filters");
     let solver = |warm_start: bool| {
-        let settings = SolverSettings { warm_start, ..SolverSettings::default() };
+        let settings = SolverSettings { warm_start, ..setup.sdp_settings.clone() };
         SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, settings).unwrap()
     };
     let (mut warm, mut cold) = (solver(true), solver(false));

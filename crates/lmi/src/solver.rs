@@ -75,7 +75,8 @@ pub enum SolveStart {
     /// The previous solve's solution, blended with the default starting point.
     Warm,
     /// A warm start that did not end `Solved` or with an infeasibility certificate, repeated
-    /// from the default starting point; `iterations` counts both attempts.
+    /// from the default starting point with what was left of the iteration budget and the time
+    /// limit; `iterations` counts both attempts (at most `max_iterations` in all).
     ColdAfterWarm,
 }
 
@@ -200,9 +201,11 @@ pub struct SolverSettings {
     /// of the default point, for sequences of nearby problems such as a filter's SDP at
     /// consecutive steps. Off by default. `faer-ipm` blends the two as Skajaa, Andersen and Ye
     /// do for the homogeneous embedding (`docs/sdp.md` §3.7); a warm solve that ends neither
-    /// `Solved` nor with an infeasibility certificate is repeated cold, so the outcome is judged
-    /// by the same tests either way. Backends that cannot warm start (Clarabel) solve cold;
-    /// [`SdpSolution::start`] tells which start was used.
+    /// `Solved` nor with an infeasibility certificate is repeated cold within the same
+    /// `max_iterations` and `time_limit` (when nothing is left, the warm outcome stands), so the
+    /// outcome is judged by the same tests either way. `faer-ipm` in legacy mode and backends
+    /// that cannot warm start (Clarabel) solve cold; [`SdpSolution::start`] tells which start
+    /// was used.
     pub warm_start: bool,
 }
 

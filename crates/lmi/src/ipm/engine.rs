@@ -289,32 +289,31 @@ impl Workspace {
     ) {
         let warm = self.warm_wanted && self.has_warm;
         self.has_warm = false;
-        let mut total = 0u32;
+        let mut used = 0u32;
         if warm {
-            let (status, st, iterations) = self.attempt(settings, start, stack, true);
-            total = iterations;
+            let (status, st, iterations) = self.attempt(settings, start, stack, true, settings.max_iterations);
+            used = iterations;
             // A certificate or a solution passes the same tests as from a cold start; anything
-            // else (a relaxed outcome, a stall) is repeated cold, except when time is up.
-            if matches!(
-                status,
-                SolveStatus::Solved
-                    | SolveStatus::PrimalInfeasible
-                    | SolveStatus::DualInfeasible
-                    | SolveStatus::TimeLimit
-            ) {
-                self.finish(status, &st, total, SolveStart::Warm, sol);
+            // else (a relaxed outcome, a stall) is repeated cold with what is left of the
+            // iteration budget and the time limit. With nothing left, the warm outcome stands.
+            let definite =
+                matches!(status, SolveStatus::Solved | SolveStatus::PrimalInfeasible | SolveStatus::DualInfeasible);
+            let out_of_time = settings.time_limit.is_some_and(|limit| limit <= start.elapsed());
+            if definite || out_of_time || used >= settings.max_iterations {
+                self.finish(status, &st, used, SolveStart::Warm, sol);
                 sol.solve_time = start.elapsed();
                 return;
             }
         }
-        let (status, st, iterations) = self.attempt(settings, start, stack, false);
+        let (status, st, iterations) = self.attempt(settings, start, stack, false, settings.max_iterations - used);
         let how = if warm { SolveStart::ColdAfterWarm } else { SolveStart::Cold };
-        self.finish(status, &st, total + iterations, how, sol);
+        self.finish(status, &st, used + iterations, how, sol);
         sol.solve_time = start.elapsed();
     }
 
     /// One run of the method from the default start, or from the warm point
-    /// ([`Workspace::warm_point`]); returns the outcome, the final state and the iterations.
+    /// ([`Workspace::warm_point`]), with at most `max_iterations` iterations; returns the
+    /// outcome, the final state and the iterations.
     #[inline(always)]
     fn attempt(
         &mut self,
@@ -322,6 +321,7 @@ impl Workspace {
         start: Instant,
         stack: &mut MemStack,
         warm: bool,
+        max_iterations: u32,
     ) -> (SolveStatus, State, u32) {
         let mut st = State { tau: 1.0, kappa: 1.0, ..State::default() };
         st.norm_f0 = self.norm_f0();
@@ -333,7 +333,7 @@ impl Workspace {
             if warm {
                 st.kappa = self.warm_point();
             }
-            self.iterate(settings, start, &mut st, &mut iterations, stack)
+            self.iterate(settings, start, max_iterations, &mut st, &mut iterations, stack)
         } else {
             SolveStatus::NumericalTrouble
         };
@@ -366,6 +366,7 @@ impl Workspace {
         &mut self,
         settings: &SolverSettings,
         start: Instant,
+        max_iterations: u32,
         st: &mut State,
         iterations: &mut u32,
         stack: &mut MemStack,
@@ -399,7 +400,7 @@ impl Workspace {
                 }
                 break Stop::Trouble;
             }
-            if *iterations >= settings.max_iterations {
+            if *iterations >= max_iterations {
                 break Stop::IterLimit;
             }
             if settings.time_limit.is_some_and(|limit| limit < start.elapsed()) {

@@ -89,11 +89,12 @@
 //! `κ = ⟨X, Y⟩/ν`, `λ = 0.99` (Skajaa, Andersen and Ye's warm start of the homogeneous
 //! embedding). The identity part keeps the start away from the boundary of the cone, where a
 //! near-optimal point of a neighbouring problem sits. A warm solve that ends neither `Solved` nor
-//! with an infeasibility certificate (nor at the time limit) is repeated from the default start,
-//! so that the outcome is either one the cold method's tests accept or the cold method's own; a
-//! solution is stored only when a solve ends `Solved` or `AlmostSolved` with the same
-//! equilibration factors as the next solve. On the carrier's filter steps the method takes about
-//! 4 iterations instead of 11–13.
+//! with an infeasibility certificate is repeated from the default start with the rest of the
+//! iteration budget and of the time limit (with nothing left, the warm outcome stands), so that
+//! the outcome is either one the cold method's tests accept or the cold method's own. A solution
+//! is stored when a solve ends `Solved` or `AlmostSolved`, and used only by a solve of the same
+//! setup whose equilibration factors are those it was stored with. Legacy mode never warm-starts.
+//! On the carrier's filter steps the method takes about 4 iterations instead of 11–13.
 //!
 //! **Small dense kernels.** The whole iteration runs inside one `pulp` dispatch (faer's SIMD
 //! layer; its kernels are inlined into it), so the hand-written loops are compiled for the best

@@ -33,7 +33,7 @@ pub(crate) fn base_bytes(problem: &SdpProblem) -> u128 {
     let per_block_index = nb * (8 * (5 * (m + 2)) + (m + 1) + 8);
     let per_entry = 120 * ne;
     let analysis = 48 * (m + 1);
-    let global = 8 * ((m + 1) * (m + 1) + m * m + 12 * (m + 1) + nmax * nmax + rows * m);
+    let global = 8 * ((m + 1) * (m + 1) + m * m + 13 * (m + 1) + nmax * nmax + rows * m);
     let structure = 40 * ne + 8 * m + 16 * nb;
     dense_blocks + per_block_index + per_entry + analysis + global + structure
 }
