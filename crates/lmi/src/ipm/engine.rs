@@ -536,9 +536,8 @@ impl Workspace {
         for blk in &mut self.blocks {
             blk.x.fill(0.0);
             blk.y.fill(0.0);
-            let n = blk.n;
-            for i in 0..n {
-                let k = if blk.psd { i + i * n } else { i };
+            for i in 0..blk.n {
+                let k = blk.diag(i);
                 blk.x[k] = xi;
                 blk.y[k] = eta;
             }
@@ -554,11 +553,10 @@ impl Workspace {
     /// warm start). Returns `κ = ⟨X, Y⟩/ν`, so that `τκ` is the start's `μ`.
     fn warm_point(&mut self) -> f64 {
         let lam = WARM_WEIGHT;
-        let diag_sum = |v: &[f64], n: usize, psd: bool| (0..n).map(|i| v[if psd { i + i * n } else { i }]).sum::<f64>();
         let (mut tx, mut ty) = (0.0, 0.0);
         for blk in &self.blocks {
-            tx += diag_sum(&blk.warm_x, blk.n, blk.psd);
-            ty += diag_sum(&blk.warm_y, blk.n, blk.psd);
+            tx += blk.trace(&blk.warm_x);
+            ty += blk.trace(&blk.warm_y);
         }
         // A stored solution has positive traces; keep the default start's shift otherwise.
         let shift = |t: f64, cold: f64| if t > 0.0 && t.is_finite() { t } else { cold };
@@ -567,10 +565,8 @@ impl Workspace {
         }
         let mut xy = 0.0;
         for blk in &mut self.blocks {
-            let n = blk.n;
-            let diag = |i: usize| if blk.psd { i + i * n } else { i };
             // The default start is a multiple of the identity: read its scale before overwriting.
-            let (xi, eta) = (blk.x[diag(0)], blk.y[diag(0)]);
+            let (xi, eta) = (blk.x[blk.diag(0)], blk.y[blk.diag(0)]);
             let (xs, ys) = ((1.0 - lam) * shift(tx / self.nu, xi), (1.0 - lam) * shift(ty / self.nu, eta));
             for (x, w) in blk.x.iter_mut().zip(&blk.warm_x) {
                 *x = lam * w;
@@ -578,9 +574,10 @@ impl Workspace {
             for (y, w) in blk.y.iter_mut().zip(&blk.warm_y) {
                 *y = lam * w;
             }
-            for i in 0..n {
-                blk.x[diag(i)] += xs;
-                blk.y[diag(i)] += ys;
+            for i in 0..blk.n {
+                let k = blk.diag(i);
+                blk.x[k] += xs;
+                blk.y[k] += ys;
             }
             xy += dense::dot(&blk.x, &blk.y);
         }

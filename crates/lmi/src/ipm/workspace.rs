@@ -279,6 +279,18 @@ impl BlockWs {
         }
     }
 
+    /// Position of diagonal entry `i` in this block's dense (`n × n`) or diagonal storage.
+    #[inline]
+    pub fn diag(&self, i: usize) -> usize {
+        if self.psd { i + i * self.n } else { i }
+    }
+
+    /// Sum of the diagonal of `v`, stored as this block's matrices are.
+    #[inline]
+    pub fn trace(&self, v: &[f64]) -> f64 {
+        (0..self.n).map(|i| v[self.diag(i)]).sum()
+    }
+
     /// Entry range of `Fᵢ` in this block.
     #[inline]
     pub fn range(&self, i: usize) -> std::ops::Range<usize> {
