@@ -2,7 +2,7 @@
 //! solve and solve only — and SDPLIB `hinf1`, `control1`, `truss1`, for every backend compiled in
 //! (`cargo bench --bench sdp_backends`; add `--features clarabel` for Clarabel).
 //!
-//! `faer-ipm-before-15` is the state before issue 15, in the same run: (28) as stated (with
+//! The `faer-ipm-before-15` lines are the earlier method, in the same run: (28) as stated (with
 //! `Q⁻¹`, `R⁻¹` in the block, [`Formulation::AsStated`]) and `faer-ipm` in its legacy mode
 //! ([`lmi::FaerIpm::set_legacy`]); every other line uses the whitened statement of (28).
 //! `faer-ipm-hkm` is `faer-ipm` with the HKM direction ([`lmi::FaerIpm::set_direction`]).
@@ -18,8 +18,9 @@ use estimators::smf::lmi28::{FilterSdp, FilterSdpData, Formulation};
 use lmi::{FaerIpm, SdpBackend, SdpSolution, SearchDirection, SolverSettings, backend_by_name, backend_names};
 use nalgebra::{DMatrix, DVector};
 
-/// A deterministic stable `n × n` system with `m` outputs (the reference case of the `lmi` issue
-/// for n = 4, m = 3; otherwise a lightly coupled damped chain).
+/// A deterministic stable `n × n` system with `m` outputs (the LMI (28) reference case of
+/// `crates/estimators/tests/lmi28_reference.rs` for n = 4, m = 3; otherwise a lightly coupled
+/// damped chain).
 fn filter_case(n: usize, m: usize, form: Formulation) -> FilterSdp {
     #[rustfmt::skip]
     let a4 = [
@@ -70,7 +71,7 @@ fn nearby_path(p: &lmi::SdpProblem, count: usize) -> Vec<lmi::SdpProblem> {
 fn filter_lmi(crit: &mut Criterion) {
     let mut group = crit.benchmark_group("filter_lmi_28");
     for (n, m) in [(4, 3), (4, 4), (8, 4)] {
-        // Before issue 15, in the same run: (28) as stated, faer-ipm in legacy mode.
+        // The earlier method, in the same run: (28) as stated, faer-ipm in legacy mode.
         let before = filter_case(n, m, Formulation::AsStated);
         let legacy = || {
             let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();

@@ -1,4 +1,4 @@
-//! LMI (28)/(29): the reference case of the `lmi` issue with every compiled backend, and (with the
+//! LMI (28)/(29): the reference case below with every compiled backend, and (with the
 //! `clarabel` feature) faer-ipm against Clarabel on random systems.
 //!
 //! Reference (an independent solver): `tr P_{k+1} = 0.98464424`, `τ ≈ (0.55710, 0.10383,
@@ -43,7 +43,7 @@ fn reference_case() -> Case {
 }
 
 /// The optimum to 1e-7 relative needs solves to `1e-9`: at the default `1e-8` the whitened
-/// statement (issue 15) stops 9.5e-8 from the reference on faer-ipm, inside the tolerance by a
+/// statement (the default) stops 9.5e-8 from the reference on faer-ipm, inside the tolerance by a
 /// margin that rounding on another machine could eat.
 #[test]
 fn every_backend_matches_the_reference_optimum() {

@@ -90,7 +90,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
 mod tests {
     use super::*;
 
-    /// Regression (issue 10): `cargo xtask sdplib --dir D` with a directory that does not exist
+    /// Regression: `cargo xtask sdplib --dir D` with a directory that does not exist
     /// said "SDPA format error at line 0"; now the error names the directory.
     #[test]
     fn a_missing_dir_is_reported_as_such() {

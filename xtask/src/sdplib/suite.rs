@@ -439,7 +439,7 @@ mod tests {
         assert!((Expected::Optimal { value: 17.78463, digits: 7 }.tolerance() - 17.78463e-6).abs() < 1e-15);
     }
 
-    /// Regression (issue 10): references of 1.5e-400, NaN or 1e400 used to make the tolerance
+    /// Regression: references of 1.5e-400, NaN or 1e400 used to make the tolerance
     /// infinite in release builds (every answer passed) and overflow an `i32` subtraction in
     /// debug builds. They are now rejected with a reason.
     #[test]

@@ -89,7 +89,7 @@ pub enum Formulation {
     /// rows of `P` scaled by `D` (see the [module documentation](self)); the default.
     #[default]
     Whitened,
-    /// (28) literally, with `τ₂ Q⁻¹` and `τ₃ R⁻¹` in the block (the form before issue 15).
+    /// (28) literally, with `τ₂ Q⁻¹` and `τ₃ R⁻¹` in the block (the earlier form).
     AsStated,
 }
 

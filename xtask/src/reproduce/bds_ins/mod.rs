@@ -27,7 +27,7 @@ use super::outputs;
 use super::truck::run::{Spread, StepTiming};
 use run::{Accumulator, Mode, VARIANTS_A, VARIANTS_B, Variant, WindowStats};
 
-/// Default number of Monte Carlo seeds (the issue asks for at least 50).
+/// Default number of Monte Carlo seeds (the reproduction calls for at least 50).
 pub const DEFAULT_RUNS: usize = 50;
 /// Seeds in `--quick`.
 pub const QUICK_RUNS: usize = 3;
