@@ -2,7 +2,7 @@
 //! solve and solve only — and SDPLIB `hinf1`, `control1`, `truss1`, for every backend compiled in
 //! (`cargo bench --bench sdp_backends`; add `--features clarabel` for Clarabel).
 //!
-//! The `faer-ipm-before-15` lines are the earlier method, in the same run: (28) as stated (with
+//! The earlier method is timed too, in the same run: (28) as stated (with
 //! `Q⁻¹`, `R⁻¹` in the block, [`Formulation::AsStated`]) and `faer-ipm` in its legacy mode
 //! ([`lmi::FaerIpm::set_legacy`]); every other line uses the whitened statement of (28).
 //! `faer-ipm-hkm` is `faer-ipm` with the HKM direction ([`lmi::FaerIpm::set_direction`]).
