@@ -61,11 +61,34 @@ impl Ellipsoid {
     }
 }
 
+/// The trace-optimal weights `(τ₁, τ₂)`, `τ₁ + τ₂ = 1`, of the outer bound `P₁/τ₁ + P₂/τ₂` of
+/// `𝓔(0, P₁) ⊕ 𝓔(0, P₂)` from the two traces: `τ₁ = √tr P₁ / (√tr P₁ + √tr P₂)` (the same family
+/// as [`Ellipsoid::minkowski_sum_outer`] with `p = τ₁/τ₂`), `(½, ½)` when both traces vanish.
+/// Allocation-free: the set-membership filter's prediction uses it on its buffers.
+#[must_use]
+pub fn min_trace_weights(trace_1: f64, trace_2: f64) -> (f64, f64) {
+    let (s1, s2) = (trace_1.max(0.0).sqrt(), trace_2.max(0.0).sqrt());
+    let t1 = if s1 + s2 > 0.0 { s1 / (s1 + s2) } else { 0.5 };
+    (t1, 1.0 - t1)
+}
+
 #[cfg(test)]
 mod tests {
     use nalgebra::{DMatrix, DVector};
 
     use super::*;
+
+    #[test]
+    fn weights_are_the_parameter_of_the_min_trace_bound() {
+        let a = Ellipsoid::axis_aligned(DVector::zeros(2), &[2.0, 1.0]).unwrap();
+        let b = Ellipsoid::axis_aligned(DVector::zeros(2), &[0.5, 0.3]).unwrap();
+        let (t1, t2) = min_trace_weights(a.trace(), b.trace());
+        let p = a.minkowski_min_trace_parameter(&b).unwrap();
+        // P₁/τ₁ + P₂/τ₂ is the bound with parameter p: 1/τ₁ = 1 + 1/p, 1/τ₂ = 1 + p.
+        assert!((1.0 / t1 - (1.0 + 1.0 / p)).abs() < 1e-14 && (1.0 / t2 - (1.0 + p)).abs() < 1e-14);
+        assert_eq!(t1 + t2, 1.0);
+        assert_eq!(min_trace_weights(0.0, 0.0), (0.5, 0.5));
+    }
 
     #[test]
     fn sum_of_balls_is_exact_at_optimum() {

@@ -18,6 +18,12 @@
 //! a closure `|c: &ScalingContext| -> f64`, or [`ConstantScaling`]. Each step reports its `t_k` and
 //! `d_k` ([`AdaptiveStep`]). Without a fix the filter only predicts ([`AdaptiveKalmanFilter::predict`]).
 //!
+//! As an [`Estimator`] (so that it runs wherever any filter runs), the receiver status travels
+//! with its measurement: the measurement vector is the model's `m` outputs followed by the
+//! satellite count and the RTK code, `y = [y₁ … y_m, N, RTK]` (length `m + 2`,
+//! [`AdaptiveKalmanFilter::dims`]); an RTK code of 0 marks an epoch without a fix, whose step is a
+//! prediction only.
+//!
 //! Bad input is a typed [`AdaptiveError`] and leaves the filter unchanged: NaN anywhere, a
 //! negative satellite count, an RTK code outside 1–4 ([`ReceiverStatus::new`]), a scale that is not
 //! positive and finite. After construction a step allocates nothing (tested with a counting
@@ -26,10 +32,12 @@
 use nalgebra::{DMatrix, DVector};
 
 use fuzzy_inference::{Evaluation, FuzzyError, FuzzySystem};
-use models::LinearModel;
+use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, KalmanFilter};
+use crate::traits::{Estimator, Setup, StepDetails};
+use crate::validate::check_vec;
 
 /// The RTK codes the paper uses (P): 1 single, 2 differential, 3 fixed, 4 float.
 pub const RTK_CODES: std::ops::RangeInclusive<u8> = 1..=4;
@@ -84,6 +92,15 @@ pub struct ReceiverStatus {
 }
 
 impl ReceiverStatus {
+    /// The status of a measurement vector's two last entries `[N, RTK]`: `None` for RTK code 0 (no
+    /// fix), else as [`ReceiverStatus::new`].
+    ///
+    /// # Errors
+    /// As [`ReceiverStatus::new`].
+    pub fn from_measurement(satellites: f64, rtk_code: f64) -> Result<Option<Self>, AdaptiveError> {
+        if rtk_code == 0.0 { Ok(None) } else { Self::new(satellites, rtk_code).map(Some) }
+    }
+
     /// Validates a status as logged (numbers, as read from a file).
     ///
     /// # Errors
@@ -226,31 +243,27 @@ pub struct AdaptiveKalmanFilter<S> {
     r_scaled: DMatrix<f64>,
     horizontal: [usize; 2],
     updates: u64,
-    last: Option<AdaptiveStep>,
+    /// The model outputs `y₁ … y_m` of a measurement vector `[y, N, RTK]`.
+    outputs: DVector<f64>,
 }
 
 /// The paper's fuzzy Kalman filter (FKF): the adaptive filter with a [`FuzzyScaling`].
 pub type FuzzyKalmanFilter = AdaptiveKalmanFilter<FuzzyScaling>;
 
 impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
-    /// A filter with initial mean `x0`, covariance `p0`, process covariance `q`, nominal
-    /// measurement covariance `r` (`t_k = 1`), `inputs` input components, and the scaling. `d_k`
-    /// is formed from innovation components 0 and 1 (see [`AdaptiveKalmanFilter::with_horizontal`]).
+    /// A filter from its [`Setup`] (covariances; the measurement noise is the nominal `R`,
+    /// `t_k = 1`) and the scaling. `d_k` is formed from innovation components 0 and 1 (see
+    /// [`AdaptiveKalmanFilter::with_horizontal`]).
     ///
     /// # Errors
     /// As [`KalmanFilter::new`] (wrapped in [`AdaptiveError::Filter`]), and
     /// [`AdaptiveError::HorizontalComponents`] for fewer than two outputs.
-    pub fn new(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        inputs: usize,
-        scaling: S,
-    ) -> Result<Self, AdaptiveError> {
-        let kf = KalmanFilter::new(x0, p0, q, r, inputs)?;
+    pub fn new(setup: Setup, scaling: S) -> Result<Self, AdaptiveError> {
+        let mut kf = KalmanFilter::new(setup)?;
+        kf.set_details(StepDetails::Adaptive(None));
         let r_scaled = kf.measurement_noise().clone();
-        Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, last: None }.with_horizontal([0, 1])
+        let outputs = DVector::zeros(r_scaled.nrows());
+        Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, outputs }.with_horizontal([0, 1])
     }
 
     /// Chooses which two innovation components form `d_k = √(r_i² + r_j²)`.
@@ -258,7 +271,7 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// # Errors
     /// [`AdaptiveError::HorizontalComponents`] unless they are distinct and below `m`.
     pub fn with_horizontal(mut self, components: [usize; 2]) -> Result<Self, AdaptiveError> {
-        let m = self.kf.dims().2;
+        let m = self.kf.dims().outputs;
         if components[0] == components[1] || components.iter().any(|&i| i >= m) {
             return Err(AdaptiveError::HorizontalComponents { components, outputs: m });
         }
@@ -266,23 +279,34 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         Ok(self)
     }
 
-    /// One predict–update step with the receiver's working state: consumes `u_k`, the
-    /// measurement `y_{k+1}` and the status of that epoch; returns the `t_k` and `d_k` used (the
-    /// estimate is [`AdaptiveKalmanFilter::estimate`]). On error the filter is unchanged.
-    /// Allocation-free (if the scaling is).
+    /// One predict–update step with the receiver's working state given apart from the
+    /// measurement: consumes `u_k`, the model outputs `y_{k+1}` (length `m`) and the status of that
+    /// epoch; returns the `t_k` and `d_k` used (the estimate is
+    /// [`AdaptiveKalmanFilter::estimate`]). On error the filter is unchanged. Allocation-free (if
+    /// the scaling is).
     ///
     /// # Errors
     /// [`AdaptiveError::Filter`] for a model, input or measurement the Kalman step rejects
     /// (dimensions, NaN/∞, a numerical failure), the scaling's error, or
     /// [`AdaptiveError::InvalidScale`].
-    pub fn step<M: LinearModel + ?Sized>(
+    pub fn step_with_status<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
         u: &DVector<f64>,
         y: &DVector<f64>,
         status: &ReceiverStatus,
     ) -> Result<AdaptiveStep, AdaptiveError> {
-        let innovation = self.kf.predict_and_innovate(model, u, y)?;
+        self.kf.predict_and_innovate(model, u, y)?;
+        self.scaled_update(model, status)
+    }
+
+    /// The update of the buffered prediction and innovation with `t_k` from the scaling.
+    fn scaled_update<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        status: &ReceiverStatus,
+    ) -> Result<AdaptiveStep, AdaptiveError> {
+        let innovation = self.kf.innovation();
         let [i, j] = self.horizontal;
         let distance = innovation[i].hypot(innovation[j]);
         let context = ScalingContext { status: *status, distance, innovation, step: self.updates + 1 };
@@ -295,21 +319,78 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         self.kf.update_buffered(model.c(), &self.r_scaled)?;
         self.updates += 1;
         let report = AdaptiveStep { scale, distance };
-        self.last = Some(report);
+        self.kf.set_details(StepDetails::Adaptive(Some(report)));
         Ok(report)
     }
 
-    /// A prediction-only step (no fix this epoch): `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q`. On error
-    /// the filter is unchanged. Allocation-free.
+    /// The prediction (no fix this epoch, or the first half of a step): `x⁻ = A x + B u`,
+    /// `P⁻ = A P Aᵀ + Q`. On error the filter is unchanged. Allocation-free.
     ///
     /// # Errors
-    /// As [`KalmanFilter::predict`], wrapped in [`AdaptiveError::Filter`].
+    /// As [`KalmanFilter::predict`].
     pub fn predict<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
         u: &DVector<f64>,
-    ) -> Result<&GaussianEstimate, AdaptiveError> {
-        Ok(self.kf.predict(model, u)?)
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.kf.predict(model, u)?;
+        self.kf.set_details(StepDetails::Adaptive(None));
+        Ok(self.kf.estimate())
+    }
+
+    /// Splits a measurement vector `[y₁ … y_m, N, RTK]` into the outputs (kept in `self.outputs`)
+    /// and the receiver status (`None`: no fix).
+    fn split_measurement(&mut self, y: &DVector<f64>) -> Result<Option<ReceiverStatus>, EstimatorError> {
+        let m = self.outputs.len();
+        check_vec("y", y, m + 2)?;
+        let status = ReceiverStatus::from_measurement(y[m], y[m + 1]).map_err(|e| adaptive_error(e, m))?;
+        self.outputs.copy_from(&y.rows(0, m));
+        Ok(status)
+    }
+
+    /// One step on a measurement vector `[y₁ … y_m, N, RTK]` (module documentation): the adaptive
+    /// predict–update with the status of the epoch, or a prediction only when the RTK code is 0.
+    /// On error the filter is unchanged. Allocation-free (if the scaling is).
+    ///
+    /// # Errors
+    /// As [`AdaptiveKalmanFilter::step_with_status`], the receiver status and noise-scale errors as
+    /// [`EstimatorError::Adaptive`] naming the measurement component.
+    pub fn step<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let m = self.outputs.len();
+        match self.split_measurement(y)? {
+            None => self.predict(model, u),
+            Some(status) => {
+                let outputs = std::mem::take(&mut self.outputs);
+                let result = self.step_with_status(model, u, &outputs, &status);
+                self.outputs = outputs;
+                result.map_err(|e| adaptive_error(e, m))?;
+                Ok(self.kf.estimate())
+            }
+        }
+    }
+
+    /// The measurement update of the current estimate with `[y₁ … y_m, N, RTK]` (nothing changes
+    /// without a fix). On error the filter is unchanged.
+    ///
+    /// # Errors
+    /// As [`AdaptiveKalmanFilter::step`].
+    pub fn update<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let m = self.outputs.len();
+        let Some(status) = self.split_measurement(y)? else {
+            return Ok(self.kf.estimate());
+        };
+        self.kf.innovate_estimate(model, &self.outputs)?;
+        self.scaled_update(model, &status).map_err(|e| adaptive_error(e, m))?;
+        Ok(self.kf.estimate())
     }
 
     /// The current estimate.
@@ -318,10 +399,13 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         self.kf.estimate()
     }
 
-    /// `t_k` and `d_k` of the last update (`None` before the first).
+    /// `t_k` and `d_k` of the last step (`None` before the first update and after a prediction).
     #[must_use]
     pub fn last_step(&self) -> Option<AdaptiveStep> {
-        self.last
+        match self.kf.estimate().details {
+            StepDetails::Adaptive(a) => a,
+            _ => None,
+        }
     }
 
     /// Number of updates so far (prediction-only steps are not counted).
@@ -347,10 +431,11 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         &mut self.scaling
     }
 
-    /// `(n, p, m)`.
+    /// States, inputs, and the length of the measurement vector `[y₁ … y_m, N, RTK]` (`m + 2`).
     #[must_use]
-    pub fn dims(&self) -> (usize, usize, usize) {
-        self.kf.dims()
+    pub fn dims(&self) -> Dims {
+        let d = self.kf.dims();
+        Dims::new(d.states, d.inputs, d.outputs + 2)
     }
 
     /// Replaces the process-noise covariance in place (a model rebuilt per step, e.g. a turning
@@ -360,6 +445,41 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// As [`KalmanFilter::set_process_noise`].
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), AdaptiveError> {
         Ok(self.kf.set_process_noise(q)?)
+    }
+}
+
+/// An [`AdaptiveError`] as an [`EstimatorError`]: the Kalman step's own errors as they are, the
+/// rest wrapped, naming measurement component `m` (satellites) or `m + 1` (RTK code) where the
+/// error is about one of them.
+fn adaptive_error(e: AdaptiveError, m: usize) -> EstimatorError {
+    match e {
+        AdaptiveError::Filter(e) => e,
+        AdaptiveError::NegativeSatellites(_) | AdaptiveError::NonFinite { what: "the satellite count", .. } => {
+            EstimatorError::Adaptive { index: Some(m), source: Box::new(e) }
+        }
+        AdaptiveError::RtkOutOfRange(_) | AdaptiveError::NonFinite { .. } => {
+            EstimatorError::Adaptive { index: Some(m + 1), source: Box::new(e) }
+        }
+        e => EstimatorError::Adaptive { index: None, source: Box::new(e) },
+    }
+}
+
+impl<S: NoiseScaling, M: LinearModel + ?Sized> Estimator<M> for AdaptiveKalmanFilter<S> {
+    type Estimate = GaussianEstimate;
+    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        AdaptiveKalmanFilter::step(self, model, u, y)
+    }
+    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        AdaptiveKalmanFilter::predict(self, model, u)
+    }
+    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        AdaptiveKalmanFilter::update(self, model, y)
+    }
+    fn estimate(&self) -> &GaussianEstimate {
+        self.kf.estimate()
+    }
+    fn dims(&self) -> Dims {
+        AdaptiveKalmanFilter::dims(self)
     }
 }
 

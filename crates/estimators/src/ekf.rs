@@ -21,7 +21,7 @@ use models::{DifferentiableModel, Dims};
 
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, GaussianUpdate, commit_prediction};
-use crate::traits::{Estimator, NoiseSettings};
+use crate::traits::{Estimator, Setup, StepDetails};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
 
 /// An extended Kalman filter; `Q`, `R` are covariances.
@@ -40,24 +40,18 @@ pub struct ExtendedKalmanFilter {
     p_pred: DMatrix<f64>,
     fp: DMatrix<f64>,
     innov: DVector<f64>,
+    /// The input of the last prediction, for `h` in a following update.
+    u_last: DVector<f64>,
     upd: GaussianUpdate,
 }
 
 impl ExtendedKalmanFilter {
-    /// A filter with initial mean `x0`, covariance `p0` (`n × n`), process covariance `q`
-    /// (`n × n`), measurement covariance `r` (`m × m`) and `inputs` input components.
+    /// A filter from its [`Setup`] (covariances).
     ///
     /// # Errors
-    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the argument.
-    pub fn new(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        inputs: usize,
-    ) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
-        let std_dev = p0.diagonal().map(f64::sqrt);
+    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix.
+    pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial(setup)?;
         let nn = || DMatrix::zeros(n, n);
         Ok(Self {
             n,
@@ -65,7 +59,7 @@ impl ExtendedKalmanFilter {
             m,
             q,
             r,
-            est: GaussianEstimate { mean: x0, covariance: p0, std_dev },
+            est: GaussianEstimate::initial(x0, p0, StepDetails::None),
             x_pred: DVector::zeros(n),
             f: nn(),
             h: DMatrix::zeros(m, n),
@@ -73,24 +67,13 @@ impl ExtendedKalmanFilter {
             p_pred: nn(),
             fp: nn(),
             innov: DVector::zeros(m),
+            u_last: DVector::zeros(inputs),
             upd: GaussianUpdate::new(n, m),
         })
     }
 
-    /// A filter from [`NoiseSettings`] (covariances).
-    ///
-    /// # Errors
-    /// As [`ExtendedKalmanFilter::new`].
-    pub fn with_noise(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        noise: &NoiseSettings,
-        inputs: usize,
-    ) -> Result<Self, EstimatorError> {
-        Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
-    }
-
     /// The current estimate.
+    #[must_use]
     pub fn estimate(&self) -> &GaussianEstimate {
         &self.est
     }
@@ -111,8 +94,8 @@ impl ExtendedKalmanFilter {
         replace_spd("R", &mut self.r, r, &mut self.upd.s)
     }
 
-    /// A prediction-only step (7), (8): `x⁻ = f(x̂, u)`, `P⁻ = F P Fᵀ + Q`. On error the state is
-    /// unchanged.
+    /// The prediction (7), (8): `x⁻ = f(x̂, u)`, `P⁻ = F P Fᵀ + Q`, published. On error the state
+    /// is unchanged.
     ///
     /// # Errors
     /// As [`ExtendedKalmanFilter::step`].
@@ -125,6 +108,45 @@ impl ExtendedKalmanFilter {
         check_vec("u", u, self.p)?;
         self.predict_into_buffers(model, u)?;
         commit_prediction(&mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        self.u_last.copy_from(u);
+        Ok(&self.est)
+    }
+
+    /// The measurement update (9)–(11) of the current estimate with `y`, `h` evaluated with the
+    /// input of the last prediction (zero before any). On error the state is unchanged.
+    ///
+    /// # Errors
+    /// As [`ExtendedKalmanFilter::step`].
+    pub fn update<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.check_dims(model.dims())?;
+        check_vec("y", y, self.m)?;
+        self.x_pred.copy_from(&self.est.center);
+        self.p_pred.copy_from(&self.est.covariance);
+        self.measurement_update(model, None, y)
+    }
+
+    /// (9)–(11) from the prediction buffers `x_pred`, `p_pred`, with `u` for `h` (`None`: the
+    /// input of the last prediction); published on success.
+    fn measurement_update<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: Option<&DVector<f64>>,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let u = u.unwrap_or(&self.u_last);
+        model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
+        if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {
+            return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
+        }
+        // Gain (9), update (10), covariance (11) in Joseph form.
+        self.innov.copy_from(y);
+        self.innov -= &self.y_pred;
+        self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov)?;
+        self.upd.commit(&mut self.est);
         Ok(&self.est)
     }
 
@@ -139,7 +161,7 @@ impl ExtendedKalmanFilter {
         model: &M,
         u: &DVector<f64>,
     ) -> Result<(), EstimatorError> {
-        model.f_with_jacobian(&self.est.mean, u, &mut self.x_pred, &mut self.f)?;
+        model.f_with_jacobian(&self.est.center, u, &mut self.x_pred, &mut self.f)?;
         if self.x_pred.iter().chain(self.f.iter()).any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's prediction or its Jacobian is not finite"));
         }
@@ -167,16 +189,8 @@ impl ExtendedKalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(model, u)?;
-        // Gain (9).
-        model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
-        if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
-        }
-        // Gain (9), update (10), covariance (11) in Joseph form.
-        self.innov.copy_from(y);
-        self.innov -= &self.y_pred;
-        self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov)?;
-        self.upd.commit(&mut self.est);
+        self.measurement_update(model, Some(u), y)?;
+        self.u_last.copy_from(u);
         Ok(&self.est)
     }
 }
@@ -188,6 +202,9 @@ impl<M: DifferentiableModel + ?Sized> Estimator<M> for ExtendedKalmanFilter {
     }
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
         ExtendedKalmanFilter::predict(self, model, u)
+    }
+    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        ExtendedKalmanFilter::update(self, model, y)
     }
     fn estimate(&self) -> &GaussianEstimate {
         &self.est

@@ -2,7 +2,7 @@
 //! filter's state unchanged.
 
 use lmi::LmiError;
-use models::ModelError;
+use models::{Capability, ModelError};
 
 /// Everything a filter can reject.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -77,6 +77,14 @@ pub enum EstimatorError {
         /// The registered names, comma-separated.
         known: String,
     },
+    /// No solver of (29) of this name in this build.
+    #[error("unknown solver {name:?} (known: {known})")]
+    UnknownSolver {
+        /// The name asked for.
+        name: String,
+        /// The solvers of this build, comma-separated.
+        known: String,
+    },
     /// The estimator needs a setting that was not given (for example the input box of the
     /// Yang–Li reconstruction (a)).
     #[error("estimator {estimator} needs {what}")]
@@ -117,6 +125,54 @@ pub enum EstimatorError {
         estimator: &'static str,
         /// What is wrong, naming the setting.
         message: String,
+    },
+    /// [`Estimator::update`](crate::Estimator::update) of an estimator whose update is joint with
+    /// its prediction, with no prediction pending.
+    #[error(
+        "{estimator} has no prediction to update: its update is joint with the prediction ((13)-(29)); call predict \
+         before each update, or step"
+    )]
+    UpdateWithoutPrediction {
+        /// The estimator.
+        estimator: &'static str,
+    },
+    /// The estimator does not offer this operation.
+    #[error("{estimator} does not offer {operation}: {reason}")]
+    Unsupported {
+        /// The estimator.
+        estimator: &'static str,
+        /// The operation asked for.
+        operation: &'static str,
+        /// Why, and what to use instead.
+        reason: &'static str,
+    },
+    /// An estimator chosen at run time was given a model without the capability it needs.
+    #[error("estimator {estimator} needs {} (a {} model); this model offers only {}", .needs.requirement(), .needs.label(), .offered.requirement())]
+    ModelLacksCapability {
+        /// The estimator.
+        estimator: &'static str,
+        /// What it needs.
+        needs: Capability,
+        /// What the model offers.
+        offered: Capability,
+    },
+    /// An estimator was built with the settings of another.
+    #[error("estimator {estimator} takes {expected}, not {given}")]
+    WrongSettings {
+        /// The estimator.
+        estimator: &'static str,
+        /// The settings it takes.
+        expected: &'static str,
+        /// The settings given.
+        given: &'static str,
+    },
+    /// The adaptive filter rejected its receiver status or its noise scale.
+    #[error("{}{source}", .index.map(|i| format!("y[{i}]: ")).unwrap_or_default())]
+    Adaptive {
+        /// The measurement component at fault (the satellite count or the RTK code), if any.
+        index: Option<usize>,
+        /// What is wrong.
+        source: Box<crate::adaptive::AdaptiveError>,
     },
     /// The model could not be evaluated.
     #[error("model: {0}")]

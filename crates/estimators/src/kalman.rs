@@ -15,18 +15,39 @@ use dense_kernels as dense;
 use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
-use crate::traits::{Estimate, EstimateKind, Estimator, NoiseSettings};
+use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
-/// The Kalman estimate after a step: mean, covariance and per-state standard deviations.
+/// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
+/// covariance, per-state standard deviations, the step's status and the filter's details.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GaussianEstimate {
     /// Posterior mean `x̂_{k+1}`.
-    pub mean: DVector<f64>,
+    pub center: DVector<f64>,
     /// Posterior covariance `P_{k+1}` (symmetric).
     pub covariance: DMatrix<f64>,
     /// `√P_ii`.
     pub std_dev: DVector<f64>,
+    /// How the step ended ([`SolveOutcome::Converged`] for a measurement update,
+    /// [`SolveOutcome::Predicted`] for a prediction; a fallback when a guard was needed).
+    pub status: StepStatus,
+    /// The filter's own details ([`StepDetails::None`] for the Kalman filters).
+    pub details: StepDetails,
+}
+
+impl GaussianEstimate {
+    /// The initial estimate `(x0, P0)` with the given details.
+    pub(crate) fn initial(x0: DVector<f64>, p0: DMatrix<f64>, details: StepDetails) -> Self {
+        let std_dev = p0.diagonal().map(|v| v.max(0.0).sqrt());
+        Self { center: x0, covariance: p0, std_dev, status: StepStatus::INITIAL, details }
+    }
+
+    /// Recomputes `std_dev` from the covariance.
+    pub(crate) fn refresh_std_dev(&mut self) {
+        for i in 0..self.center.len() {
+            self.std_dev[i] = self.covariance[(i, i)].max(0.0).sqrt();
+        }
+    }
 }
 
 /// A Kalman filter for `x_{k+1} = A_k x_k + B_k u_k + w_k`, `y = C x + v`, `w ~ (0, Q)`,
@@ -80,11 +101,10 @@ pub(crate) fn commit_prediction(
     if x_pred.iter().chain(p_pred.iter()).any(|v| !v.is_finite()) {
         return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
     }
-    std::mem::swap(&mut est.mean, x_pred);
+    std::mem::swap(&mut est.center, x_pred);
     std::mem::swap(&mut est.covariance, p_pred);
-    for i in 0..est.mean.len() {
-        est.std_dev[i] = est.covariance[(i, i)].max(0.0).sqrt();
-    }
+    est.refresh_std_dev();
+    est.status = StepStatus::unchecked(SolveOutcome::Predicted);
     Ok(())
 }
 
@@ -136,35 +156,30 @@ impl GaussianUpdate {
         Ok(())
     }
 
-    /// Publishes the computed `x⁺`, `P⁺` into `est` (swaps buffers).
+    /// Publishes the computed `x⁺`, `P⁺` into `est` (swaps buffers), status converged.
     pub(crate) fn commit(&mut self, est: &mut GaussianEstimate) {
-        std::mem::swap(&mut est.mean, &mut self.x_new);
+        std::mem::swap(&mut est.center, &mut self.x_new);
         std::mem::swap(&mut est.covariance, &mut self.p_new);
-        for i in 0..est.mean.len() {
-            est.std_dev[i] = est.covariance[(i, i)].max(0.0).sqrt();
-        }
+        est.refresh_std_dev();
+        est.status = StepStatus::unchecked(SolveOutcome::Converged);
     }
 }
 
 impl KalmanFilter {
-    /// A filter with initial mean `x0`, covariance `p0` (`n × n`), process covariance `q`
-    /// (`n × n`), measurement covariance `r` (`m × m`) and `inputs` input components.
-    pub fn new(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        inputs: usize,
-    ) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
-        let std_dev = p0.diagonal().map(f64::sqrt);
+    /// A filter from its [`Setup`]: initial mean and covariance, process and measurement noise
+    /// covariances, number of inputs.
+    ///
+    /// # Errors
+    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix.
+    pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial(setup)?;
         Ok(Self {
             n,
             p: inputs,
             m,
             q,
             r,
-            est: GaussianEstimate { mean: x0, covariance: p0, std_dev },
+            est: GaussianEstimate::initial(x0, p0, StepDetails::None),
             x_pred: DVector::zeros(n),
             p_pred: DMatrix::zeros(n, n),
             ap: DMatrix::zeros(n, n),
@@ -173,24 +188,16 @@ impl KalmanFilter {
         })
     }
 
-    /// Number of states, inputs, outputs `(n, p, m)`.
-    pub fn dims(&self) -> (usize, usize, usize) {
-        (self.n, self.p, self.m)
+    /// Number of states, inputs, outputs.
+    #[must_use]
+    pub fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
     }
 
     /// The current estimate.
+    #[must_use]
     pub fn estimate(&self) -> &GaussianEstimate {
         &self.est
-    }
-
-    /// A filter from [`NoiseSettings`] (covariances).
-    pub fn with_noise(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        noise: &NoiseSettings,
-        inputs: usize,
-    ) -> Result<Self, EstimatorError> {
-        Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
     }
 
     /// Replaces both noise matrices in place (each validated first; if either is rejected
@@ -213,8 +220,11 @@ impl KalmanFilter {
         crate::validate::replace_spd("R", &mut self.r, r, &mut self.upd.s)
     }
 
-    /// A prediction-only step (no measurement): `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q`. On error the
-    /// state is unchanged. Allocation-free.
+    /// The prediction `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q`, published. On error the state is
+    /// unchanged. Allocation-free.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::step`].
     pub fn predict<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
@@ -227,9 +237,28 @@ impl KalmanFilter {
         Ok(&self.est)
     }
 
+    /// The measurement update of the current estimate with `y` and the model's `C`, Joseph form.
+    /// On error the state is unchanged. Allocation-free.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::step`].
+    pub fn update<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        check_vec("y", y, self.m)?;
+        self.innov.copy_from(y);
+        dense::gemv(-1.0, model.c(), &self.est.center, 1.0, &mut self.innov);
+        self.upd.compute(&self.est.center, &self.est.covariance, model.c(), &self.r, &self.innov)?;
+        self.upd.commit(&mut self.est);
+        Ok(&self.est)
+    }
+
     /// `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q` into the prediction buffers (allocation-free).
     fn predict_into_buffers(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, u: &DVector<f64>) {
-        dense::gemv(1.0, a, &self.est.mean, 0.0, &mut self.x_pred);
+        dense::gemv(1.0, a, &self.est.center, 0.0, &mut self.x_pred);
         dense::gemv(1.0, b, u, 1.0, &mut self.x_pred);
         dense::mul_nn(1.0, a, &self.est.covariance, 0.0, &mut self.ap);
         self.p_pred.copy_from(&self.q);
@@ -245,14 +274,14 @@ impl KalmanFilter {
         model: &M,
         u: &DVector<f64>,
         y: &DVector<f64>,
-    ) -> Result<&DVector<f64>, EstimatorError> {
+    ) -> Result<(), EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(model.a(), model.b(), u);
         self.innov.copy_from(y);
         dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
-        Ok(&self.innov)
+        Ok(())
     }
 
     /// The second half: the Joseph-form update of the buffered prediction and innovation with
@@ -268,13 +297,44 @@ impl KalmanFilter {
         Ok(&self.est)
     }
 
+    /// The innovation formed by the last [`KalmanFilter::predict_and_innovate`] or
+    /// [`KalmanFilter::innovate_estimate`].
+    pub(crate) fn innovation(&self) -> &DVector<f64> {
+        &self.innov
+    }
+
+    /// Loads the current estimate as the prediction and forms the innovation `ν = y − C x̂`
+    /// (an update without a prediction). Allocation-free; nothing is published.
+    pub(crate) fn innovate_estimate<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<(), EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        check_vec("y", y, self.m)?;
+        self.x_pred.copy_from(&self.est.center);
+        self.p_pred.copy_from(&self.est.covariance);
+        self.innov.copy_from(y);
+        dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        Ok(())
+    }
+
+    /// Sets the details published with the estimate (the adaptive filter's scale).
+    pub(crate) fn set_details(&mut self, details: StepDetails) {
+        self.est.details = details;
+    }
+
     /// The measurement-noise covariance `R`.
     pub(crate) fn measurement_noise(&self) -> &DMatrix<f64> {
         &self.r
     }
 
-    /// One predict–update step: consumes `u_k` and the measurement `y_{k+1}`. On error the
-    /// state is unchanged. Allocation-free.
+    /// One step, [`KalmanFilter::predict`] then [`KalmanFilter::update`]: consumes `u_k` and the
+    /// measurement `y_{k+1}`. On error the state is unchanged. Allocation-free.
+    ///
+    /// # Errors
+    /// Wrong dimensions of the model, `u` or `y`; NaN/∞ in them; an innovation covariance that is
+    /// not positive definite or a non-finite estimate ([`EstimatorError::NumericalFailure`]).
     pub fn step<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
@@ -300,10 +360,19 @@ impl Estimate for GaussianEstimate {
         EstimateKind::Gaussian
     }
     fn center(&self) -> &DVector<f64> {
-        &self.mean
+        &self.center
     }
     fn shape(&self) -> &DMatrix<f64> {
         &self.covariance
+    }
+    fn bounds(&self, i: usize) -> Option<(f64, f64)> {
+        (i < self.center.len()).then(|| (self.center[i] - self.std_dev[i], self.center[i] + self.std_dev[i]))
+    }
+    fn status(&self) -> StepStatus {
+        self.status
+    }
+    fn details(&self) -> StepDetails {
+        self.details
     }
 }
 
@@ -314,6 +383,9 @@ impl<M: LinearModel + ?Sized> Estimator<M> for KalmanFilter {
     }
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
         KalmanFilter::predict(self, model, u)
+    }
+    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        KalmanFilter::update(self, model, y)
     }
     fn estimate(&self) -> &GaussianEstimate {
         &self.est

@@ -1,309 +1,711 @@
-//! Estimators by name, so that the CLI, the reproduction and user interfaces choose one at run
-//! time and adding a filter touches one place (this table and its constructor).
+//! Every estimator by name, in one table: the command line, the reproduction and the Python
+//! package choose estimators here and contain no estimator names of their own. Adding an
+//! estimator touches its own module and one row of [`ESTIMATORS`].
 //!
-//! Estimators are grouped by the model capability they need: [`LINEAR_ESTIMATORS`] run on linear
-//! (time-varying) models ([`linear`], `Box<dyn DynEstimator<dyn LinearModel>>`),
-//! [`DIFFERENTIABLE_ESTIMATORS`] on models with Jacobians ([`differentiable`]),
-//! [`NONLINEAR_ESTIMATORS`] on models that give only `f` and `h` ([`nonlinear`]).
+//! A row ([`EstimatorEntry`]) says what the estimator publishes ([`EstimateKind`]), which model
+//! capability it needs ([`Capability`]), which settings it takes ([`SettingsKind`]: the typed
+//! [`EstimatorSettings`] variant, with its default) and how to build it from a [`Setup`]. The
+//! result is an [`AnyEstimator`]: the estimator behind the object-safe [`DynEstimator`] over
+//! `dyn AnyModel`, taking from the model the capability it needs (or naming the one missing).
+//!
+//! ```
+//! use estimators::registry;
+//! use estimators::{DynEstimator, Setup};
+//! use models::{AnyModel, ConstantModel};
+//! use nalgebra::{DMatrix, DVector};
+//!
+//! let model = ConstantModel::new(DMatrix::identity(1, 1) * 0.9, DMatrix::identity(1, 1), DMatrix::identity(1, 1))?;
+//! let setup = Setup {
+//!     x0: DVector::zeros(1),
+//!     p0: DMatrix::identity(1, 1),
+//!     process_noise: DMatrix::identity(1, 1) * 0.01,
+//!     measurement_noise: DMatrix::identity(1, 1) * 0.1,
+//!     inputs: 1,
+//! };
+//! for name in ["kf", "smf", "ekf", "ukf"] {
+//!     let mut est = registry::build(name, setup.clone(), None)?;
+//!     let e = est.step_dyn(&model as &dyn AnyModel, &DVector::zeros(1), &DVector::from_element(1, 0.1))?;
+//!     assert!(e.status().is_clean(), "{name}: {}", e.status());
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
+use fuzzy_inference::FuzzySystem;
 use lmi::SolverSettings;
-use models::{DifferentiableModel, DiscreteModel, LinearModel};
+use models::{AnyModel, Capability, DifferentiableModel, DiscreteModel, Dims, LinearModel};
 
+use crate::adaptive::{AdaptiveKalmanFilter, FuzzyScaling};
 use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
 use crate::mhe::{MheCost, MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
-use crate::smf::{SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver};
-use crate::traits::{DynEstimator, EstimateKind, NoiseSettings};
+use crate::smf::{InconsistencyPolicy, SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver};
+use crate::traits::{DynEstimator, Estimate, EstimateKind, Setup};
 use crate::ukf::{UkfParams, UnscentedKalmanFilter};
 use crate::yang_li;
 
-/// The solver name of the exact two-multiplier method (the default of the set-membership
-/// filters); any `lmi` backend name (`faer-ipm`, `clarabel` with that feature) selects an SDP
-/// solver instead.
-pub const TWO_MULTIPLIER: &str = "two-multiplier";
-
-/// A registered estimator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct EstimatorInfo {
-    /// Its name in the registry (CLI `--estimator`).
-    pub name: &'static str,
-    /// What kind of set it publishes.
-    pub kind: EstimateKind,
-    /// One line for `--help` and reports.
-    pub summary: &'static str,
-    /// Whether it uses [`LinearSetup::solver`].
-    pub uses_solver: bool,
-    /// Whether it needs [`LinearSetup::input_bounds`].
-    pub needs_input_bounds: bool,
+/// How a set-membership filter solves (29), parsed from a name in one place
+/// ([`SmfSolver::by_name`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SmfSolver {
+    /// The exact two-multiplier method (the default; microseconds per step).
+    TwoMultiplier,
+    /// An SDP backend of `lmi` on LMI (28).
+    Sdp {
+        /// The backend's name ([`lmi::backend_names`]).
+        backend: &'static str,
+        /// Its settings.
+        settings: SolverSettings,
+    },
 }
 
-/// The estimators for linear models, in display order.
-pub const LINEAR_ESTIMATORS: &[EstimatorInfo] = &[
-    EstimatorInfo {
-        name: "smf",
-        kind: EstimateKind::GuaranteedEllipsoid,
-        summary: "improved set-membership filter (carrier paper (13)-(29)), certified containment",
-        uses_solver: true,
-        needs_input_bounds: false,
-    },
-    EstimatorInfo {
-        name: "kf",
-        kind: EstimateKind::Gaussian,
-        summary: "Kalman filter, Joseph form (Q, R, P0 as covariances)",
-        uses_solver: false,
-        needs_input_bounds: false,
-    },
-    EstimatorInfo {
-        name: "yang-li",
-        kind: EstimateKind::GuaranteedEllipsoid,
-        summary: "reconstruction (a) of the carrier paper's reference [17]: input unused, bounded by its box",
-        uses_solver: true,
-        needs_input_bounds: true,
-    },
-    EstimatorInfo {
-        name: "yang-li-with-input",
-        kind: EstimateKind::GuaranteedEllipsoid,
-        summary: "reconstruction (b) of [17]: the input in the predictor",
-        uses_solver: true,
-        needs_input_bounds: false,
-    },
-    EstimatorInfo {
-        name: "rmhe",
-        kind: EstimateKind::Point,
-        summary: "robust min-max moving-horizon estimator with disturbance blocking (car paper), box-bounded noise",
-        uses_solver: false,
-        needs_input_bounds: false,
-    },
-    EstimatorInfo {
-        name: "mhe",
-        kind: EstimateKind::Point,
-        summary: "plain least-squares moving-horizon estimator (the rmhe settings with lambda_v -> infinity)",
-        uses_solver: false,
-        needs_input_bounds: false,
-    },
-];
+impl SmfSolver {
+    /// The name of the two-multiplier method.
+    pub const TWO_MULTIPLIER: &'static str = "two-multiplier";
 
-/// Everything a linear-model estimator is built from.
-#[derive(Debug, Clone)]
-pub struct LinearSetup {
-    /// Initial centre (mean) `x̂₀`.
-    pub x0: DVector<f64>,
-    /// Initial shape (covariance) `P₀`.
-    pub p0: DMatrix<f64>,
-    /// `Q`, `R`: ellipsoid shapes for set-membership filters, covariances for the Kalman filter.
-    pub noise: NoiseSettings,
-    /// Number of inputs `p`.
-    pub inputs: usize,
-    /// The known input box `[lower, upper]` (needed by `yang-li`).
-    pub input_bounds: Option<(DVector<f64>, DVector<f64>)>,
-    /// How a set-membership filter solves (29): [`TWO_MULTIPLIER`] (default) or an `lmi`
-    /// backend name.
-    pub solver: String,
-    /// Settings of an SDP backend. [`LinearSetup::new`] turns
-    /// [`SolverSettings::warm_start`] on: a filter's SDPs at consecutive steps are nearby
-    /// problems, and `faer-ipm` solves them in a third to a half of the iterations from the previous
-    /// step's solution (the filter certifies its `P_{k+1}` whatever the solver returns).
-    pub sdp_settings: SolverSettings,
-    /// Settings of the moving-horizon estimators (`rmhe`, `mhe`); their `x0`, `p0`, `q`, `r`
-    /// are replaced by this setup's.
-    pub mhe: Option<MheSettings>,
-}
-
-impl LinearSetup {
-    /// A setup with the default solver and no input box.
+    /// The names this build accepts: the two-multiplier method, then the SDP backends.
     #[must_use]
-    pub fn new(x0: DVector<f64>, p0: DMatrix<f64>, noise: NoiseSettings, inputs: usize) -> Self {
-        Self {
-            x0,
-            p0,
-            noise,
-            inputs,
-            input_bounds: None,
-            solver: TWO_MULTIPLIER.to_owned(),
-            sdp_settings: SolverSettings { warm_start: true, ..SolverSettings::default() },
-            mhe: None,
+    pub fn names() -> Vec<&'static str> {
+        let mut v = vec![Self::TWO_MULTIPLIER];
+        v.extend(lmi::backend_names());
+        v
+    }
+
+    /// The solver called `name`. An SDP backend warm-starts from the previous step (a filter's
+    /// SDPs at consecutive steps are nearby problems; the filter certifies its set whatever the
+    /// solver returns).
+    ///
+    /// # Errors
+    /// [`EstimatorError::UnknownSolver`] naming the known ones.
+    pub fn by_name(name: &str) -> Result<Self, EstimatorError> {
+        if name == Self::TWO_MULTIPLIER {
+            return Ok(SmfSolver::TwoMultiplier);
+        }
+        match lmi::backend_names().into_iter().find(|b| *b == name) {
+            Some(backend) => {
+                Ok(SmfSolver::Sdp { backend, settings: SolverSettings { warm_start: true, ..SolverSettings::default() } })
+            }
+            None => Err(EstimatorError::UnknownSolver { name: name.to_owned(), known: Self::names().join(", ") }),
+        }
+    }
+
+    /// The solver's name.
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            SmfSolver::TwoMultiplier => Self::TWO_MULTIPLIER,
+            SmfSolver::Sdp { backend, .. } => backend,
+        }
+    }
+
+    /// One line for `--help`.
+    #[must_use]
+    pub fn summary(name: &str) -> &'static str {
+        if name == Self::TWO_MULTIPLIER { "exact two-multiplier method (fastest)" } else { "SDP backend on LMI (28)" }
+    }
+}
+
+/// Settings of the set-membership filters.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SetMembershipSettings {
+    /// How (29) is solved.
+    pub solver: SmfSolver,
+    /// What a step does with data that contradict the noise bounds (default: an error).
+    pub inconsistency: InconsistencyPolicy,
+}
+
+impl Default for SmfSolver {
+    fn default() -> Self {
+        SmfSolver::TwoMultiplier
+    }
+}
+
+/// The known range of the input, `lower ≤ u ≤ upper` componentwise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputBox {
+    /// Lower bounds (length `p`).
+    pub lower: DVector<f64>,
+    /// Upper bounds (length `p`).
+    pub upper: DVector<f64>,
+}
+
+/// Settings of the fuzzy-adaptive Kalman filter.
+#[derive(Debug, Clone)]
+pub struct FuzzyAdaptiveSettings {
+    /// The Mamdani system with inputs `[N, RTK, d]`.
+    pub system: FuzzySystem,
+    /// The two outputs whose innovation forms `d_k`.
+    pub horizontal: [usize; 2],
+}
+
+impl Default for FuzzyAdaptiveSettings {
+    /// The digest's 45-rule system ([`FuzzySystem::bds_ins_default`]), `d` from outputs 0 and 1.
+    fn default() -> Self {
+        Self { system: FuzzySystem::bds_ins_default(), horizontal: [0, 1] }
+    }
+}
+
+/// The settings an estimator takes beyond its [`Setup`]; the variant is the row's
+/// [`SettingsKind`].
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum EstimatorSettings {
+    /// None (Kalman and extended Kalman filters).
+    None,
+    /// A set-membership filter's solver and inconsistency policy.
+    SetMembership(SetMembershipSettings),
+    /// The same, and the known input box (the Yang–Li reconstruction (a)).
+    SetMembershipInputBox(SetMembershipSettings, InputBox),
+    /// The (robust) moving-horizon estimators.
+    MovingHorizon(Box<MheSettings>),
+    /// The unscented filter's sigma points.
+    Unscented(UkfParams),
+    /// The nonlinear moving-horizon estimator.
+    NonlinearMovingHorizon(Box<NonlinearMheSettings>),
+    /// The fuzzy-adaptive filter's system.
+    FuzzyAdaptive(Box<FuzzyAdaptiveSettings>),
+}
+
+impl EstimatorSettings {
+    /// Which kind of settings this is.
+    #[must_use]
+    pub fn kind(&self) -> SettingsKind {
+        match self {
+            EstimatorSettings::None => SettingsKind::None,
+            EstimatorSettings::SetMembership(_) => SettingsKind::SetMembership,
+            EstimatorSettings::SetMembershipInputBox(..) => SettingsKind::SetMembershipInputBox,
+            EstimatorSettings::MovingHorizon(_) => SettingsKind::MovingHorizon,
+            EstimatorSettings::Unscented(_) => SettingsKind::Unscented,
+            EstimatorSettings::NonlinearMovingHorizon(_) => SettingsKind::NonlinearMovingHorizon,
+            EstimatorSettings::FuzzyAdaptive(_) => SettingsKind::FuzzyAdaptive,
         }
     }
 }
 
-/// The names of the solvers a set-membership filter accepts.
-#[must_use]
-pub fn solver_names() -> Vec<&'static str> {
-    let mut v = vec![TWO_MULTIPLIER];
-    v.extend(lmi::backend_names());
-    v
+/// Which [`EstimatorSettings`] variant a row takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum SettingsKind {
+    /// [`EstimatorSettings::None`].
+    None,
+    /// [`EstimatorSettings::SetMembership`].
+    SetMembership,
+    /// [`EstimatorSettings::SetMembershipInputBox`].
+    SetMembershipInputBox,
+    /// [`EstimatorSettings::MovingHorizon`].
+    MovingHorizon,
+    /// [`EstimatorSettings::Unscented`].
+    Unscented,
+    /// [`EstimatorSettings::NonlinearMovingHorizon`].
+    NonlinearMovingHorizon,
+    /// [`EstimatorSettings::FuzzyAdaptive`].
+    FuzzyAdaptive,
 }
 
-/// A linear-model estimator.
-pub type BoxedLinearEstimator = Box<dyn for<'m> DynEstimator<dyn LinearModel + 'm>>;
+impl SettingsKind {
+    /// What the settings are, in words.
+    #[must_use]
+    pub fn describe(self) -> &'static str {
+        match self {
+            SettingsKind::None => "no settings",
+            SettingsKind::SetMembership => "set-membership settings (solver, inconsistency policy)",
+            SettingsKind::SetMembershipInputBox => "set-membership settings and the input box",
+            SettingsKind::MovingHorizon => {
+                "moving-horizon settings (horizon, blocks, noise boxes W and V, lambda_v, solver)"
+            }
+            SettingsKind::Unscented => "sigma-point parameters (alpha, beta, kappa)",
+            SettingsKind::NonlinearMovingHorizon => "nonlinear moving-horizon settings",
+            SettingsKind::FuzzyAdaptive => "a fuzzy system with inputs [N, RTK, d]",
+        }
+    }
 
-/// Builds the registered estimator `name` from `setup`.
-///
-/// # Errors
-/// [`EstimatorError::UnknownEstimator`]; [`EstimatorError::MissingSetting`] (the input box of
-/// `yang-li`); an unknown solver ([`EstimatorError::Lmi`]); the constructors' validation
-/// errors.
-pub fn linear(name: &str, setup: &LinearSetup) -> Result<BoxedLinearEstimator, EstimatorError> {
-    let LinearSetup { x0, p0, noise, inputs, .. } = setup;
-    let (x0, p0, q, r) = (x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone());
-    let two = setup.solver == TWO_MULTIPLIER;
-    let sdp = || SdpUpdateSolver::by_name(&setup.solver, setup.sdp_settings.clone());
-    Ok(match name {
-        "kf" => Box::new(KalmanFilter::new(x0, p0, q, r, *inputs)?),
-        "smf" if two => Box::new(SetMembershipFilter::two_multiplier(x0, p0, q, r, *inputs)?),
-        "smf" => Box::new(SetMembershipFilter::new(x0, p0, q, r, *inputs, sdp()?)?),
-        "yang-li" => {
-            let Some((lo, hi)) = &setup.input_bounds else {
-                return Err(EstimatorError::MissingSetting { estimator: "yang-li", what: "the input box" });
-            };
-            if two {
-                Box::new(yang_li::without_input(x0, p0, q, r, lo, hi, TwoMultiplierSolver::new())?)
-            } else {
-                Box::new(yang_li::without_input(x0, p0, q, r, lo, hi, sdp()?)?)
+    /// The default settings, `None` when they depend on data only the user has (the input box,
+    /// the noise boxes).
+    #[must_use]
+    pub fn default_settings(self) -> Option<EstimatorSettings> {
+        match self {
+            SettingsKind::None => Some(EstimatorSettings::None),
+            SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(SetMembershipSettings::default())),
+            SettingsKind::SetMembershipInputBox | SettingsKind::MovingHorizon => None,
+            SettingsKind::Unscented => Some(EstimatorSettings::Unscented(UkfParams::default())),
+            SettingsKind::NonlinearMovingHorizon => {
+                Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(NonlinearMheSettings::paper())))
+            }
+            SettingsKind::FuzzyAdaptive => {
+                Some(EstimatorSettings::FuzzyAdaptive(Box::new(FuzzyAdaptiveSettings::default())))
             }
         }
-        "yang-li-with-input" if two => {
-            Box::new(yang_li::with_input(x0, p0, q, r, *inputs, TwoMultiplierSolver::new())?)
-        }
-        "yang-li-with-input" => Box::new(yang_li::with_input(x0, p0, q, r, *inputs, sdp()?)?),
-        "rmhe" | "mhe" => {
-            let Some(settings) = &setup.mhe else {
-                return Err(EstimatorError::MissingSetting {
-                    estimator: if name == "rmhe" { "rmhe" } else { "mhe" },
-                    what: "the moving-horizon settings (horizon, blocks, noise boxes W and V, lambda_v)",
-                });
-            };
-            let mut settings = MheSettings { x0, p0, q, r, ..settings.clone() };
-            if name == "mhe" {
-                settings.cost = MheCost::LeastSquares;
-            }
-            Box::new(MovingHorizonEstimator::new(settings, *inputs)?)
-        }
-        _ => {
-            return Err(EstimatorError::UnknownEstimator {
-                name: name.to_owned(),
-                known: LINEAR_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
+    }
+
+    /// Whether the settings include a solver of (29) (`--solver`).
+    #[must_use]
+    pub fn uses_smf_solver(self) -> bool {
+        matches!(self, SettingsKind::SetMembership | SettingsKind::SetMembershipInputBox)
+    }
+}
+
+/// A registered estimator.
+#[derive(Debug)]
+pub struct EstimatorEntry {
+    /// Its name (`--estimator`).
+    pub name: &'static str,
+    /// What it publishes.
+    pub kind: EstimateKind,
+    /// One line for `--help` and reports.
+    pub summary: &'static str,
+    /// What it needs of the model.
+    pub needs: Capability,
+    /// The settings it takes.
+    pub settings: SettingsKind,
+    /// The length of its measurement vector beyond the model's outputs (the fuzzy-adaptive
+    /// filter's receiver status `[N, RTK]`: 2).
+    pub extra_measurements: usize,
+    build: fn(&'static EstimatorEntry, Setup, EstimatorSettings) -> Result<Inner, EstimatorError>,
+}
+
+impl EstimatorEntry {
+    /// Builds the estimator from `setup` and `settings` (the row's default when `None`).
+    ///
+    /// # Errors
+    /// [`EstimatorError::MissingSetting`] when the row has no default and none are given;
+    /// [`EstimatorError::WrongSettings`] for another row's settings; the constructor's validation
+    /// errors.
+    pub fn build(&'static self, setup: Setup, settings: Option<EstimatorSettings>) -> Result<AnyEstimator, EstimatorError> {
+        let settings = match settings {
+            Some(s) => s,
+            None => self
+                .settings
+                .default_settings()
+                .ok_or(EstimatorError::MissingSetting { estimator: self.name, what: self.settings.describe() })?,
+        };
+        if settings.kind() != self.settings {
+            return Err(EstimatorError::WrongSettings {
+                estimator: self.name,
+                expected: self.settings.describe(),
+                given: settings.kind().describe(),
             });
         }
-    })
+        Ok(AnyEstimator { entry: self, inner: (self.build)(self, setup, settings)? })
+    }
+
+    /// The measurement length the estimator consumes for a model with `outputs` outputs.
+    #[must_use]
+    pub fn measurement_len(&self, outputs: usize) -> usize {
+        outputs + self.extra_measurements
+    }
 }
 
-/// The registry entry called `name`.
-#[must_use]
-pub fn info(name: &str) -> Option<&'static EstimatorInfo> {
-    LINEAR_ESTIMATORS.iter().find(|e| e.name == name)
-}
-
-/// The estimators for differentiable (nonlinear) models, in display order.
-pub const DIFFERENTIABLE_ESTIMATORS: &[EstimatorInfo] = &[
-    EstimatorInfo {
+/// Every registered estimator, in display order.
+pub static ESTIMATORS: &[EstimatorEntry] = &[
+    EstimatorEntry {
+        name: "smf",
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "improved set-membership filter (carrier paper (13)-(29)), certified containment",
+        needs: Capability::Linear,
+        settings: SettingsKind::SetMembership,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
+            let p = s.inconsistency;
+            Ok(match solver(s.solver)? {
+                Solver::Two(t) => on_linear(e, with_policy(SetMembershipFilter::with_solver(setup, t)?, p)),
+                Solver::Sdp(t) => on_linear(e, with_policy(SetMembershipFilter::with_solver(setup, t)?, p)),
+            })
+        },
+    },
+    EstimatorEntry {
+        name: "kf",
+        kind: EstimateKind::Gaussian,
+        summary: "Kalman filter, Joseph form (Q, R, P0 as covariances)",
+        needs: Capability::Linear,
+        settings: SettingsKind::None,
+        extra_measurements: 0,
+        build: |e, setup, _| Ok(on_linear(e, KalmanFilter::new(setup)?)),
+    },
+    EstimatorEntry {
+        name: "yang-li",
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "reconstruction (a) of the carrier paper's reference [17]: input unused, bounded by its box",
+        needs: Capability::Linear,
+        settings: SettingsKind::SetMembershipInputBox,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::SetMembershipInputBox(s, b) = s else { return Err(wrong_settings(e)) };
+            let (p, lo, hi) = (s.inconsistency, &b.lower, &b.upper);
+            Ok(match solver(s.solver)? {
+                Solver::Two(t) => on_linear(e, with_policy(yang_li::without_input(setup, lo, hi, t)?, p)),
+                Solver::Sdp(t) => on_linear(e, with_policy(yang_li::without_input(setup, lo, hi, t)?, p)),
+            })
+        },
+    },
+    EstimatorEntry {
+        name: "yang-li-with-input",
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "reconstruction (b) of [17]: the input in the predictor (equal to smf)",
+        needs: Capability::Linear,
+        settings: SettingsKind::SetMembership,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
+            let p = s.inconsistency;
+            Ok(match solver(s.solver)? {
+                Solver::Two(t) => on_linear(e, with_policy(yang_li::with_input(setup, t)?, p)),
+                Solver::Sdp(t) => on_linear(e, with_policy(yang_li::with_input(setup, t)?, p)),
+            })
+        },
+    },
+    EstimatorEntry {
+        name: "rmhe",
+        kind: EstimateKind::Point,
+        summary: "robust min-max moving-horizon estimator with disturbance blocking (car paper), box-bounded noise; \
+                  Q, R, P0 as weights",
+        needs: Capability::Linear,
+        settings: SettingsKind::MovingHorizon,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::MovingHorizon(s) = s else { return Err(wrong_settings(e)) };
+            Ok(on_linear(e, MovingHorizonEstimator::new(setup, *s)?))
+        },
+    },
+    EstimatorEntry {
+        name: "mhe",
+        kind: EstimateKind::Point,
+        summary: "plain least-squares moving-horizon estimator: the rmhe settings with the least-squares cost \
+                  (lambda_v -> infinity)",
+        needs: Capability::Linear,
+        settings: SettingsKind::MovingHorizon,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::MovingHorizon(s) = s else { return Err(wrong_settings(e)) };
+            let settings = MheSettings { cost: MheCost::LeastSquares, ..*s };
+            Ok(on_linear(e, MovingHorizonEstimator::new(setup, settings)?))
+        },
+    },
+    EstimatorEntry {
+        name: "fkf",
+        kind: EstimateKind::Gaussian,
+        summary: "fuzzy-adaptive Kalman filter (BDS/INS paper): R scaled every epoch by a Mamdani system of the \
+                  receiver status; measurement [y, satellites, RTK code], RTK 0 = no fix",
+        needs: Capability::Linear,
+        settings: SettingsKind::FuzzyAdaptive,
+        extra_measurements: 2,
+        build: |e, setup, s| {
+            let EstimatorSettings::FuzzyAdaptive(s) = s else { return Err(wrong_settings(e)) };
+            let FuzzyAdaptiveSettings { system, horizontal } = *s;
+            let scaling = FuzzyScaling::new(system).map_err(adaptive)?;
+            let f = AdaptiveKalmanFilter::new(setup, scaling).and_then(|f| f.with_horizontal(horizontal));
+            Ok(on_linear(e, f.map_err(adaptive)?))
+        },
+    },
+    EstimatorEntry {
         name: "ekf",
         kind: EstimateKind::Gaussian,
         summary: "extended Kalman filter, Joseph form (truck paper (7)-(11)); Q, R, P0 as covariances",
-        uses_solver: false,
-        needs_input_bounds: false,
+        needs: Capability::Differentiable,
+        settings: SettingsKind::None,
+        extra_measurements: 0,
+        build: |e, setup, _| Ok(on_differentiable(e, ExtendedKalmanFilter::new(setup)?)),
     },
-    EstimatorInfo {
+    EstimatorEntry {
+        name: "ukf",
+        kind: EstimateKind::Gaussian,
+        summary: "unscented Kalman filter, scaled sigma points with a positive-definiteness guard (dp-vessel note); \
+                  Q, R, P0 as covariances",
+        needs: Capability::Discrete,
+        settings: SettingsKind::Unscented,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::Unscented(params) = s else { return Err(wrong_settings(e)) };
+            Ok(on_discrete(e, UnscentedKalmanFilter::new(setup, params)?))
+        },
+    },
+    EstimatorEntry {
         name: "mhe-ukf",
         kind: EstimateKind::Point,
         summary: "nonlinear moving-horizon estimator, N = 10, Gauss-Newton on the banded window, UKF arrival cost \
                   (vessel paper (21)-(37)); Q, R, P0 as weights",
-        uses_solver: false,
-        needs_input_bounds: false,
+        needs: Capability::Differentiable,
+        settings: SettingsKind::NonlinearMovingHorizon,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::NonlinearMovingHorizon(s) = s else { return Err(wrong_settings(e)) };
+            Ok(on_differentiable(e, NonlinearMhe::new(setup, *s)?))
+        },
     },
 ];
 
-/// Everything a Gaussian estimator of a nonlinear model is built from.
-#[derive(Debug, Clone)]
-pub struct GaussianSetup {
-    /// Initial mean `x̂₀`.
-    pub x0: DVector<f64>,
-    /// Initial covariance `P₀`.
-    pub p0: DMatrix<f64>,
-    /// Process and measurement covariances.
-    pub noise: NoiseSettings,
-    /// Number of inputs `p`.
-    pub inputs: usize,
+/// The entry called `name`.
+#[must_use]
+pub fn entry(name: &str) -> Option<&'static EstimatorEntry> {
+    ESTIMATORS.iter().find(|e| e.name == name)
 }
 
-/// An estimator of differentiable models.
-pub type BoxedDifferentiableEstimator = Box<dyn for<'m> DynEstimator<dyn DifferentiableModel + 'm>>;
-
-/// Builds the registered estimator `name` for differentiable models from `setup`.
+/// The entry called `name`, or an error listing the known names.
 ///
 /// # Errors
-/// [`EstimatorError::UnknownEstimator`]; the constructors' validation errors.
-pub fn differentiable(name: &str, setup: &GaussianSetup) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
-    let GaussianSetup { x0, p0, noise, inputs } = setup;
-    match name {
-        "ekf" => {
-            Ok(Box::new(ExtendedKalmanFilter::new(x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone(), *inputs)?))
-        }
-        "mhe-ukf" => Ok(Box::new(NonlinearMhe::new(
-            NonlinearMheSettings::new(x0.clone(), p0.clone(), noise.q.clone(), noise.r.clone()),
-            *inputs,
-        )?)),
-        _ => Err(EstimatorError::UnknownEstimator {
-            name: name.to_owned(),
-            known: DIFFERENTIABLE_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
-        }),
+/// [`EstimatorError::UnknownEstimator`].
+pub fn lookup(name: &str) -> Result<&'static EstimatorEntry, EstimatorError> {
+    entry(name).ok_or_else(|| EstimatorError::UnknownEstimator {
+        name: name.to_owned(),
+        known: ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
+    })
+}
+
+/// Builds the estimator `name` (see [`EstimatorEntry::build`]).
+///
+/// # Errors
+/// [`EstimatorError::UnknownEstimator`] and the errors of [`EstimatorEntry::build`].
+pub fn build(name: &str, setup: Setup, settings: Option<EstimatorSettings>) -> Result<AnyEstimator, EstimatorError> {
+    lookup(name)?.build(setup, settings)
+}
+
+/// The estimators that run on `model` (its capability covers theirs).
+pub fn runs_on(model: &dyn AnyModel) -> impl Iterator<Item = &'static EstimatorEntry> {
+    let offered = Capability::of(model);
+    ESTIMATORS.iter().filter(move |e| e.needs <= offered)
+}
+
+type Inner = Box<dyn for<'m> DynEstimator<dyn AnyModel + 'm>>;
+
+/// An estimator built from the registry: any estimator behind [`DynEstimator`] over
+/// `dyn AnyModel`, with its registry entry. A step takes from the model the capability the
+/// estimator needs and returns [`EstimatorError::ModelLacksCapability`] when it is missing.
+pub struct AnyEstimator {
+    entry: &'static EstimatorEntry,
+    inner: Inner,
+}
+
+impl std::fmt::Debug for AnyEstimator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AnyEstimator").field("name", &self.entry.name).finish_non_exhaustive()
     }
 }
 
-/// The estimators that need only `f` and `h` ([`models::DiscreteModel`]), in display order.
-pub const NONLINEAR_ESTIMATORS: &[EstimatorInfo] = &[EstimatorInfo {
-    name: "ukf",
-    kind: EstimateKind::Gaussian,
-    summary: "unscented Kalman filter, scaled sigma points with a positive-definiteness guard (dp-vessel note); \
-              Q, R, P0 as covariances",
-    uses_solver: false,
-    needs_input_bounds: false,
-}];
-
-/// Everything an estimator of [`NONLINEAR_ESTIMATORS`] is built from: the Gaussian setup and
-/// the sigma-point parameters.
-#[derive(Debug, Clone)]
-pub struct NonlinearSetup {
-    /// Initial mean and covariance, noise covariances, number of inputs.
-    pub gaussian: GaussianSetup,
-    /// Sigma-point parameters of `ukf`.
-    pub ukf: UkfParams,
-}
-
-impl NonlinearSetup {
-    /// A setup with the default sigma-point parameters ([`UkfParams::default`]).
+impl AnyEstimator {
+    /// Its registry entry.
     #[must_use]
-    pub fn new(gaussian: GaussianSetup) -> Self {
-        Self { gaussian, ukf: UkfParams::default() }
+    pub fn entry(&self) -> &'static EstimatorEntry {
+        self.entry
     }
 }
 
-/// An estimator of discrete (nonlinear) models.
-pub type BoxedNonlinearEstimator = Box<dyn for<'m> DynEstimator<dyn DiscreteModel + 'm>>;
+impl<'m> DynEstimator<dyn AnyModel + 'm> for AnyEstimator {
+    fn step_dyn(
+        &mut self,
+        model: &(dyn AnyModel + 'm),
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.step_dyn(model, u, y)
+    }
+    fn predict_dyn(&mut self, model: &(dyn AnyModel + 'm), u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.predict_dyn(model, u)
+    }
+    fn update_dyn(&mut self, model: &(dyn AnyModel + 'm), y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.update_dyn(model, y)
+    }
+    fn estimate_dyn(&self) -> &dyn Estimate {
+        self.inner.estimate_dyn()
+    }
+    fn dims_dyn(&self) -> Dims {
+        self.inner.dims_dyn()
+    }
+}
 
-/// Builds the registered estimator `name` for discrete models from `setup`. (Every estimator
-/// here also implements `Estimator<dyn DifferentiableModel>`, so the same filter can be boxed
-/// beside the EKF.)
-///
-/// # Errors
-/// [`EstimatorError::UnknownEstimator`]; the constructors' validation errors.
-pub fn nonlinear(name: &str, setup: &NonlinearSetup) -> Result<BoxedNonlinearEstimator, EstimatorError> {
-    let GaussianSetup { x0, p0, noise, inputs } = &setup.gaussian;
-    match name {
-        "ukf" => Ok(Box::new(UnscentedKalmanFilter::new(
-            x0.clone(),
-            p0.clone(),
-            noise.q.clone(),
-            noise.r.clone(),
-            *inputs,
-            setup.ukf,
-        )?)),
-        _ => Err(EstimatorError::UnknownEstimator {
-            name: name.to_owned(),
-            known: NONLINEAR_ESTIMATORS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "),
-        }),
+/// The set-membership filter's solver, built.
+enum Solver {
+    Two(TwoMultiplierSolver),
+    Sdp(SdpUpdateSolver),
+}
+
+/// Builds the solver of (29).
+fn solver(solver: SmfSolver) -> Result<Solver, EstimatorError> {
+    Ok(match solver {
+        SmfSolver::TwoMultiplier => Solver::Two(TwoMultiplierSolver::new()),
+        SmfSolver::Sdp { backend, settings } => Solver::Sdp(SdpUpdateSolver::by_name(backend, settings)?),
+    })
+}
+
+fn with_policy<S: crate::smf::UpdateSolver>(
+    mut filter: SetMembershipFilter<S>,
+    policy: InconsistencyPolicy,
+) -> SetMembershipFilter<S> {
+    filter.set_inconsistency_policy(policy);
+    filter
+}
+
+/// A row's build function given another row's settings (never: [`EstimatorEntry::build`] checks
+/// the kind first).
+fn wrong_settings(e: &'static EstimatorEntry) -> EstimatorError {
+    EstimatorError::WrongSettings { estimator: e.name, expected: e.settings.describe(), given: "other settings" }
+}
+
+fn adaptive(e: crate::adaptive::AdaptiveError) -> EstimatorError {
+    EstimatorError::Adaptive { index: None, source: Box::new(e) }
+}
+
+fn missing(name: &'static str, needs: Capability, model: &dyn AnyModel) -> EstimatorError {
+    EstimatorError::ModelLacksCapability { estimator: name, needs, offered: Capability::of(model) }
+}
+
+fn on_linear<E: for<'x> DynEstimator<dyn LinearModel + 'x> + 'static>(e: &'static EstimatorEntry, inner: E) -> Inner {
+    Box::new(OnLinear { name: e.name, inner })
+}
+
+fn on_differentiable<E: for<'x> DynEstimator<dyn DifferentiableModel + 'x> + 'static>(
+    e: &'static EstimatorEntry,
+    inner: E,
+) -> Inner {
+    Box::new(OnDifferentiable { name: e.name, inner })
+}
+
+fn on_discrete<E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + 'static>(
+    e: &'static EstimatorEntry,
+    inner: E,
+) -> Inner {
+    Box::new(OnDiscrete { name: e.name, inner })
+}
+
+/// Implements `DynEstimator<dyn AnyModel>` for an adapter that takes one capability from the
+/// model (`$get`, returning an `Option`) and hands it to the estimator inside.
+macro_rules! capability_adapter {
+    ($adapter:ident, $model:ident, $capability:expr, $get:ident) => {
+        struct $adapter<E: ?Sized> {
+            name: &'static str,
+            inner: E,
+        }
+
+        impl<'m, E> DynEstimator<dyn AnyModel + 'm> for $adapter<E>
+        where
+            E: for<'x> DynEstimator<dyn $model + 'x> + ?Sized,
+        {
+            fn step_dyn(
+                &mut self,
+                model: &(dyn AnyModel + 'm),
+                u: &DVector<f64>,
+                y: &DVector<f64>,
+            ) -> Result<&dyn Estimate, EstimatorError> {
+                let m = model.$get().ok_or_else(|| missing(self.name, $capability, model))?;
+                self.inner.step_dyn(m, u, y)
+            }
+            fn predict_dyn(
+                &mut self,
+                model: &(dyn AnyModel + 'm),
+                u: &DVector<f64>,
+            ) -> Result<&dyn Estimate, EstimatorError> {
+                let m = model.$get().ok_or_else(|| missing(self.name, $capability, model))?;
+                self.inner.predict_dyn(m, u)
+            }
+            fn update_dyn(
+                &mut self,
+                model: &(dyn AnyModel + 'm),
+                y: &DVector<f64>,
+            ) -> Result<&dyn Estimate, EstimatorError> {
+                let m = model.$get().ok_or_else(|| missing(self.name, $capability, model))?;
+                self.inner.update_dyn(m, y)
+            }
+            fn estimate_dyn(&self) -> &dyn Estimate {
+                self.inner.estimate_dyn()
+            }
+            fn dims_dyn(&self) -> Dims {
+                self.inner.dims_dyn()
+            }
+        }
+    };
+}
+
+capability_adapter!(OnLinear, LinearModel, Capability::Linear, linear);
+capability_adapter!(OnDifferentiable, DifferentiableModel, Capability::Differentiable, differentiable);
+
+/// Every model offers `f` and `h`.
+struct OnDiscrete<E: ?Sized> {
+    #[allow(dead_code)]
+    name: &'static str,
+    inner: E,
+}
+
+impl<'m, E> DynEstimator<dyn AnyModel + 'm> for OnDiscrete<E>
+where
+    E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + ?Sized,
+{
+    fn step_dyn(
+        &mut self,
+        model: &(dyn AnyModel + 'm),
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.step_dyn(model.discrete(), u, y)
+    }
+    fn predict_dyn(&mut self, model: &(dyn AnyModel + 'm), u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.predict_dyn(model.discrete(), u)
+    }
+    fn update_dyn(&mut self, model: &(dyn AnyModel + 'm), y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.update_dyn(model.discrete(), y)
+    }
+    fn estimate_dyn(&self) -> &dyn Estimate {
+        self.inner.estimate_dyn()
+    }
+    fn dims_dyn(&self) -> Dims {
+        self.inner.dims_dyn()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use models::{ConstantModel, DifferentiableView, DiscreteView};
+    use nalgebra::{DMatrix, dvector};
+
+    fn setup() -> Setup {
+        Setup {
+            x0: dvector![0.0, 0.0],
+            p0: DMatrix::identity(2, 2),
+            process_noise: DMatrix::identity(2, 2) * 0.01,
+            measurement_noise: DMatrix::identity(1, 1) * 0.1,
+            inputs: 1,
+        }
+    }
+
+    #[test]
+    fn names_are_unique_and_defaults_match_their_rows() {
+        for (i, e) in ESTIMATORS.iter().enumerate() {
+            assert!(ESTIMATORS[..i].iter().all(|o| o.name != e.name), "{} twice", e.name);
+            if let Some(s) = e.settings.default_settings() {
+                assert_eq!(s.kind(), e.settings, "{}", e.name);
+            }
+        }
+        assert!(matches!(lookup("nope"), Err(EstimatorError::UnknownEstimator { .. })));
+    }
+
+    #[test]
+    fn a_model_without_the_capability_is_named() {
+        let m = ConstantModel::new(DMatrix::identity(2, 2), DMatrix::zeros(2, 1), DMatrix::from_row_slice(1, 2, &[1.0, 0.0]))
+            .unwrap();
+        let (u, y) = (DVector::zeros(1), DVector::zeros(1));
+        let mut kf = build("kf", setup(), None).unwrap();
+        let e = kf.step_dyn(&DifferentiableView(&m), &u, &y).unwrap_err();
+        assert!(matches!(e, EstimatorError::ModelLacksCapability { needs: Capability::Linear, .. }), "{e}");
+        let mut ekf = build("ekf", setup(), None).unwrap();
+        assert!(ekf.step_dyn(&DifferentiableView(&m), &u, &y).is_ok());
+        assert!(ekf.step_dyn(&DiscreteView(&m), &u, &y).is_err());
+        let mut ukf = build("ukf", setup(), None).unwrap();
+        assert!(ukf.step_dyn(&DiscreteView(&m), &u, &y).is_ok());
+        assert_eq!(runs_on(&DiscreteView(&m)).map(|e| e.name).collect::<Vec<_>>(), ["ukf"]);
+    }
+
+    #[test]
+    fn settings_are_checked_against_the_row() {
+        let e = build("kf", setup(), Some(EstimatorSettings::Unscented(UkfParams::default()))).unwrap_err();
+        assert!(matches!(e, EstimatorError::WrongSettings { estimator: "kf", .. }), "{e}");
+        let e = build("yang-li", setup(), None).unwrap_err();
+        assert!(matches!(e, EstimatorError::MissingSetting { estimator: "yang-li", .. }), "{e}");
+        let b = InputBox { lower: dvector![-1.0], upper: dvector![1.0] };
+        let s = EstimatorSettings::SetMembershipInputBox(SetMembershipSettings::default(), b);
+        assert!(build("yang-li", setup(), Some(s)).is_ok());
+        assert!(matches!(SmfSolver::by_name("nope"), Err(EstimatorError::UnknownSolver { .. })));
+        assert_eq!(SmfSolver::by_name("two-multiplier").unwrap(), SmfSolver::TwoMultiplier);
     }
 }

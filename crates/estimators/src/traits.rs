@@ -1,105 +1,112 @@
-//! The estimator and estimate traits: what every filter offers, whatever its model and its kind
-//! of set, so that the CLI, the reproduction and user code can drive any of them.
+//! The estimator and estimate traits and the data every filter starts from: what every filter
+//! offers, whatever its model and its kind of set, so that the command line, the reproduction,
+//! the Python package and user code can drive any of them.
+//!
+//! Four concepts, as in filterpy: the sizes ([`Setup::inputs`], the lengths of `x0` and of the
+//! measurement-noise matrix), the attributes ([`Setup`]: initial estimate and noise), and the two
+//! verbs [`Estimator::predict`] and [`Estimator::update`]; [`Estimator::step`] is one of each.
 
 use nalgebra::{DMatrix, DVector};
 
 use models::Dims;
 
 use crate::error::EstimatorError;
+pub use crate::status::{DataCheck, EstimateKind, Guarantee, SolveOutcome, StepDetails, StepStatus};
 
-/// What kind of set an [`Estimate`] describes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum EstimateKind {
-    /// A Gaussian estimate: mean and covariance (bounds are ±1 standard deviation).
-    Gaussian,
-    /// A guaranteed ellipsoid `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}` that contains the true
-    /// state whenever the noises respect their bounds (bounds are the set's projections).
-    GuaranteedEllipsoid,
-    /// A point estimate (moving-horizon estimators): the shape is a weight matrix of the method
-    /// (documented by the estimator), neither a calibrated covariance nor a guaranteed set.
-    Point,
+/// What every recursive estimator starts from. The meaning of the matrices depends on the
+/// estimator's [`EstimateKind`]: covariances for the Gaussian filters, ellipsoid shape matrices
+/// for the set-membership filters (`w ∈ {w : wᵀ Q⁻¹ w ≤ 1}`), weights for the moving-horizon
+/// estimators. Fields are named, so `Q` and `R` cannot be swapped silently; each constructor
+/// validates them (sizes, finiteness, symmetry, positive definiteness) and names the one at fault.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Setup {
+    /// Initial centre (mean) `x̂₀`, length `n`.
+    pub x0: DVector<f64>,
+    /// Initial covariance or shape `P₀` (`n × n`).
+    pub p0: DMatrix<f64>,
+    /// Process noise `Q` (`n × n`).
+    pub process_noise: DMatrix<f64>,
+    /// Measurement noise `R` (`m × m`).
+    pub measurement_noise: DMatrix<f64>,
+    /// Number of inputs `p`.
+    pub inputs: usize,
 }
 
-impl EstimateKind {
-    /// A short label for tables and file headers.
+impl Setup {
+    /// `(n, p, m)` as the setup declares them.
     #[must_use]
-    pub fn label(self) -> &'static str {
-        match self {
-            EstimateKind::Gaussian => "gaussian",
-            EstimateKind::GuaranteedEllipsoid => "guaranteed ellipsoid",
-            EstimateKind::Point => "point",
-        }
+    pub fn dims(&self) -> Dims {
+        Dims::new(self.x0.len(), self.inputs, self.measurement_noise.nrows())
     }
 }
 
-/// An estimate after a step: centre, shape, per-state bounds and what kind of set it is.
+/// An estimate: centre, shape, per-state bounds where they mean something, what kind of set it
+/// is, the status of the step that produced it and the estimator's own details.
 pub trait Estimate {
-    /// Gaussian covariance or guaranteed ellipsoid.
+    /// Gaussian, guaranteed ellipsoid or point.
     fn kind(&self) -> EstimateKind;
-    /// The centre (mean) `x̂`.
+    /// The centre `x̂` (the mean of a Gaussian estimate).
     fn center(&self) -> &DVector<f64>;
-    /// The covariance (Gaussian) or the ellipsoid's shape matrix `P` (guaranteed).
+    /// The shape matrix; what it is depends on the kind ([`EstimateKind::shape_meaning`]).
     fn shape(&self) -> &DMatrix<f64>;
-    /// Per-state bounds `x̂ᵢ ∓ √Pᵢᵢ` (one standard deviation, or the guaranteed interval);
-    /// `None` if `i` is out of range.
+    /// Per-state bounds of state `i`: `x̂ᵢ ∓ √Pᵢᵢ` (one standard deviation of a Gaussian
+    /// estimate, or a guaranteed set's projection); `None` for point estimates, whose shape is a
+    /// weight, and when `i` is out of range.
     fn bounds(&self, i: usize) -> Option<(f64, f64)> {
         let c = self.center();
-        (i < c.len()).then(|| {
+        (i < c.len() && self.kind() != EstimateKind::Point).then(|| {
             let r = self.shape()[(i, i)].max(0.0).sqrt();
             (c[i] - r, c[i] + r)
         })
     }
-    /// The S-procedure multipliers `τ` of the step (set-membership filters of the carrier
-    /// paper); `None` for other estimators.
-    fn multipliers(&self) -> Option<[f64; 3]> {
-        None
-    }
-    /// Whether the step fell back to a feasible solution because its solver failed.
-    fn fallback_used(&self) -> bool {
-        false
-    }
-    /// For guaranteed estimators: whether the step's data were consistent with the noise bounds
-    /// (`None` for estimators that cannot tell).
-    fn consistent(&self) -> Option<bool> {
-        None
-    }
-    /// For guaranteed estimators: whether the published set is still guaranteed (`false` once
-    /// inconsistent data were accepted); `None` for Gaussian estimates.
-    fn guaranteed(&self) -> Option<bool> {
-        None
-    }
+    /// How the step ended, what the data check found, whether the set is guaranteed.
+    fn status(&self) -> StepStatus;
+    /// The estimator's own account of the step (multipliers, iterations, noise scale…).
+    fn details(&self) -> StepDetails;
 }
 
 /// One recursive estimator over models of type `M` (a capability trait such as
-/// [`models::LinearModel`] or [`models::DifferentiableModel`], possibly unsized).
+/// [`models::LinearModel`] or [`models::DifferentiableModel`], possibly unsized, or
+/// `dyn` [`models::AnyModel`] for estimators chosen at run time).
 ///
-/// A step consumes the input `u_k` and the measurement `y_{k+1}` taken after it, with the model
-/// valid for that step, and returns the estimate of `x_{k+1}`. On error the estimator's state is
-/// unchanged.
+/// [`Estimator::predict`] consumes the input `u_k` and publishes the prediction of `x_{k+1}`;
+/// [`Estimator::update`] consumes the measurement `y_{k+1}` taken after it; [`Estimator::step`]
+/// does both at once (the same numbers as `predict` then `update`, in one call that either
+/// succeeds or leaves the estimator unchanged). The model passed is the one valid for that
+/// step. On error the estimator's state is unchanged.
 pub trait Estimator<M: ?Sized> {
     /// The estimate type.
     type Estimate: Estimate + 'static;
-    /// One step.
+    /// One step: predict with `u_k`, update with `y_{k+1}`.
     ///
     /// # Errors
     /// An [`EstimatorError`] naming what is wrong; the state is unchanged.
     fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&Self::Estimate, EstimatorError>;
-    /// A prediction-only step (no measurement arrived, for example a gap in a log): the
-    /// estimate of `x_{k+1}` from `u_k` alone; for a guaranteed estimator the set grows to cover
-    /// every state the model and the process-noise bound allow.
+    /// The prediction with `u_k` alone (no measurement arrived, or the first half of a step): for
+    /// a guaranteed estimator the set grows to cover every state the model and the process-noise
+    /// bound allow.
     ///
     /// # Errors
     /// As [`Estimator::step`]; the state is unchanged.
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&Self::Estimate, EstimatorError>;
+    /// The measurement update with `y_{k+1}` (the measurement function sees the input of the last
+    /// prediction, zero before any). A set-membership filter's update is joint with its
+    /// prediction ((13)–(29)) and needs one; a moving-horizon estimator's window sample is an
+    /// input and the measurement after it, so it offers [`Estimator::step`] and
+    /// [`Estimator::predict`] only ([`EstimatorError::Unsupported`]).
+    ///
+    /// # Errors
+    /// As [`Estimator::step`]; the state is unchanged.
+    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&Self::Estimate, EstimatorError>;
     /// The current estimate.
     fn estimate(&self) -> &Self::Estimate;
-    /// States, inputs and outputs.
+    /// The lengths of the state, of the input `u` and of the measurement `y` the estimator
+    /// consumes.
     fn dims(&self) -> Dims;
 }
 
 /// The object-safe face of [`Estimator`], for registries and user interfaces that choose an
-/// estimator at run time (`Box<dyn DynEstimator<dyn LinearModel>>`). Implemented for every
+/// estimator at run time (`Box<dyn DynEstimator<dyn AnyModel>>`). Implemented for every
 /// estimator.
 pub trait DynEstimator<M: ?Sized> {
     /// One step (see [`Estimator::step`]).
@@ -107,14 +114,19 @@ pub trait DynEstimator<M: ?Sized> {
     /// # Errors
     /// As [`Estimator::step`].
     fn step_dyn(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError>;
-    /// A prediction-only step (see [`Estimator::predict`]).
+    /// A prediction (see [`Estimator::predict`]).
     ///
     /// # Errors
     /// As [`Estimator::predict`].
     fn predict_dyn(&mut self, model: &M, u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError>;
+    /// A measurement update (see [`Estimator::update`]).
+    ///
+    /// # Errors
+    /// As [`Estimator::update`].
+    fn update_dyn(&mut self, model: &M, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError>;
     /// The current estimate.
     fn estimate_dyn(&self) -> &dyn Estimate;
-    /// States, inputs and outputs.
+    /// The lengths of the state, the input and the measurement.
     fn dims_dyn(&self) -> Dims;
 }
 
@@ -131,29 +143,16 @@ impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
             Err(e) => Err(e),
         }
     }
+    fn update_dyn(&mut self, model: &M, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        match self.update(model, y) {
+            Ok(e) => Ok(e),
+            Err(e) => Err(e),
+        }
+    }
     fn estimate_dyn(&self) -> &dyn Estimate {
         self.estimate()
     }
     fn dims_dyn(&self) -> Dims {
         self.dims()
-    }
-}
-
-/// The noise description of a filter: process noise `Q` (`n × n`) and measurement noise `R`
-/// (`m × m`) — covariances for Gaussian filters, ellipsoid shape matrices
-/// (`w ∈ {w : wᵀ Q⁻¹ w ≤ 1}`) for set-membership filters.
-#[derive(Debug, Clone, PartialEq)]
-pub struct NoiseSettings {
-    /// Process noise `Q`.
-    pub q: DMatrix<f64>,
-    /// Measurement noise `R`.
-    pub r: DMatrix<f64>,
-}
-
-impl NoiseSettings {
-    /// `Q` and `R`.
-    #[must_use]
-    pub fn new(q: DMatrix<f64>, r: DMatrix<f64>) -> Self {
-        Self { q, r }
     }
 }

@@ -51,7 +51,7 @@ use models::{Dims, DiscreteModel};
 
 use crate::error::EstimatorError;
 use crate::kalman::GaussianEstimate;
-use crate::traits::{Estimator, NoiseSettings};
+use crate::traits::{Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
 
 /// The scaling parameters of the sigma points.
@@ -162,6 +162,8 @@ pub struct UnscentedKalmanFilter {
     dx: DVector<f64>,
     dz: DVector<f64>,
     innov: DVector<f64>,
+    /// The input of the last prediction, for `h` in a following update.
+    u_last: DVector<f64>,
 }
 
 /// Copies the symmetric `src` into `dst` and factorises it there; `true` if it is positive
@@ -187,25 +189,15 @@ fn add_outer(out: &mut DMatrix<f64>, w: f64, a: &DVector<f64>, b: &DVector<f64>)
 }
 
 impl UnscentedKalmanFilter {
-    /// A filter with initial mean `x0`, covariance `p0` (`n × n`), process covariance `q`
-    /// (`n × n`), measurement covariance `r` (`m × m`), `inputs` input components and sigma-point
-    /// parameters `params`.
+    /// A filter from its [`Setup`] (covariances) and sigma-point parameters `params`.
     ///
     /// # Errors
-    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the argument;
+    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix;
     /// [`EstimatorError::InvalidSetting`] for `params` (see [`UkfParams::weights`]).
-    pub fn new(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        inputs: usize,
-        params: UkfParams,
-    ) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
+    pub fn new(setup: Setup, params: UkfParams) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial(setup)?;
         let (c, wm0, wc0, wi) = params.weights(n)?;
         let s = 2 * n + 1;
-        let std_dev = p0.diagonal().map(f64::sqrt);
         let nn = || DMatrix::zeros(n, n);
         Ok(Self {
             n,
@@ -218,7 +210,7 @@ impl UnscentedKalmanFilter {
             wi,
             q,
             r,
-            est: GaussianEstimate { mean: x0, covariance: p0, std_dev },
+            est: GaussianEstimate::initial(x0, p0, StepDetails::Unscented(UkfReport::default())),
             report: UkfReport::default(),
             chol: nn(),
             sig: DMatrix::zeros(n, s),
@@ -245,21 +237,8 @@ impl UnscentedKalmanFilter {
             dx: DVector::zeros(n),
             dz: DVector::zeros(m),
             innov: DVector::zeros(m),
+            u_last: DVector::zeros(inputs),
         })
-    }
-
-    /// A filter from [`NoiseSettings`] (covariances).
-    ///
-    /// # Errors
-    /// As [`UnscentedKalmanFilter::new`].
-    pub fn with_noise(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        noise: &NoiseSettings,
-        inputs: usize,
-        params: UkfParams,
-    ) -> Result<Self, EstimatorError> {
-        Self::new(x0, p0, noise.q.clone(), noise.r.clone(), inputs, params)
     }
 
     /// The current estimate.
@@ -331,7 +310,7 @@ impl UnscentedKalmanFilter {
         if !factor_pd(&self.est.covariance, &mut self.chol) {
             return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
         }
-        Self::draw(&mut self.sig, &self.est.mean, &self.chol, self.gamma);
+        Self::draw(&mut self.sig, &self.est.center, &self.chol, self.gamma);
         for j in 0..s {
             self.xcol.copy_from(&self.sig.column(j));
             model.f(&self.xcol, u, &mut self.fcol)?;
@@ -380,20 +359,51 @@ impl UnscentedKalmanFilter {
         self.check_dims(model.dims())?;
         check_vec("u", u, self.p)?;
         let guarded = self.predict_into_buffers(model, u)?;
-        std::mem::swap(&mut self.est.mean, &mut self.x_pred);
+        std::mem::swap(&mut self.est.center, &mut self.x_pred);
         std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
-        self.publish_std_dev();
+        self.est.refresh_std_dev();
         self.report.guarded_prediction = guarded;
         self.report.guarded_innovation = false;
         self.report.guarded_update = false;
         self.report.guard_total += u64::from(guarded);
+        self.u_last.copy_from(u);
+        self.publish_report(SolveOutcome::Predicted);
         Ok(&self.est)
     }
 
-    fn publish_std_dev(&mut self) {
-        for i in 0..self.n {
-            self.est.std_dev[i] = self.est.covariance[(i, i)].max(0.0).sqrt();
+    /// Writes the report into the estimate's details and the status (a fallback when a guard
+    /// was needed in this step).
+    fn publish_report(&mut self, outcome: SolveOutcome) {
+        let r = self.report;
+        let guarded = r.guarded_prediction || r.guarded_innovation || r.guarded_update;
+        self.est.status = StepStatus::unchecked(if guarded { SolveOutcome::FallbackUsed } else { outcome });
+        self.est.details = StepDetails::Unscented(r);
+    }
+
+    /// The measurement update (29)–(32) of the current estimate with `y`, `h` evaluated with the
+    /// input of the last prediction (zero before any). On error the state is unchanged.
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::step`].
+    pub fn update<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        self.check_dims(model.dims())?;
+        check_vec("y", y, self.m)?;
+        self.load_prediction_from_estimate()?;
+        self.update_from_prediction(model, None, y, false)
+    }
+
+    /// Copies the current estimate into the prediction buffers and factorises it.
+    fn load_prediction_from_estimate(&mut self) -> Result<(), EstimatorError> {
+        self.x_pred.copy_from(&self.est.center);
+        self.p_pred.copy_from(&self.est.covariance);
+        if !factor_pd(&self.p_pred, &mut self.p_pred_chol) {
+            return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
         }
+        Ok(())
     }
 
     /// One step: time update with `u_k`, measurement update with `y_{k+1}`. On error the state
@@ -413,7 +423,9 @@ impl UnscentedKalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         let guarded_prediction = self.predict_into_buffers(model, u)?;
-        self.update_from_prediction(model, u, y, guarded_prediction)
+        self.update_from_prediction(model, Some(u), y, guarded_prediction)?;
+        self.u_last.copy_from(u);
+        Ok(&self.est)
     }
 
     /// Replaces the state by `(mean, covariance)` (for an arrival-cost update that starts from
@@ -439,10 +451,10 @@ impl UnscentedKalmanFilter {
         if !factor_pd(covariance, &mut self.chol) {
             return Err(EstimatorError::NotPositiveDefinite { what: "covariance" });
         }
-        self.est.mean.copy_from(mean);
+        self.est.center.copy_from(mean);
         self.est.covariance.copy_from(covariance);
         dense::symmetrize(&mut self.est.covariance);
-        self.publish_std_dev();
+        self.est.refresh_std_dev();
         Ok(())
     }
 
@@ -461,23 +473,21 @@ impl UnscentedKalmanFilter {
         self.check_dims(model.dims())?;
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
-        self.x_pred.copy_from(&self.est.mean);
-        self.p_pred.copy_from(&self.est.covariance);
-        if !factor_pd(&self.p_pred, &mut self.p_pred_chol) {
-            return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
-        }
-        self.update_from_prediction(model, u, y, false)
+        self.load_prediction_from_estimate()?;
+        self.update_from_prediction(model, Some(u), y, false)
     }
 
     /// The measurement update (29)–(32) from `x_pred`, `p_pred` (factor in `p_pred_chol`).
+    /// `u` is the input for `h` (`None`: the input of the last prediction).
     fn update_from_prediction<M: DiscreteModel + ?Sized>(
         &mut self,
         model: &M,
-        u: &DVector<f64>,
+        u: Option<&DVector<f64>>,
         y: &DVector<f64>,
         guarded_prediction: bool,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         let (n, m, s) = (self.n, self.m, 2 * self.n + 1);
+        let u = u.unwrap_or(&self.u_last);
         // Redraw from (x⁻, P⁻) and map through h (29).
         Self::draw(&mut self.sig, &self.x_pred, &self.p_pred_chol, self.gamma);
         for j in 0..s {
@@ -556,14 +566,15 @@ impl UnscentedKalmanFilter {
         if self.x_new.iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
         }
-        std::mem::swap(&mut self.est.mean, &mut self.x_new);
+        std::mem::swap(&mut self.est.center, &mut self.x_new);
         std::mem::swap(&mut self.est.covariance, &mut self.p_new);
-        self.publish_std_dev();
+        self.est.refresh_std_dev();
         self.report.guarded_prediction = guarded_prediction;
         self.report.guarded_innovation = guarded_innovation;
         self.report.guarded_update = guarded_update;
         self.report.guard_total +=
             u64::from(guarded_prediction) + u64::from(guarded_innovation) + u64::from(guarded_update);
+        self.publish_report(SolveOutcome::Converged);
         Ok(&self.est)
     }
 }
@@ -575,6 +586,9 @@ impl<M: DiscreteModel + ?Sized> Estimator<M> for UnscentedKalmanFilter {
     }
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
         UnscentedKalmanFilter::predict(self, model, u)
+    }
+    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
+        UnscentedKalmanFilter::update(self, model, y)
     }
     fn estimate(&self) -> &GaussianEstimate {
         &self.est

@@ -5,6 +5,7 @@ use nalgebra::{DMatrix, DVector};
 use models::LinearModel;
 
 use crate::error::EstimatorError;
+use crate::traits::Setup;
 
 /// Relative symmetry tolerance for `Q`, `R`, `P`: `|M_ij − M_ji| ≤ 1e-10 · max |M_kl|` (the
 /// workspace's, from `dense-kernels`).
@@ -136,12 +137,16 @@ pub(crate) fn replace_spd(
     Ok(())
 }
 
-/// The validated initial data shared by the filters' constructors.
+/// The validated [`Setup`] shared by the filters' constructors.
 pub(crate) struct InitialData {
     /// States `n`.
     pub n: usize,
     /// Outputs `m`.
     pub m: usize,
+    /// Inputs `p`.
+    pub inputs: usize,
+    /// `x₀`.
+    pub x0: DVector<f64>,
     /// Symmetrised `P₀`, `Q`, `R`.
     pub p0: DMatrix<f64>,
     pub q: DMatrix<f64>,
@@ -150,12 +155,8 @@ pub(crate) struct InitialData {
 
 /// Checks `x₀` (finite, at least one state), `P₀`, `Q` (`n × n`) and `R` (`m × m`, at least one
 /// output) symmetric positive definite; returns them symmetrised.
-pub(crate) fn check_initial(
-    x0: &DVector<f64>,
-    p0: &DMatrix<f64>,
-    q: &DMatrix<f64>,
-    r: &DMatrix<f64>,
-) -> Result<InitialData, EstimatorError> {
+pub(crate) fn check_initial(setup: Setup) -> Result<InitialData, EstimatorError> {
+    let Setup { x0, p0, process_noise: q, measurement_noise: r, inputs } = setup;
     let n = x0.len();
     let m = r.nrows();
     if n == 0 {
@@ -165,5 +166,6 @@ pub(crate) fn check_initial(
         return Err(EstimatorError::EmptySystem("no outputs"));
     }
     check_finite("x0", x0.as_slice())?;
-    Ok(InitialData { n, m, p0: check_spd("P0", p0, n)?, q: check_spd("Q", q, n)?, r: check_spd("R", r, m)? })
+    let (p0, q, r) = (check_spd("P0", &p0, n)?, check_spd("Q", &q, n)?, check_spd("R", &r, m)?);
+    Ok(InitialData { n, m, inputs, x0, p0, q, r })
 }

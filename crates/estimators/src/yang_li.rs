@@ -20,32 +20,30 @@
 //!
 //! Both are [`SetMembershipFilter`]s, generic over the solver of (29).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::error::EstimatorError;
 use crate::smf::{SetMembershipFilter, UpdateSolver};
+use crate::traits::Setup;
 
-/// Variant (a): the input is not used; `B u` over `[u_lo, u_hi]` is a bounded disturbance.
+/// Variant (a): the input is not used; `B u` over `[u_lo, u_hi]` is a bounded disturbance
+/// (`setup.inputs` must be the length of the box).
+///
+/// # Errors
+/// As [`SetMembershipFilter::with_solver`], and [`EstimatorError::InvalidInputBounds`].
 pub fn without_input<S: UpdateSolver>(
-    x0: DVector<f64>,
-    p0: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
+    setup: Setup,
     u_lo: &DVector<f64>,
     u_hi: &DVector<f64>,
     solver: S,
 ) -> Result<SetMembershipFilter<S>, EstimatorError> {
-    SetMembershipFilter::new(x0, p0, q, r, u_lo.len(), solver)?.with_input_bounds(u_lo, u_hi)
+    SetMembershipFilter::with_solver(setup, solver)?.with_input_bounds(u_lo, u_hi)
 }
 
 /// Variant (b): the input in the predictor; identical to the improved filter (13).
-pub fn with_input<S: UpdateSolver>(
-    x0: DVector<f64>,
-    p0: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    inputs: usize,
-    solver: S,
-) -> Result<SetMembershipFilter<S>, EstimatorError> {
-    SetMembershipFilter::new(x0, p0, q, r, inputs, solver)
+///
+/// # Errors
+/// As [`SetMembershipFilter::with_solver`].
+pub fn with_input<S: UpdateSolver>(setup: Setup, solver: S) -> Result<SetMembershipFilter<S>, EstimatorError> {
+    SetMembershipFilter::with_solver(setup, solver)
 }

@@ -4,6 +4,8 @@
 //!   [`DifferentiableModel`] (plus Jacobians; [`check_jacobians`] against central
 //!   differences), [`LinearModel`] (`A`, `B`, `C`; every linear model is a differentiable
 //!   discrete model), and [`LinearTimeVarying`] (the matrices of each step).
+//! * [`capability`]: [`AnyModel`], a model seen through the capabilities it offers (for
+//!   estimators chosen at run time), and [`Capability`].
 //! * [`continuous`]: continuous-time models and their discretisation — explicit Euler, RK4,
 //!   exact zero-order hold ([`discretize`]: own Padé matrix exponential), Van Loan's discrete
 //!   process noise.
@@ -39,6 +41,7 @@
 //! # Ok::<(), models::ModelError>(())
 //! ```
 
+pub mod capability;
 pub mod continuous;
 pub mod discretize;
 pub mod error;
@@ -47,6 +50,7 @@ pub mod noise;
 pub mod rng;
 pub mod simulate;
 
+pub use capability::{AnyModel, Capability, DifferentiableView, DiscreteView, LinearView};
 pub use continuous::{
     ContinuousModel, DifferentiableContinuousModel, Discretized, Integrator, LinearContinuous, van_loan,
 };

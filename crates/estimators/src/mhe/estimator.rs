@@ -14,7 +14,7 @@ use crate::mhe::solve::{
     NoiseData, SolveCounters, SolverScratch, WindowStatus, coordinate_rotation, exact_saddle, saddle_value,
 };
 use crate::mhe::window::WindowProblem;
-use crate::traits::{Estimate, EstimateKind, Estimator};
+use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{check_model, check_vec};
 
 /// Which form of the arrival-cost recursion (20) advanced the weight in this step.
@@ -47,20 +47,34 @@ pub struct MheReport {
     pub objective: f64,
     /// Wall time of the update (recursion, window build and solve).
     pub elapsed: Duration,
+    /// Whether the newest sample had a measurement (`false` after a prediction).
+    pub measured: bool,
 }
 
 /// The estimate of a moving-horizon estimator: the last state of the window's optimal trajectory
 /// and, as its shape, the arrival-cost recursion's matrix updated with the last measurement
 /// (`(P_T⁻¹ + Cᵀ R_eff⁻¹ C)⁻¹`): a covariance of the equivalent Kalman filter, not a calibrated
-/// covariance of the estimate nor a guaranteed set ([`EstimateKind::Point`]).
+/// covariance of the estimate nor a guaranteed set ([`EstimateKind::Point`]: no per-state bounds).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MheEstimate {
     /// `x̂_{T|T}`.
-    pub state: DVector<f64>,
-    /// The shape (see above).
-    pub shape: DMatrix<f64>,
+    pub center: DVector<f64>,
+    /// The weight matrix (see above).
+    pub weight: DMatrix<f64>,
     /// What the last update did (`None` before the first).
     pub report: Option<MheReport>,
+}
+
+/// The shared status of a window solve: converged (a prediction when the newest sample had no
+/// measurement), not converged (the sweep limit, or an inner QP failure: the last finite iterate
+/// is published), relaxed (constraints that cannot all hold were dropped).
+pub(crate) fn window_outcome(status: WindowStatus, measured: bool) -> SolveOutcome {
+    match status {
+        WindowStatus::Converged if measured => SolveOutcome::Converged,
+        WindowStatus::Converged => SolveOutcome::Predicted,
+        WindowStatus::NotConverged | WindowStatus::InnerFailure => SolveOutcome::NotConverged,
+        WindowStatus::Infeasible => SolveOutcome::Relaxed,
+    }
 }
 
 impl Estimate for MheEstimate {
@@ -68,10 +82,19 @@ impl Estimate for MheEstimate {
         EstimateKind::Point
     }
     fn center(&self) -> &DVector<f64> {
-        &self.state
+        &self.center
     }
     fn shape(&self) -> &DMatrix<f64> {
-        &self.shape
+        &self.weight
+    }
+    fn status(&self) -> StepStatus {
+        StepStatus::unchecked(match &self.report {
+            None => SolveOutcome::Initial,
+            Some(r) => window_outcome(r.solve.status, r.measured),
+        })
+    }
+    fn details(&self) -> StepDetails {
+        StepDetails::MovingHorizon(self.report)
     }
 }
 
@@ -106,6 +129,7 @@ pub struct MovingHorizonEstimator {
     // Constant data.
     q: Vec<f64>,
     q_inv: Vec<f64>,
+    x0: Vec<f64>,
     p0: Vec<f64>,
     r_inv: Vec<f64>,
     v_lo: Vec<f64>,
@@ -134,13 +158,15 @@ pub struct MovingHorizonEstimator {
 }
 
 impl MovingHorizonEstimator {
-    /// An estimator with `inputs` inputs for the validated `settings`.
+    /// An estimator from its [`Setup`] (prior mean and weight, process weight `Q`, diagonal
+    /// measurement weight `R`, number of inputs) and its `settings`, both validated.
     ///
     /// # Errors
     /// [`EstimatorError::InvalidConfiguration`] naming the first invalid setting.
-    pub fn new(settings: MheSettings, inputs: usize) -> Result<Self, EstimatorError> {
-        settings.validate()?;
-        let (n, m, p) = (settings.states(), settings.outputs(), inputs);
+    pub fn new(setup: Setup, settings: MheSettings) -> Result<Self, EstimatorError> {
+        settings.validate(&setup)?;
+        let Setup { x0, p0, process_noise: q, measurement_noise: r, inputs } = setup;
+        let (n, m, p) = (x0.len(), r.nrows(), inputs);
         let horizon = settings.horizon;
         let cap = horizon + 2;
         let max_len = horizon + 1;
@@ -148,7 +174,7 @@ impl MovingHorizonEstimator {
         let nz_cap = n * (1 + max_blocks);
         let to_vec = |a: &DMatrix<f64>| a.as_slice().to_vec();
         let mut q_inv = vec![0.0; n * n];
-        let mut work = to_vec(&settings.q);
+        let mut work = to_vec(&q);
         if !cholesky(&mut work, n) {
             return Err(EstimatorError::InvalidConfiguration {
                 estimator: "mhe",
@@ -156,14 +182,14 @@ impl MovingHorizonEstimator {
             });
         }
         chol_inverse(&work, n, &mut q_inv);
-        let r_inv: Vec<f64> = (0..m).map(|i| 1.0 / settings.r[(i, i)]).collect();
+        let r_inv: Vec<f64> = (0..m).map(|i| 1.0 / r[(i, i)]).collect();
         let mut p_ring = vec![0.0; cap * n * n];
-        p_ring[..n * n].copy_from_slice(settings.p0.as_slice());
+        p_ring[..n * n].copy_from_slice(p0.as_slice());
         let mut traj_ring = vec![0.0; cap * n];
-        traj_ring[..n].copy_from_slice(settings.x0.as_slice());
+        traj_ring[..n].copy_from_slice(x0.as_slice());
         let mut filt_ring = vec![0.0; cap * n];
-        filt_ring[..n].copy_from_slice(settings.x0.as_slice());
-        let est = MheEstimate { state: settings.x0.clone(), shape: settings.p0.clone(), report: None };
+        filt_ring[..n].copy_from_slice(x0.as_slice());
+        let est = MheEstimate { center: x0.clone(), weight: p0.clone(), report: None };
         Ok(Self {
             n,
             p,
@@ -181,9 +207,10 @@ impl MovingHorizonEstimator {
             traj_ring,
             filt_ring,
             v_ring: vec![0.0; cap * m],
-            q: to_vec(&settings.q),
+            q: to_vec(&q),
             q_inv,
-            p0: to_vec(&settings.p0),
+            x0: x0.as_slice().to_vec(),
+            p0: to_vec(&p0),
             r_inv,
             v_lo: settings.v_box.0.as_slice().to_vec(),
             v_hi: settings.v_box.1.as_slice().to_vec(),
@@ -422,7 +449,7 @@ impl MovingHorizonEstimator {
         let nblocks = if blocked { self.settings.blocks.len() } else { len - 1 };
         // Prior of x_s: (x̄_s, P_s).
         if s == 0 {
-            self.prior_mean.copy_from_slice(self.settings.x0.as_slice());
+            self.prior_mean.copy_from_slice(&self.x0);
             self.mat_a.copy_from_slice(&self.p0);
         } else {
             match self.settings.prior_mean {
@@ -566,11 +593,11 @@ impl MovingHorizonEstimator {
         let sl = big_t % cap;
         let last = &self.traj_work[(len - 1) * n..len * n];
         self.filt_ring[sl * n..(sl + 1) * n].copy_from_slice(last);
-        self.est.state.as_mut_slice().copy_from_slice(last);
+        self.est.center.as_mut_slice().copy_from_slice(last);
         // Shape: (P_T⁻¹ + Cᵀ R_eff⁻¹ C)⁻¹ (the Kalman form's posterior).
         let r_eff = self.settings.r_eff_factor();
         if self.information(sl, r_eff, 0.0) {
-            self.est.shape.as_mut_slice().copy_from_slice(&self.mat_b);
+            self.est.weight.as_mut_slice().copy_from_slice(&self.mat_b);
         }
         let blocks = if big_t > self.settings.horizon { self.settings.blocks.len() } else { len - 1 };
         self.est.report = Some(MheReport {
@@ -581,6 +608,7 @@ impl MovingHorizonEstimator {
             arrival,
             objective,
             elapsed: start.elapsed(),
+            measured: self.has_y[sl],
         });
     }
 }
@@ -623,6 +651,15 @@ impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
 
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
         self.advance(model, u, None)
+    }
+
+    fn update(&mut self, _model: &M, _y: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
+        Err(EstimatorError::Unsupported {
+            estimator: "the moving-horizon estimator",
+            operation: "update",
+            reason: "a window sample is an input and the measurement after it; use step (or predict when no \
+                     measurement arrived)",
+        })
     }
 
     fn estimate(&self) -> &MheEstimate {

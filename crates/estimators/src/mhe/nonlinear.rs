@@ -30,9 +30,10 @@ use models::{DifferentiableModel, Dims};
 use crate::error::EstimatorError;
 use crate::kalman::GaussianEstimate;
 use crate::mhe::solve::WindowStatus;
-use crate::traits::{Estimate, EstimateKind, Estimator};
+use crate::mhe::estimator::window_outcome;
+use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::ukf::{UkfParams, UnscentedKalmanFilter};
-use crate::validate::{check_initial, check_vec};
+use crate::validate::{InitialData, check_initial, check_vec};
 
 /// How the arrival-cost weight `P_s` advances when the window slides.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,19 +48,12 @@ pub enum NonlinearArrival {
     Fixed,
 }
 
-/// Settings of [`NonlinearMhe`], as data.
+/// Settings of [`NonlinearMhe`] beyond its [`Setup`] (prior mean `x̄₀` and weight `P₀`, process
+/// and measurement weights `Q`, `R`), as data.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NonlinearMheSettings {
     /// Horizon `N` (the window holds `N + 1` states; the paper's 10).
     pub horizon: usize,
-    /// Prior mean `x̄_0`.
-    pub x0: DVector<f64>,
-    /// Prior weight `P_0` (SPD).
-    pub p0: DMatrix<f64>,
-    /// Process weight `Q` (SPD).
-    pub q: DMatrix<f64>,
-    /// Measurement weight `R` (SPD).
-    pub r: DMatrix<f64>,
     /// Arrival-cost update.
     pub arrival: NonlinearArrival,
     /// At most this many Gauss–Newton iterations per update (default 20).
@@ -95,13 +89,9 @@ impl NonlinearMheSettings {
     /// The paper's shape: `N = 10`, UKF arrival cost with `α, β, κ = 0.5, 2, −2`, 20 iterations,
     /// tolerance `1e−10`.
     #[must_use]
-    pub fn new(x0: DVector<f64>, p0: DMatrix<f64>, q: DMatrix<f64>, r: DMatrix<f64>) -> Self {
+    pub fn paper() -> Self {
         Self {
             horizon: 10,
-            x0,
-            p0,
-            q,
-            r,
             arrival: NonlinearArrival::Ukf(UkfParams::paper()),
             max_iterations: 20,
             tolerance: 1e-10,
@@ -125,16 +115,19 @@ pub struct NonlinearMheReport {
     pub unknowns: usize,
     /// The window's cost at the solution.
     pub cost: f64,
+    /// Whether the newest sample had a measurement (`false` after a prediction).
+    pub measured: bool,
     /// Wall time of the update (arrival update, build and solve).
     pub elapsed: Duration,
 }
 
 /// The estimate: `x̂_{T|T}` and, as its shape, the Gauss–Newton matrix's inverse block of the
-/// last state (the Laplace approximation of its covariance).
+/// last state (the Laplace approximation of its covariance; a point estimate: no per-state bounds
+/// are published from it).
 #[derive(Debug, Clone, PartialEq)]
 pub struct NonlinearMheEstimate {
     /// `x̂_{T|T}`.
-    pub state: DVector<f64>,
+    pub center: DVector<f64>,
     /// Approximate covariance of `x̂_{T|T}`.
     pub covariance: DMatrix<f64>,
     /// The last update's report (`None` before the first).
@@ -146,10 +139,19 @@ impl Estimate for NonlinearMheEstimate {
         EstimateKind::Point
     }
     fn center(&self) -> &DVector<f64> {
-        &self.state
+        &self.center
     }
     fn shape(&self) -> &DMatrix<f64> {
         &self.covariance
+    }
+    fn status(&self) -> StepStatus {
+        StepStatus::unchecked(match &self.report {
+            None => SolveOutcome::Initial,
+            Some(r) => window_outcome(r.status, r.measured),
+        })
+    }
+    fn details(&self) -> StepDetails {
+        StepDetails::NonlinearMovingHorizon(self.report)
     }
 }
 
@@ -203,6 +205,10 @@ pub struct NonlinearMhe {
     ukf: Option<UnscentedKalmanFilter>,
     ekf_p: DMatrix<f64>,
     est: NonlinearMheEstimate,
+    /// The setup's prior mean and weight and process weight.
+    x0: DVector<f64>,
+    p0: DMatrix<f64>,
+    q: DMatrix<f64>,
 }
 
 fn spd_inverse(a: &DMatrix<f64>, work: &mut DMatrix<f64>, out: &mut DMatrix<f64>) -> bool {
@@ -218,15 +224,15 @@ fn spd_inverse(a: &DMatrix<f64>, work: &mut DMatrix<f64>, out: &mut DMatrix<f64>
 }
 
 impl NonlinearMhe {
-    /// An estimator for models with `inputs` inputs.
+    /// An estimator from its [`Setup`] (weights) and settings.
     ///
     /// # Errors
     /// Invalid settings ([`EstimatorError::InvalidConfiguration`] and the validation errors of
     /// `x0`, `P0`, `Q`, `R`); UKF parameters that give no weights.
-    pub fn new(settings: NonlinearMheSettings, inputs: usize) -> Result<Self, EstimatorError> {
+    pub fn new(setup: Setup, settings: NonlinearMheSettings) -> Result<Self, EstimatorError> {
         let bad = |message: String| EstimatorError::InvalidConfiguration { estimator: "nonlinear-mhe", message };
-        let init = check_initial(&settings.x0, &settings.p0, &settings.q, &settings.r)?;
-        let (n, m, p) = (init.n, init.m, inputs);
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial(setup)?;
+        let p = inputs;
         if settings.horizon == 0 {
             return Err(bad("the horizon N must be at least 1".into()));
         }
@@ -252,30 +258,33 @@ impl NonlinearMhe {
         let mut r_inv = DMatrix::zeros(m, m);
         let mut work = DMatrix::zeros(n, n);
         let mut work_m = DMatrix::zeros(m, m);
-        if !spd_inverse(&settings.q, &mut work, &mut q_inv) {
+        if !spd_inverse(&q, &mut work, &mut q_inv) {
             return Err(EstimatorError::NotPositiveDefinite { what: "Q" });
         }
-        if !spd_inverse(&settings.r, &mut work_m, &mut r_inv) {
+        if !spd_inverse(&r, &mut work_m, &mut r_inv) {
             return Err(EstimatorError::NotPositiveDefinite { what: "R" });
         }
         let mut prior_inv = DMatrix::zeros(n, n);
-        if !spd_inverse(&settings.p0, &mut work, &mut prior_inv) {
+        if !spd_inverse(&p0, &mut work, &mut prior_inv) {
             return Err(EstimatorError::NotPositiveDefinite { what: "P0" });
         }
         let ukf = match settings.arrival {
-            NonlinearArrival::Ukf(params) => Some(UnscentedKalmanFilter::with_noise(
-                settings.x0.clone(),
-                settings.p0.clone(),
-                &crate::traits::NoiseSettings::new(settings.q.clone(), settings.r.clone()),
-                inputs,
+            NonlinearArrival::Ukf(params) => Some(UnscentedKalmanFilter::new(
+                Setup {
+                    x0: x0.clone(),
+                    p0: p0.clone(),
+                    process_noise: q.clone(),
+                    measurement_noise: r.clone(),
+                    inputs,
+                },
                 params,
             )?),
             _ => None,
         };
         let vn = |k: usize| vec![DVector::zeros(k); len_max];
         let mut traj = vn(n);
-        traj[0].copy_from(&settings.x0);
-        let est = NonlinearMheEstimate { state: settings.x0.clone(), covariance: settings.p0.clone(), report: None };
+        traj[0].copy_from(&x0);
+        let est = NonlinearMheEstimate { center: x0.clone(), covariance: p0.clone(), report: None };
         Ok(Self {
             n,
             p,
@@ -291,8 +300,8 @@ impl NonlinearMhe {
             traj,
             start: 0,
             len: 1,
-            prior_mean: settings.x0.clone(),
-            prior_cov: settings.p0.clone(),
+            prior_mean: x0.clone(),
+            prior_cov: p0.clone(),
             prior_inv,
             x: vn(n),
             x_trial: vn(n),
@@ -318,6 +327,9 @@ impl NonlinearMhe {
             ekf_p: DMatrix::zeros(n, n),
             est,
             settings,
+            x0,
+            p0,
+            q,
         })
     }
 
@@ -372,7 +384,7 @@ impl NonlinearMhe {
         self.y_ring[0].copy_from(y0);
         self.uh_ring[0].copy_from(u);
         self.has_y[0] = true;
-        self.x[0].copy_from(&self.settings.x0);
+        self.x[0].copy_from(&self.x0);
         match self.solve(model, 0, 1, start) {
             Ok(()) => Ok(&self.est),
             Err(e) => {
@@ -472,7 +484,7 @@ impl NonlinearMhe {
         self.new_mean.copy_from(&self.traj[1]);
         let (u, y, uh, has) = (&self.u_ring[slot], &self.y_ring[slot], &self.uh_ring[slot], self.has_y[slot]);
         match self.settings.arrival {
-            NonlinearArrival::Fixed => self.new_cov.copy_from(&self.settings.p0),
+            NonlinearArrival::Fixed => self.new_cov.copy_from(&self.p0),
             NonlinearArrival::Ukf(_) => {
                 // tidy: invariant — the UKF exists whenever the arrival is `Ukf` (built in `new`).
                 let ukf = self.ukf.as_mut().expect("built with the settings");
@@ -483,7 +495,7 @@ impl NonlinearMhe {
                 let e = ukf.predict(model, u)?;
                 self.new_cov.copy_from(&e.covariance);
                 if own {
-                    self.new_mean.copy_from(&e.mean);
+                    self.new_mean.copy_from(&e.center);
                 }
             }
             NonlinearArrival::Ekf => {
@@ -512,7 +524,7 @@ impl NonlinearMhe {
                     self.new_mean.copy_from(&self.tmp_n2);
                 }
                 dense::mul_nn(1.0, &self.a[0], &self.ekf_p, 0.0, &mut self.tmp_nn);
-                self.new_cov.copy_from(&self.settings.q);
+                self.new_cov.copy_from(&self.q);
                 dense::mul_nt(1.0, &self.tmp_nn, &self.a[0], 1.0, &mut self.new_cov);
                 dense::symmetrize(&mut self.new_cov);
             }
@@ -670,7 +682,7 @@ impl NonlinearMhe {
         }
         self.start = start;
         self.len = len;
-        self.est.state.copy_from(&self.x[len - 1]);
+        self.est.center.copy_from(&self.x[len - 1]);
         if have_cov {
             let l = &self.d[len - 1];
             self.est.covariance.fill_with_identity();
@@ -685,6 +697,7 @@ impl NonlinearMhe {
             unknowns: self.n * len,
             cost,
             elapsed: started.elapsed(),
+            measured: self.has_y[(start + len - 1) % self.cap],
         });
         Ok(())
     }
@@ -995,6 +1008,15 @@ impl<M: DifferentiableModel + ?Sized> Estimator<M> for NonlinearMhe {
         self.advance(model, u, None)
     }
 
+    fn update(&mut self, _model: &M, _y: &DVector<f64>) -> Result<&NonlinearMheEstimate, EstimatorError> {
+        Err(EstimatorError::Unsupported {
+            estimator: "the nonlinear moving-horizon estimator",
+            operation: "update",
+            reason: "a window sample is an input and the measurement after it; use step (or predict when no \
+                     measurement arrived)",
+        })
+    }
+
     fn estimate(&self) -> &NonlinearMheEstimate {
         &self.est
     }
@@ -1008,9 +1030,11 @@ impl<M: DifferentiableModel + ?Sized> Estimator<M> for NonlinearMhe {
 impl From<&NonlinearMheEstimate> for GaussianEstimate {
     fn from(e: &NonlinearMheEstimate) -> Self {
         GaussianEstimate {
-            mean: e.state.clone(),
+            center: e.center.clone(),
             covariance: e.covariance.clone(),
             std_dev: e.covariance.diagonal().map(|v| v.max(0.0).sqrt()),
+            status: e.status(),
+            details: StepDetails::None,
         }
     }
 }

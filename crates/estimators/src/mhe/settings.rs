@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::EstimatorError;
+use crate::traits::Setup;
 
 /// How the paper's `α ∈ (0, 1)` sets the attenuation weight `λv` of the min–max cost (§2.1 \[A\]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,7 +173,9 @@ impl WindowSolver {
     }
 }
 
-/// Everything that defines a (robust) moving-horizon estimator, as data.
+/// Everything that defines a (robust) moving-horizon estimator beyond its [`Setup`] (the prior
+/// mean `x̄₀` and weight `P₀`, the process weight `Q` and the measurement weight `R`, diagonal),
+/// as data.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MheSettings {
     /// Horizon `N` (disturbances per full window; the window holds `N + 1` states).
@@ -183,18 +186,10 @@ pub struct MheSettings {
     pub block_weighting: BlockWeighting,
     /// Min–max or least-squares cost.
     pub cost: MheCost,
-    /// Process-noise weight `Q` (`n × n`, SPD).
-    pub q: DMatrix<f64>,
-    /// Measurement-noise weight `R` (`m × m`, diagonal, positive).
-    pub r: DMatrix<f64>,
     /// Box `W = [w_lo, w_hi]` of the process noise (entries may be infinite).
     pub w_box: (DVector<f64>, DVector<f64>),
     /// Box `V = [v_lo, v_hi]` of the measurement noise (finite, containing 0), used by the min–max cost.
     pub v_box: (DVector<f64>, DVector<f64>),
-    /// Prior mean `x̄_0`.
-    pub x0: DVector<f64>,
-    /// Prior weight `P_0` (SPD).
-    pub p0: DMatrix<f64>,
     /// Arrival-cost recursion (20).
     pub arrival: ArrivalRecursion,
     /// Prior mean of a window's first state.
@@ -209,28 +204,18 @@ pub struct MheSettings {
 }
 
 impl MheSettings {
-    /// The digest's RMHE setting shape for a system with the given noise data: `N = 6`, min–max
-    /// with `λv = 10`, Kalman-form arrival cost, smoothed prior, coordinate rotation.
+    /// The digest's RMHE settings for the noise boxes `W` (process, length `n`) and `V`
+    /// (measurement, length `m`): `N = 6`, min–max with `λv = 10`, Kalman-form arrival cost,
+    /// smoothed prior, coordinate rotation.
     #[must_use]
-    pub fn new(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        w_box: (DVector<f64>, DVector<f64>),
-        v_box: (DVector<f64>, DVector<f64>),
-    ) -> Self {
+    pub fn new(w_box: (DVector<f64>, DVector<f64>), v_box: (DVector<f64>, DVector<f64>)) -> Self {
         Self {
             horizon: 6,
             blocks: vec![1; 6],
             block_weighting: BlockWeighting::Length,
             cost: MheCost::MinMax { lambda_v: 10.0 },
-            q,
-            r,
             w_box,
             v_box,
-            x0,
-            p0,
             arrival: ArrivalRecursion::Kalman,
             prior_mean: PriorMean::Smoothed,
             solver: WindowSolver::coordinate_rotation(),
@@ -246,18 +231,6 @@ impl MheSettings {
         self.blocks = preset.lengths(horizon)?;
         self.horizon = horizon;
         Ok(self)
-    }
-
-    /// Number of states `n`.
-    #[must_use]
-    pub fn states(&self) -> usize {
-        self.x0.len()
-    }
-
-    /// Number of outputs `m`.
-    #[must_use]
-    pub fn outputs(&self) -> usize {
-        self.r.nrows()
     }
 
     /// The vector unknowns of a full window, `1 + S` (`x_s` and one value per block): the paper's
@@ -276,19 +249,21 @@ impl MheSettings {
         }
     }
 
-    /// Checks every setting; the error names the first one that is wrong.
+    /// Checks every setting, and the [`Setup`] as this estimator reads it (`R` diagonal); the
+    /// error names the first one that is wrong.
     ///
     /// # Errors
     /// [`EstimatorError::InvalidConfiguration`] naming the setting.
-    pub fn validate(&self) -> Result<(), EstimatorError> {
+    pub fn validate(&self, setup: &Setup) -> Result<(), EstimatorError> {
         let bad = |s: String| Err(invalid(s));
-        let n = self.x0.len();
-        let m = self.r.nrows();
+        let Setup { x0, p0, process_noise: q, measurement_noise: r, .. } = setup;
+        let n = x0.len();
+        let m = r.nrows();
         if n == 0 {
             return bad("the prior mean x0 is empty (no states)".into());
         }
-        if m == 0 || self.r.ncols() != m {
-            return bad(format!("R must be square and non-empty, got {}×{}", self.r.nrows(), self.r.ncols()));
+        if m == 0 || r.ncols() != m {
+            return bad(format!("R must be square and non-empty, got {}×{}", r.nrows(), r.ncols()));
         }
         if self.horizon == 0 {
             return bad("the horizon N must be at least 1".into());
@@ -303,22 +278,22 @@ impl MheSettings {
                 self.blocks, self.horizon
             ));
         }
-        if let Some(i) = self.x0.iter().position(|v| !v.is_finite()) {
+        if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
             return bad(format!("x0[{i}] is not finite"));
         }
-        check_spd("P0", &self.p0, n)?;
-        check_spd("Q", &self.q, n)?;
+        check_spd("P0", p0, n)?;
+        check_spd("Q", q, n)?;
         for i in 0..m {
             for j in 0..m {
-                let v = self.r[(i, j)];
+                let v = r[(i, j)];
                 if !v.is_finite() || (i != j && v != 0.0) {
                     return bad(format!(
                         "R must be diagonal with finite entries (the min–max cost separates per output); R[({i}, {j})] = {v}"
                     ));
                 }
             }
-            if self.r[(i, i)] <= 0.0 {
-                return bad(format!("R[({i}, {i})] = {} must be positive", self.r[(i, i)]));
+            if r[(i, i)] <= 0.0 {
+                return bad(format!("R[({i}, {i})] = {} must be positive", r[(i, i)]));
             }
         }
         check_box("W", &self.w_box, n, false)?;

@@ -14,12 +14,16 @@ use super::input::{InputModel, check_in_box, effective_noise};
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 use crate::error::EstimatorError;
-use crate::traits::{Estimate, EstimateKind, Estimator, NoiseSettings};
+use crate::traits::{
+    DataCheck, Estimate, EstimateKind, Estimator, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus,
+};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// What one step did.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepReport {
+    /// Initial, predicted, converged (the solver's `(L, τ)` used), or a fallback.
+    pub outcome: SolveOutcome,
     /// The multipliers used (after clamping onto the simplex).
     pub tau: [f64; 3],
     /// The solver's status.
@@ -64,6 +68,23 @@ pub struct SetEstimate {
     pub report: StepReport,
 }
 
+impl StepReport {
+    /// The report of the initial set.
+    fn initial() -> Self {
+        StepReport {
+            outcome: SolveOutcome::Initial,
+            tau: [1.0 / 3.0; 3],
+            status: UpdateStatus::Unsolved,
+            iterations: 0,
+            fallback: None,
+            inflation: Inflation::default(),
+            solve_time: Duration::ZERO,
+            consistency: Consistency::Consistent,
+            guaranteed: true,
+        }
+    }
+}
+
 impl SetEstimate {
     /// `tr P`.
     pub fn trace(&self) -> f64 {
@@ -99,6 +120,22 @@ struct Workspace {
     y_zero: DVector<f64>,
 }
 
+/// What [`SetMembershipFilter::predict`] keeps for a following [`SetMembershipFilter::update`]:
+/// the update (13)–(29) is joint with the prediction, from the set before it.
+#[derive(Debug, Clone, Default)]
+struct PendingPrediction {
+    /// Whether a prediction is waiting for its measurement.
+    armed: bool,
+    /// `x̂_k`, `P_k` and the report of the set before the prediction.
+    center: DVector<f64>,
+    shape: DMatrix<f64>,
+    report: Option<StepReport>,
+    /// `A_k`, `B_k`, `u_k` of the prediction.
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    u: DVector<f64>,
+}
+
 /// The improved set-membership filter, generic over the solver of (29).
 #[derive(Debug, Clone)]
 pub struct SetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
@@ -118,59 +155,34 @@ pub struct SetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
     est: SetEstimate,
     sol: UpdateSolution,
     ws: Workspace,
+    pending: PendingPrediction,
 }
 
 impl SetMembershipFilter<TwoMultiplierSolver> {
-    /// The filter with the exact two-multiplier solver, from [`NoiseSettings`] (ellipsoid shapes).
-    pub fn with_noise(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        noise: &NoiseSettings,
-        inputs: usize,
-    ) -> Result<Self, EstimatorError> {
-        Self::two_multiplier(x0, p0, noise.q.clone(), noise.r.clone(), inputs)
-    }
-
-    /// The filter with the exact two-multiplier solver.
-    pub fn two_multiplier(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        inputs: usize,
-    ) -> Result<Self, EstimatorError> {
-        Self::new(x0, p0, q, r, inputs, TwoMultiplierSolver::new())
+    /// The filter with the exact two-multiplier solver, from its [`Setup`]: the initial set
+    /// `𝓔(x0, p0)` and the noise shapes `w ∈ 𝓔(0, Q)`, `v ∈ 𝓔(0, R)`.
+    ///
+    /// # Errors
+    /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix.
+    pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
+        Self::with_solver(setup, TwoMultiplierSolver::new())
     }
 }
 
 impl<S: UpdateSolver> SetMembershipFilter<S> {
-    /// A filter with initial set `𝓔(x0, p0)`, noise shapes `q` (`n × n`) and `r` (`m × m`),
-    /// `inputs` input components and the given solver.
-    pub fn new(
-        x0: DVector<f64>,
-        p0: DMatrix<f64>,
-        q: DMatrix<f64>,
-        r: DMatrix<f64>,
-        inputs: usize,
-        mut solver: S,
-    ) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, p0, q, r } = check_initial(&x0, &p0, &q, &r)?;
+    /// A filter from its [`Setup`] (ellipsoid shapes) with the given solver of (29).
+    ///
+    /// # Errors
+    /// As [`SetMembershipFilter::new`], and the solver's preparation error.
+    pub fn with_solver(setup: Setup, mut solver: S) -> Result<Self, EstimatorError> {
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial(setup)?;
         solver.prepare(n, m)?;
         let mut est = SetEstimate {
             center: x0,
             shape: p0,
             lower: DVector::zeros(n),
             upper: DVector::zeros(n),
-            report: StepReport {
-                tau: [1.0 / 3.0; 3],
-                status: UpdateStatus::Unsolved,
-                iterations: 0,
-                fallback: None,
-                inflation: Inflation::default(),
-                solve_time: Duration::ZERO,
-                consistency: Consistency::Consistent,
-                guaranteed: true,
-            },
+            report: StepReport::initial(),
         };
         est.set_bounds();
         let nn = || DMatrix::zeros(n, n);
@@ -198,6 +210,15 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 gain_r: DMatrix::zeros(m, m),
                 cons: ConsistencyWork::new(n, m),
                 y_zero: DVector::zeros(m),
+            },
+            pending: PendingPrediction {
+                armed: false,
+                center: DVector::zeros(n),
+                shape: DMatrix::zeros(n, n),
+                report: None,
+                a: DMatrix::zeros(n, n),
+                b: DMatrix::zeros(n, inputs),
+                u: DVector::zeros(inputs),
             },
         })
     }
@@ -264,9 +285,10 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         self.time_budget = budget;
     }
 
-    /// Number of states, inputs, outputs `(n, p, m)`.
-    pub fn dims(&self) -> (usize, usize, usize) {
-        (self.n, self.p, self.m)
+    /// Number of states, inputs, outputs.
+    #[must_use]
+    pub fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
     }
 
     /// How the input enters.
@@ -289,11 +311,15 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         &mut self.solver
     }
 
-    /// A prediction-only step (no measurement arrived): the certified outer bound of
+    /// The prediction (no measurement yet, or none arrived): the certified outer bound of
     /// `A 𝓔(x̂_k, P_k) ⊕ 𝓔(0, Q)` (plus `B u_k`), the update (13)–(29) with `τ₃ = 0` and `L = 0`:
-    /// `P = X₁/τ₁ + Q/τ₂` with the trace-optimal `τ₁ = √tr X₁ / (√tr X₁ + √tr Q)`, certified
-    /// as every published set. The set grows honestly; it stays guaranteed. On error the filter is
-    /// unchanged. Allocation-free.
+    /// `P = X₁/τ₁ + Q/τ₂` with the trace-optimal weights of [`ellipsoid::minkowski`], certified
+    /// as every published set. The set grows honestly; it stays guaranteed. The set before it is
+    /// kept, so that a following [`SetMembershipFilter::update`] makes the joint step (13)–(29)
+    /// from it. On error the filter is unchanged. Allocation-free.
+    ///
+    /// # Errors
+    /// As [`SetMembershipFilter::step`], except the data checks of `y`.
     pub fn predict<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
@@ -305,12 +331,11 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
             check_in_box(u, lower, upper)?;
         }
-        let Self { q, r, input, est, sol, ws, steps, guarantee_lost, .. } = self;
+        let Self { q, r, input, est, sol, ws, steps, guarantee_lost, pending, .. } = self;
         let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
         let q_used: &DMatrix<f64> = if bounded { &ws.q_eff } else { q };
-        let (sx, sq) = (ws.x1.trace().max(0.0).sqrt(), q_used.trace().max(0.0).sqrt());
-        let t1 = if sx + sq > 0.0 { sx / (sx + sq) } else { 0.5 };
-        let Some(tau) = clamp_tau([t1, 1.0 - t1, 0.0]) else {
+        let (t1, t2) = ellipsoid::minkowski::min_trace_weights(ws.x1.trace(), q_used.trace());
+        let Some(tau) = clamp_tau([t1, t2, 0.0]) else {
             return Err(EstimatorError::NumericalFailure("the prediction's multipliers are not finite"));
         };
         sol.l.fill(0.0);
@@ -318,11 +343,19 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         else {
             return Err(EstimatorError::NumericalFailure("the predicted set is not finite"));
         };
+        pending.center.copy_from(&est.center);
+        pending.shape.copy_from(&est.shape);
+        pending.report = Some(est.report);
+        pending.a.copy_from(model.a);
+        pending.b.copy_from(model.b);
+        pending.u.copy_from(u);
+        pending.armed = true;
         std::mem::swap(&mut est.center, &mut ws.cert.x_new);
         std::mem::swap(&mut est.shape, &mut ws.cert.p_new);
         est.set_bounds();
         *steps += 1;
         est.report = StepReport {
+            outcome: SolveOutcome::Predicted,
             tau,
             status: UpdateStatus::Unsolved,
             iterations: 0,
@@ -335,10 +368,60 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         Ok(est)
     }
 
-    /// One step: consumes `u_k` and the measurement `y_{k+1}`, returns the certified set
-    /// estimate. On error the filter is unchanged. After the first step (which may set a
-    /// solver up), this does not allocate with the two-multiplier solver or an SDP backend whose
-    /// solve does not allocate.
+    /// The measurement update with `y_{k+1}` of the last [`SetMembershipFilter::predict`]: the
+    /// joint step (13)–(29) from the set before that prediction with its `A_k`, `B_k`, `u_k`, and
+    /// this model's `C_{k+1}` — the same numbers as [`SetMembershipFilter::step`]. On error the
+    /// filter is unchanged (the prediction stays published and pending). Allocation-free.
+    ///
+    /// # Errors
+    /// [`EstimatorError::UpdateWithoutPrediction`] when no prediction is pending (the update is
+    /// joint with a prediction; a second update of the same step has none); otherwise as
+    /// [`SetMembershipFilter::step`].
+    pub fn update<M: LinearModel + ?Sized>(&mut self, model: &M, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        check_vec("y", y, self.m)?;
+        if !self.pending.armed {
+            return Err(EstimatorError::UpdateWithoutPrediction { estimator: "the set-membership filter" });
+        }
+        let mut pending = std::mem::take(&mut self.pending);
+        let Some(mut prior_report) = pending.report else {
+            return Err(EstimatorError::UpdateWithoutPrediction { estimator: "the set-membership filter" });
+        };
+        let swap = |est: &mut SetEstimate, pending: &mut PendingPrediction, report: &mut StepReport| {
+            std::mem::swap(&mut est.center, &mut pending.center);
+            std::mem::swap(&mut est.shape, &mut pending.shape);
+            std::mem::swap(&mut est.report, report);
+        };
+        swap(&mut self.est, &mut pending, &mut prior_report);
+        self.steps -= 1;
+        let result = self.step(&StepModel::new(&pending.a, &pending.b, model.c()), &pending.u, y).map(|_| ());
+        match result {
+            Ok(()) => {
+                pending.armed = false;
+                pending.report = None;
+                self.pending = pending;
+                Ok(&self.est)
+            }
+            Err(e) => {
+                swap(&mut self.est, &mut pending, &mut prior_report);
+                pending.report = Some(prior_report);
+                self.steps += 1;
+                self.pending = pending;
+                Err(e)
+            }
+        }
+    }
+
+    /// One step, [`SetMembershipFilter::predict`] and [`SetMembershipFilter::update`] at once:
+    /// consumes `u_k` and the measurement `y_{k+1}`, returns the certified set estimate. On error
+    /// the filter is unchanged. After the first step (which may set a solver up), this does not
+    /// allocate with the two-multiplier solver or an SDP backend whose solve does not allocate.
+    ///
+    /// # Errors
+    /// Wrong dimensions of the model, `u` or `y`; NaN/∞ in them; an input outside its declared
+    /// box ([`EstimatorError::InputOutsideBounds`]); a measurement that contradicts the predicted
+    /// set and the noise bounds ([`EstimatorError::InconsistentData`], with the default policy); a
+    /// set that is not finite ([`EstimatorError::NumericalFailure`]).
     pub fn step<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
@@ -352,7 +435,8 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
             check_in_box(u, lower, upper)?;
         }
-        let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, .. } = self;
+        let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, pending, .. } =
+            self;
         let (n, m) = (*n, *m);
         let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
         let warm = est.report.tau;
@@ -468,7 +552,9 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         let guaranteed = !*guarantee_lost && consistency.is_consistent();
         *guarantee_lost = !guaranteed;
         *steps += 1;
+        pending.armed = false;
         est.report = StepReport {
+            outcome: if reason.is_some() { SolveOutcome::FallbackUsed } else { SolveOutcome::Converged },
             tau,
             status: sol.status,
             iterations: sol.iterations,
@@ -518,17 +604,17 @@ impl Estimate for SetEstimate {
     fn bounds(&self, i: usize) -> Option<(f64, f64)> {
         (i < self.lower.len()).then(|| (self.lower[i], self.upper[i]))
     }
-    fn multipliers(&self) -> Option<[f64; 3]> {
-        Some(self.report.tau)
+    fn status(&self) -> StepStatus {
+        let r = &self.report;
+        let data = match r.outcome {
+            SolveOutcome::Initial | SolveOutcome::Predicted => DataCheck::NotChecked,
+            _ if r.consistency.is_consistent() => DataCheck::Consistent,
+            _ => DataCheck::Inconsistent,
+        };
+        StepStatus { outcome: r.outcome, data, guarantee: if r.guaranteed { Guarantee::Holds } else { Guarantee::Lost } }
     }
-    fn fallback_used(&self) -> bool {
-        self.report.fallback_used()
-    }
-    fn consistent(&self) -> Option<bool> {
-        Some(self.report.consistency.is_consistent())
-    }
-    fn guaranteed(&self) -> Option<bool> {
-        Some(self.report.guaranteed)
+    fn details(&self) -> StepDetails {
+        StepDetails::SetMembership(self.report)
     }
 }
 
@@ -539,6 +625,9 @@ impl<S: UpdateSolver, M: LinearModel + ?Sized> Estimator<M> for SetMembershipFil
     }
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
         SetMembershipFilter::predict(self, model, u)
+    }
+    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
+        SetMembershipFilter::update(self, model, y)
     }
     fn estimate(&self) -> &SetEstimate {
         &self.est

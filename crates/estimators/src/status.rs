@@ -1,0 +1,264 @@
+//! What every estimate says about itself: the kind of set, one step status shared by every
+//! estimator, and the estimator's own details (no downcasting).
+//!
+//! A [`StepStatus`] has three parts, each with a fixed vocabulary:
+//!
+//! * [`SolveOutcome`]: how the step's computation ended — the initial estimate, a prediction
+//!   without a measurement, converged (closed-form filters always), not converged (an iterative
+//!   solver stopped at its limit and its last iterate is published), a fallback (the solver's
+//!   answer was not used; a set-membership filter publishes a certified set from a feasible
+//!   multiplier, an unscented filter a covariance recomputed about the central sigma point), or
+//!   relaxed (the problem as posed had no solution and a relaxed one was solved);
+//! * [`DataCheck`]: whether the estimator checked the step's data against what it was told, and
+//!   what it found;
+//! * [`Guarantee`]: for guaranteed sets, whether the published set is still guaranteed.
+//!
+//! [`StepStatus::label`] writes them as one word list (`converged`, `fallback`,
+//! `converged+inconsistent+not-guaranteed`), the `status` column of `port-est`.
+
+use std::fmt;
+
+use crate::adaptive::AdaptiveStep;
+use crate::mhe::{MheReport, NonlinearMheReport};
+use crate::smf::StepReport;
+use crate::ukf::UkfReport;
+
+/// What kind of set an estimate describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum EstimateKind {
+    /// A Gaussian estimate: mean and covariance; the per-state bounds are ±1 standard deviation.
+    Gaussian,
+    /// A guaranteed ellipsoid `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}` that contains the true
+    /// state whenever the noises respect their bounds; the per-state bounds are its projections.
+    GuaranteedEllipsoid,
+    /// A point estimate (moving-horizon estimators): no per-state bounds; the shape is a weight
+    /// matrix of the method (documented by the estimator), neither a calibrated covariance nor a
+    /// guaranteed set.
+    Point,
+}
+
+impl EstimateKind {
+    /// A short label for tables and file headers.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            EstimateKind::Gaussian => "gaussian",
+            EstimateKind::GuaranteedEllipsoid => "guaranteed ellipsoid",
+            EstimateKind::Point => "point",
+        }
+    }
+
+    /// What the shape matrix is.
+    #[must_use]
+    pub fn shape_meaning(self) -> &'static str {
+        match self {
+            EstimateKind::Gaussian => "covariance",
+            EstimateKind::GuaranteedEllipsoid => "ellipsoid shape matrix (certified outer bound)",
+            EstimateKind::Point => "weight matrix of the method (not a covariance, not a bound)",
+        }
+    }
+
+    /// What the per-state bounds mean, `None` when the kind has none.
+    #[must_use]
+    pub fn bounds_meaning(self) -> Option<&'static str> {
+        match self {
+            EstimateKind::Gaussian => Some("mean ∓ one standard deviation"),
+            EstimateKind::GuaranteedEllipsoid => Some("guaranteed interval (the ellipsoid's projection)"),
+            EstimateKind::Point => None,
+        }
+    }
+}
+
+/// How a step's computation ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum SolveOutcome {
+    /// No step yet: the initial estimate.
+    Initial,
+    /// A prediction without a measurement.
+    Predicted,
+    /// The step finished as designed (closed form, or an iterative solve within its tolerance).
+    Converged,
+    /// An iterative solver stopped at its limit; its last iterate is published.
+    NotConverged,
+    /// The solver's answer was not used; a fallback was published (module documentation).
+    FallbackUsed,
+    /// The step's constraints could not all hold; the estimate of a relaxed problem is published.
+    Relaxed,
+}
+
+impl SolveOutcome {
+    /// A short label: `initial`, `predicted`, `converged`, `not-converged`, `fallback`, `relaxed`.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            SolveOutcome::Initial => "initial",
+            SolveOutcome::Predicted => "predicted",
+            SolveOutcome::Converged => "converged",
+            SolveOutcome::NotConverged => "not-converged",
+            SolveOutcome::FallbackUsed => "fallback",
+            SolveOutcome::Relaxed => "relaxed",
+        }
+    }
+}
+
+/// Whether the step's data were checked against the estimator's assumptions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum DataCheck {
+    /// The estimator does not check its data (or there were none: a prediction).
+    NotChecked,
+    /// Checked and consistent with the noise description.
+    Consistent,
+    /// Provably inconsistent with the noise description, and published anyway (a policy the
+    /// caller chose).
+    Inconsistent,
+}
+
+/// Whether a published set is guaranteed to contain the true state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Guarantee {
+    /// The estimate is not a guaranteed set (Gaussian, point).
+    NotApplicable,
+    /// Guaranteed whenever the noises respect their bounds.
+    Holds,
+    /// No longer guaranteed: inconsistent data were accepted at this or an earlier step.
+    Lost,
+}
+
+/// The status of one step, the same vocabulary for every estimator (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct StepStatus {
+    /// How the computation ended.
+    pub outcome: SolveOutcome,
+    /// What the data check found.
+    pub data: DataCheck,
+    /// Whether the set is guaranteed.
+    pub guarantee: Guarantee,
+}
+
+impl StepStatus {
+    /// The initial estimate of a non-guaranteed estimator.
+    pub const INITIAL: Self =
+        Self { outcome: SolveOutcome::Initial, data: DataCheck::NotChecked, guarantee: Guarantee::NotApplicable };
+
+    /// A status with no data check and no guarantee (Gaussian and point estimators).
+    #[must_use]
+    pub fn unchecked(outcome: SolveOutcome) -> Self {
+        Self { outcome, data: DataCheck::NotChecked, guarantee: Guarantee::NotApplicable }
+    }
+
+    /// Whether nothing is wrong: initial, predicted or converged, no inconsistent data, and the
+    /// guarantee (if any) holds.
+    #[must_use]
+    pub fn is_clean(&self) -> bool {
+        matches!(self.outcome, SolveOutcome::Initial | SolveOutcome::Predicted | SolveOutcome::Converged)
+            && self.data != DataCheck::Inconsistent
+            && self.guarantee != Guarantee::Lost
+    }
+
+    /// The outcome, then `+inconsistent` and `+not-guaranteed` where they apply.
+    #[must_use]
+    pub fn label(&self) -> String {
+        self.to_string()
+    }
+}
+
+impl fmt::Display for StepStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.outcome.label())?;
+        if self.data == DataCheck::Inconsistent {
+            f.write_str("+inconsistent")?;
+        }
+        if self.guarantee == Guarantee::Lost {
+            f.write_str("+not-guaranteed")?;
+        }
+        Ok(())
+    }
+}
+
+/// An estimator's own account of its last step, beyond the shared [`StepStatus`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum StepDetails {
+    /// Nothing beyond the status (Kalman and extended Kalman filters).
+    None,
+    /// The set-membership filters: multipliers, solver status and iterations, fallback,
+    /// certification inflation, consistency.
+    SetMembership(StepReport),
+    /// The unscented filter's positive-definiteness guards.
+    Unscented(UkfReport),
+    /// The adaptive filter's noise scale `t_k` and distance `d_k` (`None` before the first update
+    /// and after a prediction without a fix).
+    Adaptive(Option<AdaptiveStep>),
+    /// The linear moving-horizon estimators (`None` before the first update).
+    MovingHorizon(Option<MheReport>),
+    /// The nonlinear moving-horizon estimator (`None` before the first update).
+    NonlinearMovingHorizon(Option<NonlinearMheReport>),
+}
+
+impl StepDetails {
+    /// The names of the numbers [`StepDetails::for_each_field`] reports, the same for every step of
+    /// one estimator (for file headers).
+    #[must_use]
+    pub fn field_names(&self) -> &'static [&'static str] {
+        match self {
+            StepDetails::None | StepDetails::Unscented(_) => &[],
+            StepDetails::SetMembership(_) => &["tau1", "tau2", "tau3"],
+            StepDetails::Adaptive(_) => &["scale", "distance"],
+            StepDetails::MovingHorizon(_) | StepDetails::NonlinearMovingHorizon(_) => &["iterations"],
+        }
+    }
+
+    /// Calls `f` with each of [`StepDetails::field_names`] and its value (`None` when this step
+    /// has none, e.g. the scale of an epoch without a fix). Allocation-free.
+    pub fn for_each_field(&self, f: &mut dyn FnMut(&'static str, Option<f64>)) {
+        match self {
+            StepDetails::None | StepDetails::Unscented(_) => {}
+            StepDetails::SetMembership(r) => {
+                for (name, t) in ["tau1", "tau2", "tau3"].into_iter().zip(r.tau) {
+                    f(name, Some(t));
+                }
+            }
+            StepDetails::Adaptive(a) => {
+                f("scale", a.map(|a| a.scale));
+                f("distance", a.map(|a| a.distance));
+            }
+            StepDetails::MovingHorizon(r) => f("iterations", r.map(|r| r.solve.sweeps as f64)),
+            StepDetails::NonlinearMovingHorizon(r) => f("iterations", r.map(|r| r.iterations as f64)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_list_every_flag() {
+        let s = StepStatus { outcome: SolveOutcome::Converged, data: DataCheck::Consistent, guarantee: Guarantee::Holds };
+        assert_eq!(s.label(), "converged");
+        assert!(s.is_clean());
+        let s = StepStatus { data: DataCheck::Inconsistent, guarantee: Guarantee::Lost, ..s };
+        assert_eq!(s.label(), "converged+inconsistent+not-guaranteed");
+        assert!(!s.is_clean());
+        let s = StepStatus { outcome: SolveOutcome::FallbackUsed, data: DataCheck::Consistent, ..s };
+        assert_eq!(s.label(), "fallback+not-guaranteed");
+        assert_eq!(StepStatus::unchecked(SolveOutcome::NotConverged).label(), "not-converged");
+        assert!(!StepStatus::unchecked(SolveOutcome::NotConverged).is_clean());
+        assert!(StepStatus::INITIAL.is_clean());
+    }
+
+    #[test]
+    fn detail_fields_match_their_names() {
+        for d in [StepDetails::None, StepDetails::Adaptive(None), StepDetails::MovingHorizon(None)] {
+            let mut names = Vec::new();
+            d.for_each_field(&mut |n, _| names.push(n));
+            assert_eq!(names, d.field_names());
+        }
+        assert_eq!(EstimateKind::Point.bounds_meaning(), None);
+        assert!(EstimateKind::Gaussian.bounds_meaning().is_some());
+    }
+}
