@@ -12,6 +12,7 @@
 //! And the supply vessel's UKF step (paper's α, β, κ; 6 states, Euler at 0.1 s) beside its EKF
 //! step, and one NSAMPC control law.
 
+use estimators::Setup;
 use std::hint::black_box;
 
 use carrier_dynamics::{CarrierModel, CarrierParams};
@@ -74,7 +75,14 @@ fn steps(crit: &mut Criterion) {
         let x0 = DVector::zeros(4);
         let label = format!("n4m{m}");
 
-        let kf0 = KalmanFilter::new(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8).unwrap();
+        let kf0 = KalmanFilter::new(Setup {
+            x0: x0.clone(),
+            p0: cs.p0.clone(),
+            process_noise: cs.q.clone(),
+            measurement_noise: cs.r.clone(),
+            inputs: 8,
+        })
+        .unwrap();
         let mut kf = kf0.clone();
         let mut k = 0;
         group.bench_function(BenchmarkId::new("kalman", &label), |b| {
@@ -86,8 +94,14 @@ fn steps(crit: &mut Criterion) {
             })
         });
 
-        let smf0 =
-            SetMembershipFilter::two_multiplier(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8).unwrap();
+        let smf0 = SetMembershipFilter::new(Setup {
+            x0: x0.clone(),
+            p0: cs.p0.clone(),
+            process_noise: cs.q.clone(),
+            measurement_noise: cs.r.clone(),
+            inputs: 8,
+        })
+        .unwrap();
         let mut smf = smf0.clone();
         k = 0;
         group.bench_function(BenchmarkId::new("smf-two-multiplier", &label), |b| {
@@ -110,8 +124,17 @@ fn steps(crit: &mut Criterion) {
         for (name, warm_start) in variants {
             let settings = SolverSettings { warm_start, ..SolverSettings::default() };
             let solver = SdpUpdateSolver::by_name(name, settings).unwrap();
-            let mut f =
-                SetMembershipFilter::new(x0.clone(), cs.p0.clone(), cs.q.clone(), cs.r.clone(), 8, solver).unwrap();
+            let mut f = SetMembershipFilter::with_solver(
+                Setup {
+                    x0: x0.clone(),
+                    p0: cs.p0.clone(),
+                    process_noise: cs.q.clone(),
+                    measurement_noise: cs.r.clone(),
+                    inputs: 8,
+                },
+                solver,
+            )
+            .unwrap();
             k = 0;
             let id = if warm_start { format!("smf-{name}-warm") } else { format!("smf-{name}") };
             // An SDP step takes 0.1–0.5 ms: the run never wraps within a benchmark.
@@ -147,7 +170,14 @@ fn truck(crit: &mut Criterion) {
     let ys: Vec<DVector<f64>> =
         (0..64).map(|k| DVector::from_vec(vec![v + 0.01 * (k % 5) as f64, 0.3, 0.02])).collect();
     let mut group = crit.benchmark_group("truck_step");
-    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 7).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 7,
+    })
+    .unwrap();
     let mut k = 0;
     group.bench_function("ekf", |b| {
         b.iter(|| {
@@ -173,7 +203,8 @@ fn truck(crit: &mut Criterion) {
     let a = DMatrix::identity(3, 3) * 0.999;
     let bm = DMatrix::from_element(3, 7, 1e-4);
     let c = DMatrix::identity(3, 3);
-    let mut kf = KalmanFilter::new(x0, p0, q, r, 7).unwrap();
+    let mut kf =
+        KalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 7 }).unwrap();
     let lin = StepModel::new(&a, &bm, &c);
     group.bench_function("kalman-same-size", |b| {
         b.iter(|| {
@@ -201,25 +232,51 @@ fn vessel(crit: &mut Criterion) {
     let ys: Vec<DVector<f64>> =
         (0..64).map(|k| DVector::from_vec(vec![0.1 * k as f64, 0.05 * k as f64, 0.01 * (k % 7) as f64])).collect();
     let mut group = crit.benchmark_group("vessel_step");
-    let mut ukf =
-        UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper()).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(
+        Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 },
+        UkfParams::paper(),
+    )
+    .unwrap();
     let mut k = 0;
     group.bench_function("ukf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
             if k == 0 {
-                ukf = UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper())
-                    .unwrap();
+                ukf = UnscentedKalmanFilter::new(
+                    Setup {
+                        x0: x0.clone(),
+                        p0: p0.clone(),
+                        process_noise: q.clone(),
+                        measurement_noise: r.clone(),
+                        inputs: 3,
+                    },
+                    UkfParams::paper(),
+                )
+                .unwrap();
             }
             black_box(ukf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
         })
     });
-    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 3,
+    })
+    .unwrap();
     group.bench_function("ekf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
             if k == 0 {
-                ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3).unwrap();
+                ekf = ExtendedKalmanFilter::new(Setup {
+                    x0: x0.clone(),
+                    p0: p0.clone(),
+                    process_noise: q.clone(),
+                    measurement_noise: r.clone(),
+                    inputs: 3,
+                })
+                .unwrap();
             }
             black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
         })

@@ -7,6 +7,7 @@
 //! Also the supply vessel's nonlinear MHE (N = 10, 66 unknowns) with the UKF and the EKF arrival
 //! cost, beside one UKF step.
 
+use estimators::Setup;
 use std::hint::black_box;
 
 use car_dynamics::{CarModel, CarParams, NoiseBounds, double_lane_change_inputs};
@@ -131,8 +132,11 @@ fn vessel(c: &mut Criterion) {
             );
         });
     }
-    let mut ukf =
-        UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper()).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(
+        Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 },
+        UkfParams::paper(),
+    )
+    .unwrap();
     for k in 0..20 {
         ukf.step(&model, &us[k], &ys[k]).unwrap();
     }

@@ -258,6 +258,18 @@ pub fn correct(ins: [f64; 3], error_estimate: &DVector<f64>) -> Result<[f64; 3],
     ])
 }
 
+impl models::AnyModel for DiscreteInsModel {
+    fn discrete(&self) -> &dyn models::DiscreteModel {
+        self
+    }
+    fn differentiable(&self) -> Option<&dyn models::DifferentiableModel> {
+        Some(self)
+    }
+    fn linear(&self) -> Option<&dyn models::LinearModel> {
+        Some(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

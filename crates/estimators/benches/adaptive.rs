@@ -8,6 +8,7 @@
 //! 20 satellites) so that the FIS fires several rules.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use estimators::Setup;
 use std::hint::black_box;
 
 use bds_ins_dynamics::{InsErrorModel, InsNoise, InsParams, scenario, simulate_error_states};
@@ -50,8 +51,14 @@ fn steps(c: &mut Criterion) {
     let status = ReceiverStatus::new(20.0, 4.0).unwrap_or_else(|e| panic!("{e}"));
     let mut group = c.benchmark_group("bds_ins_step_13x3");
     // Each iteration is one step; the filter runs on along the 1200 epochs and restarts.
-    let mut kf = KalmanFilter::new(x0.clone(), d.p0.clone(), d.model.q.clone(), d.r.clone(), 0)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let mut kf = KalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: d.p0.clone(),
+        process_noise: d.model.q.clone(),
+        measurement_noise: d.r.clone(),
+        inputs: 0,
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
     let mut k = 0;
     group.bench_function("kalman", |b| {
         b.iter(|| {
@@ -59,12 +66,20 @@ fn steps(c: &mut Criterion) {
             k = (k + 1) % STEPS;
         })
     });
-    let mut constant =
-        AdaptiveKalmanFilter::new(x0.clone(), d.p0.clone(), d.model.q.clone(), d.r.clone(), 0, ConstantScaling(1.0))
-            .unwrap_or_else(|e| panic!("{e}"));
+    let mut constant = AdaptiveKalmanFilter::new(
+        Setup {
+            x0: x0.clone(),
+            p0: d.p0.clone(),
+            process_noise: d.model.q.clone(),
+            measurement_noise: d.r.clone(),
+            inputs: 0,
+        },
+        ConstantScaling(1.0),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     group.bench_function("adaptive_constant_scale", |b| {
         b.iter(|| {
-            let _ = black_box(constant.step(&d.model, &u, &d.ys[k], &status));
+            let _ = black_box(constant.step_with_status(&d.model, &u, &d.ys[k], &status));
             k = (k + 1) % STEPS;
         })
     });
@@ -75,11 +90,20 @@ fn steps(c: &mut Criterion) {
     ] {
         let system = FuzzySystem::bds_ins_default().with_defuzzifier(defuzz).unwrap_or_else(|e| panic!("{e}"));
         let scaling = FuzzyScaling::new(system).unwrap_or_else(|e| panic!("{e}"));
-        let mut f = AdaptiveKalmanFilter::new(x0.clone(), d.p0.clone(), d.model.q.clone(), d.r.clone(), 0, scaling)
-            .unwrap_or_else(|e| panic!("{e}"));
+        let mut f = AdaptiveKalmanFilter::new(
+            Setup {
+                x0: x0.clone(),
+                p0: d.p0.clone(),
+                process_noise: d.model.q.clone(),
+                measurement_noise: d.r.clone(),
+                inputs: 0,
+            },
+            scaling,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         group.bench_function(name, |b| {
             b.iter(|| {
-                let _ = black_box(f.step(&d.model, &u, &d.ys[k], &status));
+                let _ = black_box(f.step_with_status(&d.model, &u, &d.ys[k], &status));
                 k = (k + 1) % STEPS;
             })
         });

@@ -34,7 +34,7 @@ use nalgebra::DVector;
 
 use fuzzy_inference::FuzzySystem;
 use lmi::SolverSettings;
-use models::{AnyModel, Capability, DifferentiableModel, DiscreteModel, Dims, LinearModel};
+use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel};
 
 use crate::adaptive::{AdaptiveKalmanFilter, FuzzyScaling};
 use crate::ekf::ExtendedKalmanFilter;
@@ -85,9 +85,10 @@ impl SmfSolver {
             return Ok(SmfSolver::TwoMultiplier);
         }
         match lmi::backend_names().into_iter().find(|b| *b == name) {
-            Some(backend) => {
-                Ok(SmfSolver::Sdp { backend, settings: SolverSettings { warm_start: true, ..SolverSettings::default() } })
-            }
+            Some(backend) => Ok(SmfSolver::Sdp {
+                backend,
+                settings: SolverSettings { warm_start: true, ..SolverSettings::default() },
+            }),
             None => Err(EstimatorError::UnknownSolver { name: name.to_owned(), known: Self::names().join(", ") }),
         }
     }
@@ -273,7 +274,11 @@ impl EstimatorEntry {
     /// [`EstimatorError::MissingSetting`] when the row has no default and none are given;
     /// [`EstimatorError::WrongSettings`] for another row's settings; the constructor's validation
     /// errors.
-    pub fn build(&'static self, setup: Setup, settings: Option<EstimatorSettings>) -> Result<AnyEstimator, EstimatorError> {
+    pub fn build(
+        &'static self,
+        setup: Setup,
+        settings: Option<EstimatorSettings>,
+    ) -> Result<AnyEstimator, EstimatorError> {
         let settings = match settings {
             Some(s) => s,
             None => self
@@ -490,6 +495,47 @@ impl AnyEstimator {
     pub fn entry(&self) -> &'static EstimatorEntry {
         self.entry
     }
+
+    /// One step (see [`Estimator::step`](crate::Estimator::step)).
+    ///
+    /// # Errors
+    /// The estimator's errors; [`EstimatorError::ModelLacksCapability`].
+    pub fn step(
+        &mut self,
+        model: &dyn AnyModel,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.step_dyn(model, u, y)
+    }
+
+    /// A prediction (see [`Estimator::predict`](crate::Estimator::predict)).
+    ///
+    /// # Errors
+    /// As [`AnyEstimator::step`].
+    pub fn predict(&mut self, model: &dyn AnyModel, u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.predict_dyn(model, u)
+    }
+
+    /// A measurement update (see [`Estimator::update`](crate::Estimator::update)).
+    ///
+    /// # Errors
+    /// As [`AnyEstimator::step`].
+    pub fn update(&mut self, model: &dyn AnyModel, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
+        self.inner.update_dyn(model, y)
+    }
+
+    /// The current estimate.
+    #[must_use]
+    pub fn estimate(&self) -> &dyn Estimate {
+        self.inner.estimate_dyn()
+    }
+
+    /// The lengths of the state, the input and the measurement it consumes.
+    #[must_use]
+    pub fn dims(&self) -> Dims {
+        self.inner.dims_dyn()
+    }
 }
 
 impl<'m> DynEstimator<dyn AnyModel + 'm> for AnyEstimator {
@@ -682,11 +728,17 @@ mod tests {
 
     #[test]
     fn a_model_without_the_capability_is_named() {
-        let m = ConstantModel::new(DMatrix::identity(2, 2), DMatrix::zeros(2, 1), DMatrix::from_row_slice(1, 2, &[1.0, 0.0]))
-            .unwrap();
+        let m = ConstantModel::new(
+            DMatrix::identity(2, 2),
+            DMatrix::zeros(2, 1),
+            DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+        )
+        .unwrap();
         let (u, y) = (DVector::zeros(1), DVector::zeros(1));
         let mut kf = build("kf", setup(), None).unwrap();
-        let e = kf.step_dyn(&DifferentiableView(&m), &u, &y).unwrap_err();
+        let Err(e) = kf.step_dyn(&DifferentiableView(&m), &u, &y) else {
+            panic!("a linear filter ran without A, B, C")
+        };
         assert!(matches!(e, EstimatorError::ModelLacksCapability { needs: Capability::Linear, .. }), "{e}");
         let mut ekf = build("ekf", setup(), None).unwrap();
         assert!(ekf.step_dyn(&DifferentiableView(&m), &u, &y).is_ok());

@@ -238,7 +238,8 @@ mod tests {
 
     #[test]
     fn labels_list_every_flag() {
-        let s = StepStatus { outcome: SolveOutcome::Converged, data: DataCheck::Consistent, guarantee: Guarantee::Holds };
+        let s =
+            StepStatus { outcome: SolveOutcome::Converged, data: DataCheck::Consistent, guarantee: Guarantee::Holds };
         assert_eq!(s.label(), "converged");
         assert!(s.is_clean());
         let s = StepStatus { data: DataCheck::Inconsistent, guarantee: Guarantee::Lost, ..s };

@@ -5,6 +5,7 @@
 
 use bds_ins_dynamics::{DiscreteInsModel, InsErrorModel, InsNoise, InsParams, scenario, simulate_error_states};
 use counting_allocator::{Counting, count};
+use estimators::Setup;
 use estimators::{
     AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, EstimatorError, FuzzyScaling, KalmanFilter, NoiseScaling,
     ReceiverStatus, ScalingContext,
@@ -38,11 +39,13 @@ fn measurements(model: &DiscreteInsModel, steps: usize, switch: usize, seed: u64
 
 fn filter<S: NoiseScaling>(model: &DiscreteInsModel, scaling: S) -> AdaptiveKalmanFilter<S> {
     AdaptiveKalmanFilter::new(
-        DVector::zeros(13),
-        scenario::initial_covariance(),
-        model.q.clone(),
-        scenario::nominal_r(),
-        0,
+        Setup {
+            x0: DVector::zeros(13),
+            p0: scenario::initial_covariance(),
+            process_noise: model.q.clone(),
+            measurement_noise: scenario::nominal_r(),
+            inputs: 0,
+        },
         scaling,
     )
     .unwrap()
@@ -57,9 +60,14 @@ fn unit_scale_is_the_plain_kalman_filter() {
     let m = model();
     let ys = measurements(&m, 300, 150, 1);
     let u = DVector::zeros(0);
-    let mut kf =
-        KalmanFilter::new(DVector::zeros(13), scenario::initial_covariance(), m.q.clone(), scenario::nominal_r(), 0)
-            .unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: DVector::zeros(13),
+        p0: scenario::initial_covariance(),
+        process_noise: m.q.clone(),
+        measurement_noise: scenario::nominal_r(),
+        inputs: 0,
+    })
+    .unwrap();
     let mut constant = filter(&m, ConstantScaling(1.0));
     let mut closure = filter(&m, |_: &ScalingContext<'_>| 1.0);
     for (k, y) in ys.iter().enumerate() {
@@ -71,10 +79,10 @@ fn unit_scale_is_the_plain_kalman_filter() {
             continue;
         }
         kf.step(&m, &u, y).unwrap();
-        assert_eq!(constant.step(&m, &u, y, &status()).unwrap().scale, 1.0);
-        closure.step(&m, &u, y, &status()).unwrap();
+        assert_eq!(constant.step_with_status(&m, &u, y, &status()).unwrap().scale, 1.0);
+        closure.step_with_status(&m, &u, y, &status()).unwrap();
         for f in [constant.estimate(), closure.estimate()] {
-            assert_eq!(f.mean, kf.estimate().mean, "step {k}");
+            assert_eq!(f.center, kf.estimate().center, "step {k}");
             assert_eq!(f.covariance, kf.estimate().covariance, "step {k}");
         }
     }
@@ -111,14 +119,14 @@ fn a_distance_dependent_scale_matches_an_independent_implementation_of_eq_9() {
     let u = DVector::zeros(0);
     let mut largest = 0.0f64;
     for y in &ys {
-        let got = f.step(&m, &u, y, &status()).unwrap();
+        let got = f.step_with_status(&m, &u, y, &status()).unwrap();
         let want = reference.step(&m, &scenario::nominal_r(), y, t_of_d);
         largest = largest.max(want);
         assert!((got.scale - want).abs() <= 1e-9 * want, "t {} vs {want}", got.scale);
         let e = f.estimate();
         for i in 0..13 {
             let scale = reference.p[(i, i)].sqrt();
-            assert!((e.mean[i] - reference.x[i]).abs() <= 1e-7 * scale, "x[{i}]");
+            assert!((e.center[i] - reference.x[i]).abs() <= 1e-7 * scale, "x[{i}]");
             for j in 0..13 {
                 let s = (reference.p[(i, i)] * reference.p[(j, j)]).sqrt();
                 assert!((e.covariance[(i, j)] - reference.p[(i, j)]).abs() <= 1e-7 * s, "P[{i}][{j}]");
@@ -143,7 +151,7 @@ fn the_fuzzy_scaling_gives_the_notes_values_and_reports_them() {
     ] {
         let mut f = filter(&m, FuzzyScaling::bds_ins_default());
         let y = DVector::from_vec(vec![0.6 * d, 0.8 * d, 0.0]);
-        let s = f.step(&m, &u, &y, &ReceiverStatus::new(n, rtk).unwrap()).unwrap();
+        let s = f.step_with_status(&m, &u, &y, &ReceiverStatus::new(n, rtk).unwrap()).unwrap();
         assert!((s.distance - d).abs() < 1e-12);
         assert!((s.scale - want).abs() <= 0.006 * want, "({n}, {rtk}, {d}) → {} (note: {want})", s.scale);
         assert_eq!(f.last_step(), Some(s));
@@ -155,10 +163,10 @@ fn the_fuzzy_scaling_gives_the_notes_values_and_reports_them() {
     let y = DVector::from_vec(vec![0.1, 0.0, 0.0]);
     let mut a = filter(&m, ConstantScaling(1.0));
     let mut b = filter(&m, ConstantScaling(25.0));
-    a.step(&m, &u, &y, &status()).unwrap();
-    b.step(&m, &u, &y, &status()).unwrap();
+    a.step_with_status(&m, &u, &y, &status()).unwrap();
+    b.step_with_status(&m, &u, &y, &status()).unwrap();
     assert!(b.estimate().covariance[(0, 0)] > 10.0 * a.estimate().covariance[(0, 0)]);
-    assert!(b.estimate().mean[0].abs() < a.estimate().mean[0].abs());
+    assert!(b.estimate().center[0].abs() < a.estimate().center[0].abs());
 }
 
 #[test]
@@ -167,7 +175,7 @@ fn bad_input_is_a_typed_error_and_leaves_the_filter_unchanged() {
     let u = DVector::zeros(0);
     let ys = measurements(&m, 5, 5, 3);
     let mut f = filter(&m, FuzzyScaling::bds_ins_default());
-    f.step(&m, &u, &ys[0], &status()).unwrap();
+    f.step_with_status(&m, &u, &ys[0], &status()).unwrap();
     let before = f.estimate().clone();
     let last = f.last_step();
     let unchanged = |f: &AdaptiveKalmanFilter<FuzzyScaling>| {
@@ -177,12 +185,12 @@ fn bad_input_is_a_typed_error_and_leaves_the_filter_unchanged() {
     };
     let mut nan = ys[1].clone();
     nan[2] = f64::NAN;
-    let e = f.step(&m, &u, &nan, &status()).unwrap_err();
+    let e = f.step_with_status(&m, &u, &nan, &status()).unwrap_err();
     assert_eq!(e, AdaptiveError::Filter(EstimatorError::NonFinite { what: "y", index: 2 }));
     unchanged(&f);
     let short = DVector::from_vec(vec![0.1, 0.2]);
     assert!(matches!(
-        f.step(&m, &u, &short, &status()),
+        f.step_with_status(&m, &u, &short, &status()),
         Err(AdaptiveError::Filter(EstimatorError::DimensionMismatch { .. }))
     ));
     unchanged(&f);
@@ -198,7 +206,7 @@ fn bad_input_is_a_typed_error_and_leaves_the_filter_unchanged() {
     for bad in [f64::NAN, 0.0, -1.0, f64::INFINITY] {
         let mut g = filter(&m, move |_: &ScalingContext<'_>| bad);
         let before = g.estimate().clone();
-        let e = g.step(&m, &u, &ys[0], &status()).unwrap_err();
+        let e = g.step_with_status(&m, &u, &ys[0], &status()).unwrap_err();
         assert!(matches!(e, AdaptiveError::InvalidScale(v) if v.is_nan() == bad.is_nan()), "{e}");
         assert_eq!(g.estimate(), &before);
         assert_eq!((g.updates(), g.last_step()), (0, None));
@@ -211,16 +219,18 @@ fn bad_input_is_a_typed_error_and_leaves_the_filter_unchanged() {
     }
     let mut g = filter(&m, Failing);
     let before = g.estimate().clone();
-    assert!(g.step(&m, &u, &ys[0], &status()).is_err());
+    assert!(g.step_with_status(&m, &u, &ys[0], &status()).is_err());
     assert_eq!(g.estimate(), &before);
 
     // Construction errors.
     let e = AdaptiveKalmanFilter::new(
-        DVector::zeros(2),
-        DMatrix::identity(2, 2),
-        DMatrix::identity(2, 2),
-        DMatrix::identity(1, 1),
-        0,
+        Setup {
+            x0: DVector::zeros(2),
+            p0: DMatrix::identity(2, 2),
+            process_noise: DMatrix::identity(2, 2),
+            measurement_noise: DMatrix::identity(1, 1),
+            inputs: 0,
+        },
         ConstantScaling(1.0),
     )
     .unwrap_err();
@@ -247,13 +257,13 @@ fn steps_do_not_allocate() {
     let ys = measurements(&m, 200, 100, 4);
     let mut f = filter(&m, FuzzyScaling::bds_ins_default());
     let statuses = [status(), ReceiverStatus::new(5.0, 1.0).unwrap(), ReceiverStatus::new(12.0, 3.0).unwrap()];
-    f.step(&m, &u, &ys[0], &statuses[0]).unwrap();
+    f.step_with_status(&m, &u, &ys[0], &statuses[0]).unwrap();
     let (_, n) = count(|| {
         for (k, y) in ys.iter().enumerate() {
             if k % 10 == 9 {
                 f.predict(&m, &u).unwrap();
             } else {
-                f.step(&m, &u, y, &statuses[k % 3]).unwrap();
+                f.step_with_status(&m, &u, y, &statuses[k % 3]).unwrap();
             }
         }
     });

@@ -7,6 +7,7 @@
 mod common;
 
 use carrier_dynamics::{CarrierModel, CarrierParams};
+use estimators::Setup;
 use estimators::{
     EstimatorError, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateProblem,
     UpdateSolution, UpdateSolver,
@@ -28,9 +29,17 @@ struct Case {
 }
 
 fn one_step<S: UpdateSolver>(case: &Case, solver: S) -> estimators::SetEstimate {
-    let mut f =
-        SetMembershipFilter::new(case.x.clone(), case.p.clone(), case.q.clone(), case.r.clone(), case.u.len(), solver)
-            .unwrap();
+    let mut f = SetMembershipFilter::with_solver(
+        Setup {
+            x0: case.x.clone(),
+            p0: case.p.clone(),
+            process_noise: case.q.clone(),
+            measurement_noise: case.r.clone(),
+            inputs: case.u.len(),
+        },
+        solver,
+    )
+    .unwrap();
     // Random data need not respect the noise bounds: this test compares solvers, not data.
     f.set_inconsistency_policy(estimators::InconsistencyPolicy::FlagAndContinue);
     f.step(&StepModel::new(&case.a, &case.b, &case.c), &case.u, &case.y).unwrap().clone()
@@ -238,27 +247,28 @@ fn warm_started_sdp_solves_agree_with_cold_ones_in_fewer_iterations() {
     }
     let case = reference_case();
     // The warm solver gets the settings a filter built through the registry gets.
-    let setup = estimators::registry::LinearSetup::new(
-        case.x.clone(),
-        case.p.clone(),
-        estimators::NoiseSettings::new(case.q.clone(), case.r.clone()),
-        1,
-    );
-    assert!(setup.sdp_settings.warm_start, "LinearSetup warm-starts SDP-backed filters");
+    let estimators::SmfSolver::Sdp { settings: registry_settings, .. } =
+        estimators::SmfSolver::by_name(lmi::DEFAULT_BACKEND).unwrap()
+    else {
+        panic!("{} is an SDP backend", lmi::DEFAULT_BACKEND)
+    };
+    assert!(registry_settings.warm_start, "the registry warm-starts SDP-backed filters");
     let solver = |warm_start: bool| {
-        let settings = SolverSettings { warm_start, ..setup.sdp_settings.clone() };
+        let settings = SolverSettings { warm_start, ..registry_settings.clone() };
         SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, settings).unwrap()
     };
     let (mut warm, mut cold) = (solver(true), solver(false));
     warm.prepare(4, 3).unwrap();
     cold.prepare(4, 3).unwrap();
     let (mut w_out, mut c_out) = (UpdateSolution::new(4, 3), UpdateSolution::new(4, 3));
-    let mut exact = SetMembershipFilter::new(
-        case.x.clone(),
-        case.p.clone(),
-        case.q.clone(),
-        case.r.clone(),
-        1,
+    let mut exact = SetMembershipFilter::with_solver(
+        Setup {
+            x0: case.x.clone(),
+            p0: case.p.clone(),
+            process_noise: case.q.clone(),
+            measurement_noise: case.r.clone(),
+            inputs: 1,
+        },
         TwoMultiplierSolver::new(),
     )
     .unwrap();

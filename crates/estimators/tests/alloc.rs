@@ -4,6 +4,7 @@
 mod common;
 
 use counting_allocator::{Counting, count};
+use estimators::Setup;
 
 use estimators::{KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, yang_li};
 use nalgebra::{DMatrix, DVector};
@@ -43,7 +44,14 @@ fn steps_do_not_allocate_after_warm_up() {
             DMatrix::identity(m, m) * 0.05,
         );
 
-        let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 2).unwrap();
+        let mut kf = KalmanFilter::new(Setup {
+            x0: x0.clone(),
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: 2,
+        })
+        .unwrap();
         kf.step(&model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {
@@ -52,7 +60,14 @@ fn steps_do_not_allocate_after_warm_up() {
         });
         assert_eq!(n, 0, "Kalman step allocated (m = {m})");
 
-        let mut smf = SetMembershipFilter::two_multiplier(x0.clone(), p0.clone(), q.clone(), r.clone(), 2).unwrap();
+        let mut smf = SetMembershipFilter::new(Setup {
+            x0: x0.clone(),
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: 2,
+        })
+        .unwrap();
         smf.step(&model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {
@@ -67,10 +82,13 @@ fn steps_do_not_allocate_after_warm_up() {
         let (_, n) = count(|| smf.step(&model, &u, &ys[1]).map(|e| e.report.fallback.is_some()));
         assert_eq!(n, 0, "fallback step allocated (m = {m})");
         let mut yl = yang_li::without_input(
-            x0.clone(),
-            p0.clone(),
-            q.clone(),
-            r.clone(),
+            Setup {
+                x0: x0.clone(),
+                p0: p0.clone(),
+                process_noise: q.clone(),
+                measurement_noise: r.clone(),
+                inputs: DVector::from_vec(vec![-1.0, -1.0]).len(),
+            },
             &DVector::from_vec(vec![-1.0, -1.0]),
             &DVector::from_vec(vec![1.0, 1.0]),
             TwoMultiplierSolver::new(),
@@ -89,7 +107,11 @@ fn steps_do_not_allocate_after_warm_up() {
         assert!(r);
         assert_eq!(n, 0, "refusing an input outside the box allocated (m = {m})");
         // A "solved" result whose certification overflows: redone with the fallback.
-        let mut bad = SetMembershipFilter::new(x0.clone(), p0.clone(), q.clone(), r_mat(m), 2, overflowing()).unwrap();
+        let mut bad = SetMembershipFilter::with_solver(
+            Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r_mat(m), inputs: 2 },
+            overflowing(),
+        )
+        .unwrap();
         bad.step(&model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {
@@ -118,12 +140,14 @@ fn sdp_step_with_the_default_backend_does_not_allocate_after_setup() {
     for warm_start in [false, true] {
         let settings = lmi::SolverSettings { warm_start, ..lmi::SolverSettings::default() };
         let solver = SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, settings).unwrap();
-        let mut smf = SetMembershipFilter::new(
-            DVector::zeros(4),
-            DMatrix::identity(4, 4) * 0.5,
-            DMatrix::identity(4, 4) * 0.01,
-            DMatrix::identity(3, 3) * 0.05,
-            2,
+        let mut smf = SetMembershipFilter::with_solver(
+            Setup {
+                x0: DVector::zeros(4),
+                p0: DMatrix::identity(4, 4) * 0.5,
+                process_noise: DMatrix::identity(4, 4) * 0.01,
+                measurement_noise: DMatrix::identity(3, 3) * 0.05,
+                inputs: 2,
+            },
             solver,
         )
         .unwrap();
@@ -140,44 +164,79 @@ fn sdp_step_with_the_default_backend_does_not_allocate_after_setup() {
 
 #[test]
 fn registry_estimators_and_noise_setters_do_not_allocate_after_warm_up() {
-    use estimators::registry::{LINEAR_ESTIMATORS, LinearSetup, linear};
-    use estimators::{LinearModel, NoiseSettings};
+    use estimators::registry::{self, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind};
+    use models::AnyModel;
     let a = common::reference_a();
     let b = DMatrix::from_fn(4, 2, |i, j| 0.01 * (i + 2 * j) as f64);
     let c = common::reference_c();
     let model = StepModel::new(&a, &b, &c);
-    let dyn_model: &dyn LinearModel = &model;
+    let dyn_model: &dyn AnyModel = &model;
     let u = DVector::from_vec(vec![0.2, -0.1]);
     let ys: Vec<DVector<f64>> = (0..50).map(|k| DVector::from_fn(3, |i, _| ((k * 7 + i) as f64).sin() * 0.1)).collect();
     let q = DMatrix::identity(4, 4) * 0.01;
     let r = DMatrix::identity(3, 3) * 0.05;
-    let mut setup =
-        LinearSetup::new(DVector::zeros(4), DMatrix::identity(4, 4) * 0.5, NoiseSettings::new(q.clone(), r.clone()), 2);
-    setup.input_bounds = Some((DVector::from_element(2, -1.0), DVector::from_element(2, 1.0)));
-    // The moving-horizon estimators need their settings (noise boxes); x0, P0, Q, R are the setup's.
-    setup.mhe = Some(estimators::MheSettings::new(
-        DVector::zeros(4),
-        DMatrix::identity(4, 4),
-        DMatrix::identity(4, 4),
-        DMatrix::identity(3, 3),
-        (DVector::from_element(4, -0.5), DVector::from_element(4, 0.5)),
-        (DVector::from_element(3, -1.0), DVector::from_element(3, 1.0)),
-    ));
-    for info in LINEAR_ESTIMATORS {
-        let mut est = linear(info.name, &setup).unwrap();
-        est.step_dyn(dyn_model, &u, &ys[0]).unwrap();
+    let setup = Setup {
+        x0: DVector::zeros(4),
+        p0: DMatrix::identity(4, 4) * 0.5,
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 2,
+    };
+    for entry in registry::ESTIMATORS {
+        // The nonlinear MHE allocates per update (its window problem); every other estimator
+        // runs on this linear model without allocating.
+        let settings = match entry.settings {
+            SettingsKind::NonlinearMovingHorizon => continue,
+            SettingsKind::SetMembershipInputBox => Some(EstimatorSettings::SetMembershipInputBox(
+                SetMembershipSettings::default(),
+                InputBox { lower: DVector::from_element(2, -1.0), upper: DVector::from_element(2, 1.0) },
+            )),
+            SettingsKind::MovingHorizon => {
+                Some(EstimatorSettings::MovingHorizon(Box::new(estimators::MheSettings::new(
+                    (DVector::from_element(4, -0.5), DVector::from_element(4, 0.5)),
+                    (DVector::from_element(3, -1.0), DVector::from_element(3, 1.0)),
+                ))))
+            }
+            _ => None,
+        };
+        let mut est = entry.build(setup.clone(), settings).unwrap();
+        // The fuzzy-adaptive filter's measurement carries the receiver status [N, RTK].
+        let ys: Vec<DVector<f64>> = ys
+            .iter()
+            .map(|y| {
+                let extra = [12.0, 3.0];
+                DVector::from_iterator(
+                    y.len() + entry.extra_measurements,
+                    y.iter().copied().chain(extra.into_iter().take(entry.extra_measurements)),
+                )
+            })
+            .collect();
+        est.step(dyn_model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {
-                let e = est.step_dyn(dyn_model, &u, y).unwrap();
-                assert_eq!(e.kind(), info.kind);
+                let e = est.step(dyn_model, &u, y).unwrap();
+                assert_eq!(e.kind(), entry.kind);
             }
         });
-        assert_eq!(n, 0, "{} through the registry allocated", info.name);
+        assert_eq!(n, 0, "{} through the registry allocated", entry.name);
     }
     // In-place noise setters: no allocation, and a rejected matrix changes nothing.
-    let mut kf = KalmanFilter::new(DVector::zeros(4), DMatrix::identity(4, 4), q.clone(), r.clone(), 2).unwrap();
-    let mut smf =
-        SetMembershipFilter::two_multiplier(DVector::zeros(4), DMatrix::identity(4, 4), q.clone(), r, 2).unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: DVector::zeros(4),
+        p0: DMatrix::identity(4, 4),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 2,
+    })
+    .unwrap();
+    let mut smf = SetMembershipFilter::new(Setup {
+        x0: DVector::zeros(4),
+        p0: DMatrix::identity(4, 4),
+        process_noise: q.clone(),
+        measurement_noise: r,
+        inputs: 2,
+    })
+    .unwrap();
     let q2 = &q * 2.0;
     let r2 = DMatrix::identity(3, 3) * 0.07;
     let (ok, n) = count(|| kf.set_noise(&q2, &r2).is_ok() && smf.set_noise(&q2, &r2).is_ok());
@@ -200,13 +259,13 @@ fn ekf_step_on_the_truck_does_not_allocate() {
     let params = TruckParams::digest_preset();
     let model = TruckEkfModel::paper(params).unwrap();
     let v = 70.0 / 3.6;
-    let mut ekf = estimators::ExtendedKalmanFilter::new(
-        DVector::from_vec(vec![v, 0.0, 0.0]),
-        DMatrix::identity(3, 3) * 0.01,
-        DMatrix::identity(3, 3) * 1e-7,
-        DMatrix::identity(3, 3) * 1e-3,
-        model.dims().inputs,
-    )
+    let mut ekf = estimators::ExtendedKalmanFilter::new(Setup {
+        x0: DVector::from_vec(vec![v, 0.0, 0.0]),
+        p0: DMatrix::identity(3, 3) * 0.01,
+        process_noise: DMatrix::identity(3, 3) * 1e-7,
+        measurement_noise: DMatrix::identity(3, 3) * 1e-3,
+        inputs: model.dims().inputs,
+    })
     .unwrap();
     let u = TruckInput::free_rolling(0.01, v, params.rolling_radius).to_dvector();
     let y = DVector::from_vec(vec![v, 0.1, 0.01]);
@@ -230,13 +289,13 @@ fn inconsistent_steps_do_not_allocate_under_any_policy() {
     let y = DVector::from_vec(vec![0.01, 0.0, -0.01]);
     let outlier = DVector::from_vec(vec![50.0, 0.0, 0.0]);
     for policy in [InconsistencyPolicy::Error, InconsistencyPolicy::FlagAndContinue, InconsistencyPolicy::Restart] {
-        let mut f = SetMembershipFilter::two_multiplier(
-            DVector::zeros(4),
-            DMatrix::identity(4, 4) * 0.5,
-            DMatrix::identity(4, 4) * 0.01,
-            DMatrix::identity(3, 3) * 0.05,
-            2,
-        )
+        let mut f = SetMembershipFilter::new(Setup {
+            x0: DVector::zeros(4),
+            p0: DMatrix::identity(4, 4) * 0.5,
+            process_noise: DMatrix::identity(4, 4) * 0.01,
+            measurement_noise: DMatrix::identity(3, 3) * 0.05,
+            inputs: 2,
+        })
         .unwrap();
         f.set_inconsistency_policy(policy);
         f.step(&model, &u, &y).unwrap();

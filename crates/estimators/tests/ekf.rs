@@ -3,6 +3,7 @@
 //! (`docs/truck-ekf.md`: a nominal β RMSE above about 0.1° signals a bug), recovering a wrong
 //! initial lateral speed, and refusing bad input with its state unchanged.
 
+use estimators::Setup;
 use estimators::{EstimatorError, ExtendedKalmanFilter, KalmanFilter, StepModel};
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
@@ -26,15 +27,24 @@ fn equals_the_kalman_filter_on_linear_models() {
         let r = DMatrix::identity(m, m) * 0.3;
         let p0 = DMatrix::identity(n, n) * 2.0;
         let x0 = DVector::from_fn(n, |i, _| i as f64 * 0.1);
-        let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), p).unwrap();
-        let mut ekf = ExtendedKalmanFilter::new(x0, p0, q, r, p).unwrap();
+        let mut kf = KalmanFilter::new(Setup {
+            x0: x0.clone(),
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: p,
+        })
+        .unwrap();
+        let mut ekf =
+            ExtendedKalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: p })
+                .unwrap();
         let model = StepModel::new(&a, &b, &c);
         for _ in 0..30 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
             let y = random(&mut rng, m, 1).column(0).into_owned();
             let k = kf.step(&model, &u, &y).unwrap().clone();
             let e = ekf.step(&model, &u, &y).unwrap();
-            worst = worst.max((&e.mean - &k.mean).amax()).max((&e.covariance - &k.covariance).amax());
+            worst = worst.max((&e.center - &k.center).amax()).max((&e.covariance - &k.covariance).amax());
         }
     }
     assert!(worst <= 1e-12, "largest difference {worst:e}");
@@ -46,7 +56,14 @@ fn truck_filter(model: &TruckEkfModel, x0: DVector<f64>) -> ExtendedKalmanFilter
     let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4 * t, 1e-4 * t, 1e-6 * t]));
     let r = DMatrix::from_diagonal(&DVector::from_vec(vec![0.05f64.powi(2), 0.05f64.powi(2), 0.002f64.powi(2)]));
     let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![0.01, 0.01, 1e-4]));
-    ExtendedKalmanFilter::new(x0, p0, q, r, model.dims().inputs).unwrap()
+    ExtendedKalmanFilter::new(Setup {
+        x0: x0,
+        p0: p0,
+        process_noise: q,
+        measurement_noise: r,
+        inputs: model.dims().inputs,
+    })
+    .unwrap()
 }
 
 /// Runs the EKF over a 6 s slalom; returns the RMSE of β [deg] over 1–6 s and the lateral-speed
@@ -70,11 +87,11 @@ fn run_slalom(vy0_error: f64) -> (f64, f64) {
         let x = truth.body_state(k + 1).unwrap();
         let t = (k + 1) as f64 * model.ts();
         if (t - 0.1).abs() < 0.5 * model.ts() {
-            vy_err_early = (e.mean[1] - x[1]).abs();
+            vy_err_early = (e.center[1] - x[1]).abs();
         }
         if t >= 1.0 {
             let beta = (x[1] / x[0]).atan().to_degrees();
-            let beta_hat = (e.mean[1] / e.mean[0]).atan().to_degrees();
+            let beta_hat = (e.center[1] / e.center[0]).atan().to_degrees();
             sq += (beta - beta_hat).powi(2);
             count += 1;
         }

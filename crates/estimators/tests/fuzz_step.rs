@@ -2,6 +2,7 @@
 //! tiny values never make a step panic; a step either fails and leaves the filter unchanged, or
 //! publishes a finite estimate (never a NaN set marked valid).
 
+use estimators::Setup;
 use estimators::{Estimate, ExtendedKalmanFilter, InconsistencyPolicy, KalmanFilter, SetMembershipFilter, StepModel};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
@@ -33,11 +34,11 @@ proptest! {
         let (u, y) = (u.column(0).into_owned(), y.column(0).into_owned());
         let (x0, p0) = (DVector::zeros(3), DMatrix::identity(3, 3));
         let (q, r) = (DMatrix::identity(3, 3) * 0.01, DMatrix::identity(2, 2) * 0.1);
-        let mut smf = SetMembershipFilter::two_multiplier(x0.clone(), p0.clone(), q.clone(), r.clone(), 1).unwrap();
+        let mut smf = SetMembershipFilter::new(Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 1 }).unwrap();
         let mut flagged = smf.clone();
         flagged.set_inconsistency_policy(InconsistencyPolicy::FlagAndContinue);
-        let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 1).unwrap();
-        let mut ekf = ExtendedKalmanFilter::new(x0, p0, q, r, 1).unwrap();
+        let mut kf = KalmanFilter::new(Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 1 }).unwrap();
+        let mut ekf = ExtendedKalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 1 }).unwrap();
         for _ in 0..steps {
             let before = smf.estimate().clone();
             match smf.step(&model, &u, &y) {

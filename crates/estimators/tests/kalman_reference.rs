@@ -3,7 +3,8 @@
 //! systems, and the closed-form scalar random walk (whose steady-state variance solves
 //! `p² + q p − q r = 0`).
 
-use estimators::{Estimate, EstimateKind, Estimator, KalmanFilter, NoiseSettings, StepModel};
+use estimators::Setup;
+use estimators::{Estimate, EstimateKind, Estimator, KalmanFilter, StepModel};
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
 
@@ -31,8 +32,14 @@ fn matches_the_textbook_covariance_form_on_random_systems() {
         let r = spd(&mut rng, m, 0.1);
         let p0 = spd(&mut rng, n, 0.5);
         let x0 = random(&mut rng, n, 1).column(0).into_owned();
-        let mut kf =
-            KalmanFilter::with_noise(x0.clone(), p0.clone(), &NoiseSettings::new(q.clone(), r.clone()), p).unwrap();
+        let mut kf = KalmanFilter::new(Setup {
+            x0: x0.clone(),
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: p,
+        })
+        .unwrap();
         let (mut x, mut pp) = (x0, p0);
         for _ in 0..15 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
@@ -64,7 +71,14 @@ fn scalar_random_walk_converges_to_the_closed_form_steady_state() {
     let post = prior * r / (prior + r);
     let one = DMatrix::identity(1, 1);
     let zero_b = DMatrix::zeros(1, 1);
-    let mut kf = KalmanFilter::new(DVector::zeros(1), one.clone() * 10.0, one.clone() * q, one.clone() * r, 1).unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: DVector::zeros(1),
+        p0: one.clone() * 10.0,
+        process_noise: one.clone() * q,
+        measurement_noise: one.clone() * r,
+        inputs: 1,
+    })
+    .unwrap();
     let model = StepModel::new(&one, &zero_b, &one);
     for k in 0..200 {
         let y = DVector::from_element(1, (k as f64 * 0.37).sin());
@@ -73,8 +87,8 @@ fn scalar_random_walk_converges_to_the_closed_form_steady_state() {
     let p = kf.estimate().covariance[(0, 0)];
     assert!((p - post).abs() < 1e-12 * post, "{p} vs {post}");
     // One step from a known state: x̂ = x̂⁻ + p⁻/(p⁻ + r) (y − x̂⁻).
-    let x_before = kf.estimate().mean[0];
+    let x_before = kf.estimate().center[0];
     let e = kf.step(&model, &DVector::zeros(1), &DVector::from_element(1, 5.0)).unwrap();
     let want = x_before + prior / (prior + r) * (5.0 - x_before);
-    assert!((e.mean[0] - want).abs() < 1e-12, "{} vs {want}", e.mean[0]);
+    assert!((e.center[0] - want).abs() < 1e-12, "{} vs {want}", e.center[0]);
 }

@@ -4,6 +4,7 @@
 //! against the exact saddle solver, the exact saddle against Clarabel on an uncondensed
 //! epigraph formulation, and bad settings and data.
 
+use estimators::Setup;
 use estimators::mhe::{
     ArrivalRecursion, ArrivalStatus, BlockingPreset, InnerSolver, MheCost, MheSettings, MovingHorizonEstimator,
     PriorMean, WindowSolver, WindowStatus,
@@ -28,19 +29,65 @@ fn system(n: usize, m: usize, seed: u64) -> (DMatrix<f64>, DMatrix<f64>, DMatrix
     (a, b, c)
 }
 
-fn settings(n: usize, m: usize, cost: MheCost, horizon: usize, w: f64, v: f64) -> MheSettings {
+/// A test case: the estimator's setup (prior, weights) beside its settings, which it derefs to.
+#[derive(Debug, Clone)]
+struct Case {
+    x0: DVector<f64>,
+    p0: DMatrix<f64>,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    settings: MheSettings,
+}
+
+impl std::ops::Deref for Case {
+    type Target = MheSettings;
+    fn deref(&self) -> &MheSettings {
+        &self.settings
+    }
+}
+
+impl std::ops::DerefMut for Case {
+    fn deref_mut(&mut self) -> &mut MheSettings {
+        &mut self.settings
+    }
+}
+
+impl Case {
+    fn with_preset(mut self, horizon: usize, preset: BlockingPreset) -> Result<Self, EstimatorError> {
+        self.settings = self.settings.with_preset(horizon, preset)?;
+        Ok(self)
+    }
+
+    fn setup(&self, inputs: usize) -> Setup {
+        Setup {
+            x0: self.x0.clone(),
+            p0: self.p0.clone(),
+            process_noise: self.q.clone(),
+            measurement_noise: self.r.clone(),
+            inputs,
+        }
+    }
+}
+
+fn new_mhe(case: Case, inputs: usize) -> Result<MovingHorizonEstimator, EstimatorError> {
+    MovingHorizonEstimator::new(case.setup(inputs), case.settings)
+}
+
+fn settings(n: usize, m: usize, cost: MheCost, horizon: usize, w: f64, v: f64) -> Case {
     let mut s = MheSettings::new(
-        DVector::from_fn(n, |i, _| 0.1 * i as f64),
-        DMatrix::identity(n, n) * 0.5,
-        DMatrix::identity(n, n) * 0.01,
-        DMatrix::from_diagonal(&DVector::from_fn(m, |i, _| 0.1 + 0.05 * i as f64)),
         (DVector::repeat(n, -w), DVector::repeat(n, w)),
         (DVector::repeat(m, -v), DVector::repeat(m, v)),
     );
     s.cost = cost;
     s.horizon = horizon;
     s.blocks = vec![1; horizon];
-    s
+    Case {
+        x0: DVector::from_fn(n, |i, _| 0.1 * i as f64),
+        p0: DMatrix::identity(n, n) * 0.5,
+        q: DMatrix::identity(n, n) * 0.01,
+        r: DMatrix::from_diagonal(&DVector::from_fn(m, |i, _| 0.1 + 0.05 * i as f64)),
+        settings: s,
+    }
 }
 
 /// Simulated data: inputs and measurements with noise uniform in the boxes.
@@ -76,15 +123,22 @@ fn unconstrained_mhe_with_the_kalman_arrival_cost_and_filtered_prior_is_the_kalm
         let mut s = settings(n, m, MheCost::LeastSquares, 4, f64::INFINITY, 1.0);
         s.w_box = (DVector::repeat(n, f64::NEG_INFINITY), DVector::repeat(n, f64::INFINITY));
         s.prior_mean = PriorMean::Filtered;
-        let mut kf = KalmanFilter::new(s.x0.clone(), s.p0.clone(), s.q.clone(), s.r.clone(), 1).unwrap();
-        let mut mhe = MovingHorizonEstimator::new(s, 1).unwrap();
+        let mut kf = KalmanFilter::new(Setup {
+            x0: s.x0.clone(),
+            p0: s.p0.clone(),
+            process_noise: s.q.clone(),
+            measurement_noise: s.r.clone(),
+            inputs: 1,
+        })
+        .unwrap();
+        let mut mhe = new_mhe(s, 1).unwrap();
         let model = StepModel::new(&a, &b, &c);
         let (us, ys) = data(&a, &b, &c, 25, 0.05, 0.3, seed);
         for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
-            let xk = kf.step(&model, u, y).unwrap().mean.clone();
+            let xk = kf.step(&model, u, y).unwrap().center.clone();
             let e = mhe.step(&model, u, y).unwrap();
-            let diff = (&e.state - &xk).amax();
-            assert!(diff < 1e-9 * (1.0 + xk.amax()), "seed {seed} step {k}: MHE {} vs KF {}", e.state, xk);
+            let diff = (&e.center - &xk).amax();
+            assert!(diff < 1e-9 * (1.0 + xk.amax()), "seed {seed} step {k}: MHE {} vs KF {}", e.center, xk);
             assert_eq!(e.report.unwrap().solve.status, WindowStatus::Converged);
         }
     }
@@ -97,14 +151,21 @@ fn full_information_least_squares_is_the_kalman_filter_whatever_the_prior_mean_r
     let (a, b, c) = system(4, 2, 11);
     let mut s = settings(4, 2, MheCost::LeastSquares, 30, f64::INFINITY, 1.0);
     s.w_box = (DVector::repeat(4, f64::NEG_INFINITY), DVector::repeat(4, f64::INFINITY));
-    let mut kf = KalmanFilter::new(s.x0.clone(), s.p0.clone(), s.q.clone(), s.r.clone(), 1).unwrap();
-    let mut mhe = MovingHorizonEstimator::new(s, 1).unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: s.x0.clone(),
+        p0: s.p0.clone(),
+        process_noise: s.q.clone(),
+        measurement_noise: s.r.clone(),
+        inputs: 1,
+    })
+    .unwrap();
+    let mut mhe = new_mhe(s, 1).unwrap();
     let model = StepModel::new(&a, &b, &c);
     let (us, ys) = data(&a, &b, &c, 30, 0.05, 0.3, 3);
     for (u, y) in us.iter().zip(&ys) {
-        let xk = kf.step(&model, u, y).unwrap().mean.clone();
+        let xk = kf.step(&model, u, y).unwrap().center.clone();
         let e = mhe.step(&model, u, y).unwrap();
-        assert!((&e.state - &xk).amax() < 1e-9 * (1.0 + xk.amax()));
+        assert!((&e.center - &xk).amax() < 1e-9 * (1.0 + xk.amax()));
     }
 }
 
@@ -124,13 +185,13 @@ fn min_max_without_active_clip_is_least_squares_with_r_eff() {
         plain.cost = MheCost::LeastSquares;
         plain.r *= (lambda_v - 1.0) / lambda_v;
         plain.solver = WindowSolver::exact_saddle();
-        let mut e1 = MovingHorizonEstimator::new(robust, 1).unwrap();
-        let mut e2 = MovingHorizonEstimator::new(plain, 1).unwrap();
+        let mut e1 = new_mhe(robust, 1).unwrap();
+        let mut e2 = new_mhe(plain, 1).unwrap();
         let model = StepModel::new(&a, &b, &c);
         let (us, ys) = data(&a, &b, &c, 20, 0.05, 0.5, 7);
         for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
-            let x1 = e1.step(&model, u, y).unwrap().state.clone();
-            let x2 = e2.step(&model, u, y).unwrap().state.clone();
+            let x1 = e1.step(&model, u, y).unwrap().center.clone();
+            let x2 = e2.step(&model, u, y).unwrap().center.clone();
             assert!((&x1 - &x2).amax() < 1e-8, "{solver:?} step {k}: {x1} vs {x2}");
         }
     }
@@ -152,15 +213,15 @@ fn coordinate_rotation_agrees_with_the_exact_saddle_where_it_converges() {
                 WindowSolver::CoordinateRotation { max_sweeps: 100, tolerance: 1e-12, inner: InnerSolver::ActiveSet };
             let mut ex = base;
             ex.solver = WindowSolver::exact_saddle();
-            let mut e1 = MovingHorizonEstimator::new(cr, 1).unwrap();
-            let mut e2 = MovingHorizonEstimator::new(ex, 1).unwrap();
+            let mut e1 = new_mhe(cr, 1).unwrap();
+            let mut e2 = new_mhe(ex, 1).unwrap();
             let model = StepModel::new(&a, &b, &c);
             let (us, ys) = data(&a, &b, &c, 14, 0.03, 0.5, seed);
             for (u, y) in us.iter().zip(&ys) {
                 let r1 = *e1.step(&model, u, y).unwrap().report.as_ref().unwrap();
-                let x1 = e1.estimate().state.clone();
+                let x1 = e1.estimate().center.clone();
                 let r2 = *e2.step(&model, u, y).unwrap().report.as_ref().unwrap();
-                let x2 = e2.estimate().state.clone();
+                let x2 = e2.estimate().center.clone();
                 assert_eq!(r2.solve.status, WindowStatus::Converged);
                 assert!(
                     (r1.objective - r2.objective) >= -1e-9 * r2.objective.abs().max(1.0),
@@ -184,7 +245,7 @@ fn coordinate_rotation_agrees_with_the_exact_saddle_where_it_converges() {
 /// equalities and the maximised stage cost as `e²/R + (a²/μ + 2t)/R`, `|e − a| ≤ t`
 /// (`g(e) = (e² + Huber_μ(e))/R` for V = [−1, 1]).
 fn clarabel_full_information(
-    s: &MheSettings,
+    s: &Case,
     output_constraint: bool,
     a: &DMatrix<f64>,
     b: &DMatrix<f64>,
@@ -328,11 +389,11 @@ fn exact_saddle_matches_clarabel_on_an_uncondensed_formulation() {
         let mut s = settings(3, m, MheCost::MinMax { lambda_v: 1.5 }, 10, 0.05, 1.0);
         s.solver = WindowSolver::exact_saddle();
         s.r = DMatrix::identity(m, m) * 0.2;
-        let mut mhe = MovingHorizonEstimator::new(s.clone(), 1).unwrap();
+        let mut mhe = new_mhe(s.clone(), 1).unwrap();
         let model = StepModel::new(&a, &b, &c);
         let (us, ys) = data(&a, &b, &c, 8, 0.05, 1.5, seed);
         for t in 0..us.len() {
-            let x = mhe.step(&model, &us[t], &ys[t]).unwrap().state.clone();
+            let x = mhe.step(&model, &us[t], &ys[t]).unwrap().center.clone();
             let reference = clarabel_full_information(&s, false, &a, &b, &c, &us[..=t], &ys[..=t]);
             assert!((&x - &reference).amax() < 1e-6, "seed {seed} T = {}: {x} vs Clarabel {reference}", t + 1);
         }
@@ -349,13 +410,13 @@ fn clarabel_as_inner_solver_gives_the_active_set_result() {
     s1.solver = WindowSolver::CoordinateRotation { max_sweeps: 10, tolerance: 1e-8, inner: InnerSolver::ActiveSet };
     let mut s2 = base;
     s2.solver = WindowSolver::CoordinateRotation { max_sweeps: 10, tolerance: 1e-8, inner: InnerSolver::Clarabel };
-    let mut e1 = MovingHorizonEstimator::new(s1, 1).unwrap();
-    let mut e2 = MovingHorizonEstimator::new(s2, 1).unwrap();
+    let mut e1 = new_mhe(s1, 1).unwrap();
+    let mut e2 = new_mhe(s2, 1).unwrap();
     let model = StepModel::new(&a, &b, &c);
     let (us, ys) = data(&a, &b, &c, 12, 0.03, 0.3, 1);
     for (u, y) in us.iter().zip(&ys) {
-        let x1 = e1.step(&model, u, y).unwrap().state.clone();
-        let x2 = e2.step(&model, u, y).unwrap().state.clone();
+        let x1 = e1.step(&model, u, y).unwrap().center.clone();
+        let x2 = e2.step(&model, u, y).unwrap().center.clone();
         assert!((&x1 - &x2).amax() < 1e-6, "{x1} vs {x2}");
     }
 }
@@ -368,7 +429,7 @@ fn unknown_counts_are_the_papers() {
     for (preset, vectors) in [(BlockingPreset::Rmhe, 7), (BlockingPreset::RmheOp, 4), (BlockingPreset::RmheOf, 3)] {
         let s = base.clone().with_preset(6, preset).unwrap();
         assert_eq!(s.vector_unknowns(), vectors);
-        let mut e = MovingHorizonEstimator::new(s, 1).unwrap();
+        let mut e = new_mhe(s, 1).unwrap();
         let (us, ys) = data(&a, &b, &c, 9, 0.1, 1.0, 4);
         for (u, y) in us.iter().zip(&ys) {
             e.step(&model, u, y).unwrap();
@@ -387,7 +448,7 @@ fn blocked_disturbances_stay_in_their_box_on_boundary_noise() {
     let s = settings(4, 1, MheCost::MinMax { lambda_v: 10.0 }, 6, 0.02, 1.0)
         .with_preset(6, BlockingPreset::RmheOf)
         .unwrap();
-    let mut e = MovingHorizonEstimator::new(s, 1).unwrap();
+    let mut e = new_mhe(s, 1).unwrap();
     let model = StepModel::new(&a, &b, &c);
     let mut x = DVector::<f64>::zeros(4);
     for k in 0..40 {
@@ -396,7 +457,7 @@ fn blocked_disturbances_stay_in_their_box_on_boundary_noise() {
         x = &a * &x + &w;
         let y = &c * &x + DVector::from_element(1, if k % 3 == 0 { 1.0 } else { -1.0 });
         let est = e.step(&model, &u, &y).unwrap();
-        assert!(est.state.iter().all(|v| v.is_finite()));
+        assert!(est.center.iter().all(|v| v.is_finite()));
         assert_ne!(est.report.unwrap().solve.status, WindowStatus::InnerFailure);
     }
 }
@@ -409,21 +470,21 @@ fn the_h_infinity_recursion_reports_a_failed_existence_condition_and_continues()
     ok.arrival = ArrivalRecursion::HInfinity { theta: 0.05 };
     let mut bad = ok.clone();
     bad.arrival = ArrivalRecursion::HInfinity { theta: 1e3 };
-    let mut e_ok = MovingHorizonEstimator::new(ok, 1).unwrap();
-    let mut e_bad = MovingHorizonEstimator::new(bad, 1).unwrap();
+    let mut e_ok = new_mhe(ok, 1).unwrap();
+    let mut e_bad = new_mhe(bad, 1).unwrap();
     let (us, ys) = data(&a, &b, &c, 8, 0.1, 1.0, 5);
     for (u, y) in us.iter().zip(&ys) {
         assert_eq!(e_ok.step(&model, u, y).unwrap().report.unwrap().arrival, ArrivalStatus::HInfinity);
         let r = e_bad.step(&model, u, y).unwrap().report.unwrap();
         assert_eq!(r.arrival, ArrivalStatus::HInfinityConditionFailed);
-        assert!(e_bad.estimate().state.iter().all(|v| v.is_finite()));
+        assert!(e_bad.estimate().center.iter().all(|v| v.is_finite()));
     }
 }
 
 #[test]
 fn bad_settings_are_named() {
     let s = settings(4, 1, MheCost::MinMax { lambda_v: 10.0 }, 6, 0.1, 1.0);
-    let message = |s: MheSettings| match MovingHorizonEstimator::new(s, 1) {
+    let message = |s: Case| match new_mhe(s, 1) {
         Err(EstimatorError::InvalidConfiguration { message, .. }) => message,
         other => panic!("expected an invalid configuration, got {other:?}"),
     };
@@ -460,8 +521,7 @@ fn bad_settings_are_named() {
 fn bad_data_is_refused_and_leaves_the_estimator_unchanged() {
     let (a, b, c) = system(4, 1, 3);
     let model = StepModel::new(&a, &b, &c);
-    let mut e =
-        MovingHorizonEstimator::new(settings(4, 1, MheCost::MinMax { lambda_v: 10.0 }, 6, 0.1, 1.0), 1).unwrap();
+    let mut e = new_mhe(settings(4, 1, MheCost::MinMax { lambda_v: 10.0 }, 6, 0.1, 1.0), 1).unwrap();
     let (us, ys) = data(&a, &b, &c, 10, 0.1, 1.0, 6);
     for (u, y) in us.iter().zip(&ys).take(8) {
         e.step(&model, u, y).unwrap();
@@ -479,8 +539,8 @@ fn bad_data_is_refused_and_leaves_the_estimator_unchanged() {
     // The next steps give exactly what the untouched copy gives.
     let mut twin = before;
     for k in 8..10 {
-        let x1 = e.step(&model, &us[k], &ys[k]).unwrap().state.clone();
-        let x2 = twin.step(&model, &us[k], &ys[k]).unwrap().state.clone();
+        let x1 = e.step(&model, &us[k], &ys[k]).unwrap().center.clone();
+        let x2 = twin.step(&model, &us[k], &ys[k]).unwrap().center.clone();
         assert_eq!(x1, x2);
     }
 }
@@ -491,13 +551,13 @@ fn an_overflowing_model_is_an_error_not_a_nan_estimate() {
     let b = DMatrix::zeros(2, 1);
     let c = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
     let model = StepModel::new(&a, &b, &c);
-    let mut e = MovingHorizonEstimator::new(settings(2, 1, MheCost::LeastSquares, 3, 0.1, 1.0), 1).unwrap();
+    let mut e = new_mhe(settings(2, 1, MheCost::LeastSquares, 3, 0.1, 1.0), 1).unwrap();
     let u = DVector::zeros(1);
     let y = DVector::from_element(1, 1.0);
     let mut failed = false;
     for _ in 0..6 {
         match e.step(&model, &u, &y) {
-            Ok(est) => assert!(est.state.iter().all(|v| v.is_finite())),
+            Ok(est) => assert!(est.center.iter().all(|v| v.is_finite())),
             Err(err) => {
                 assert!(matches!(err, EstimatorError::NumericalFailure(_)), "{err}");
                 failed = true;
@@ -513,14 +573,14 @@ fn predictions_bridge_missing_measurements_and_the_initial_measurement_is_used()
     let (a, b, c) = system(3, 1, 4);
     let model = StepModel::new(&a, &b, &c);
     let s = settings(3, 1, MheCost::MinMax { lambda_v: 10.0 }, 4, 0.1, 1.0);
-    let mut e = MovingHorizonEstimator::new(s, 1).unwrap();
-    let x0 = e.measure_initial(&model, &DVector::from_element(1, 0.7)).unwrap().state.clone();
+    let mut e = new_mhe(s, 1).unwrap();
+    let x0 = e.measure_initial(&model, &DVector::from_element(1, 0.7)).unwrap().center.clone();
     assert_ne!(x0, DVector::from_fn(3, |i, _| 0.1 * i as f64));
     assert!(e.measure_initial(&model, &DVector::from_element(1, 0.7)).is_err());
     let (us, ys) = data(&a, &b, &c, 12, 0.1, 1.0, 9);
     for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
         let est = if k % 3 == 1 { e.predict(&model, u) } else { e.step(&model, u, y) }.unwrap();
-        assert!(est.state.iter().all(|v| v.is_finite()));
+        assert!(est.center.iter().all(|v| v.is_finite()));
     }
     assert_eq!(e.time(), 12);
 }
@@ -540,10 +600,10 @@ fn output_constraints_match_clarabel_and_infeasibility_is_an_outcome() {
         ] {
             let mut s = s.clone();
             s.solver = solver;
-            let mut mhe = MovingHorizonEstimator::new(s.clone(), 1).unwrap();
+            let mut mhe = new_mhe(s.clone(), 1).unwrap();
             for t in 0..us.len() {
                 let e = mhe.step(&model, &us[t], &ys[t]).unwrap();
-                let x = e.state.clone();
+                let x = e.center.clone();
                 let status = e.report.unwrap().solve.status;
                 assert!(((&c * &x)[0] - ys[t][0]).abs() <= 1.0 + 1e-6, "the output constraint at T");
                 if matches!(solver, WindowSolver::ExactSaddle { .. }) {
@@ -560,13 +620,13 @@ fn output_constraints_match_clarabel_and_infeasibility_is_an_outcome() {
     let mut s = settings(3, 1, MheCost::MinMax { lambda_v: 10.0 }, 4, 1e-3, 0.5);
     s.output_constraint = true;
     s.solver = WindowSolver::exact_saddle();
-    let mut mhe = MovingHorizonEstimator::new(s, 1).unwrap();
+    let mut mhe = new_mhe(s, 1).unwrap();
     let u = DVector::zeros(1);
     let mut statuses = Vec::new();
     for k in 0..6 {
         let y = DVector::from_element(1, if k == 3 { 50.0 } else { 0.0 });
         let e = mhe.step(&model, &u, &y).unwrap();
-        assert!(e.state.iter().all(|v| v.is_finite()));
+        assert!(e.center.iter().all(|v| v.is_finite()));
         statuses.push(e.report.unwrap().solve.status);
     }
     assert!(statuses.contains(&WindowStatus::Infeasible), "{statuses:?}");

@@ -2,6 +2,7 @@
 //! coordinate rotation and exact saddle, every blocking preset, with and without measurements).
 
 use counting_allocator::{Counting, count};
+use estimators::Setup;
 
 use estimators::mhe::{ArrivalRecursion, BlockingPreset, MheCost, MheSettings, MovingHorizonEstimator, WindowSolver};
 use estimators::{Estimator, StepModel};
@@ -25,11 +26,14 @@ fn updates_do_not_allocate() {
     for preset in [BlockingPreset::Rmhe, BlockingPreset::RmheOp, BlockingPreset::RmheOf] {
         for solver in [WindowSolver::coordinate_rotation(), WindowSolver::exact_saddle()] {
             for arrival in [ArrivalRecursion::Kalman, ArrivalRecursion::HInfinity { theta: 0.9 }] {
+                let setup = Setup {
+                    x0: DVector::zeros(4),
+                    p0: DMatrix::identity(4, 4) * 0.01,
+                    process_noise: DMatrix::identity(4, 4) * 9e-4,
+                    measurement_noise: DMatrix::from_element(1, 1, 0.1),
+                    inputs: 1,
+                };
                 let mut s = MheSettings::new(
-                    DVector::zeros(4),
-                    DMatrix::identity(4, 4) * 0.01,
-                    DMatrix::identity(4, 4) * 9e-4,
-                    DMatrix::from_element(1, 1, 0.1),
                     (DVector::repeat(4, -0.1), DVector::repeat(4, 0.1)),
                     (DVector::repeat(1, -1.0), DVector::repeat(1, 1.0)),
                 )
@@ -38,7 +42,7 @@ fn updates_do_not_allocate() {
                 s.solver = solver;
                 s.arrival = arrival;
                 s.cost = MheCost::MinMax { lambda_v: 10.0 };
-                let mut e = MovingHorizonEstimator::new(s, 1).unwrap();
+                let mut e = MovingHorizonEstimator::new(setup, s).unwrap();
                 let (_, allocations) = count(|| {
                     e.measure_initial(&model, &outputs[0]).unwrap();
                     for k in 0..30 {

@@ -5,6 +5,7 @@
 //! independently written cost on a nonlinear model, bad input, and no allocation.
 
 use counting_allocator::{Counting, count};
+use estimators::Setup;
 
 use estimators::mhe::{
     ArrivalRecursion, MheCost, MheSettings, MovingHorizonEstimator, NonlinearArrival, NonlinearMhe,
@@ -43,29 +44,76 @@ fn data(model: &dyn DiscreteModel, steps: usize, seed: u64) -> (Vec<DVector<f64>
     (us, ys)
 }
 
-fn settings(n: usize, m: usize, horizon: usize, arrival: NonlinearArrival) -> NonlinearMheSettings {
-    let mut s = NonlinearMheSettings::new(
-        DVector::zeros(n),
-        DMatrix::identity(n, n) * 0.5,
-        DMatrix::identity(n, n) * 0.01,
-        DMatrix::identity(m, m) * 0.04,
-    );
+/// A test case: the estimator's setup (prior, weights) beside its settings, which it derefs to.
+#[derive(Debug, Clone)]
+struct Case {
+    x0: DVector<f64>,
+    p0: DMatrix<f64>,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    settings: NonlinearMheSettings,
+}
+
+impl std::ops::Deref for Case {
+    type Target = NonlinearMheSettings;
+    fn deref(&self) -> &NonlinearMheSettings {
+        &self.settings
+    }
+}
+
+impl std::ops::DerefMut for Case {
+    fn deref_mut(&mut self) -> &mut NonlinearMheSettings {
+        &mut self.settings
+    }
+}
+
+impl Case {
+    fn setup(&self, inputs: usize) -> Setup {
+        Setup {
+            x0: self.x0.clone(),
+            p0: self.p0.clone(),
+            process_noise: self.q.clone(),
+            measurement_noise: self.r.clone(),
+            inputs,
+        }
+    }
+}
+
+fn new_mhe(case: Case, inputs: usize) -> Result<NonlinearMhe, EstimatorError> {
+    NonlinearMhe::new(case.setup(inputs), case.settings)
+}
+
+fn settings(n: usize, m: usize, horizon: usize, arrival: NonlinearArrival) -> Case {
+    let mut s = NonlinearMheSettings::paper();
     s.horizon = horizon;
     s.arrival = arrival;
-    s
+    Case {
+        x0: DVector::zeros(n),
+        p0: DMatrix::identity(n, n) * 0.5,
+        q: DMatrix::identity(n, n) * 0.01,
+        r: DMatrix::identity(m, m) * 0.04,
+        settings: s,
+    }
 }
 
 #[test]
 fn full_information_on_a_linear_model_is_the_kalman_filter() {
     let model = linear();
     let s = settings(3, 2, 40, NonlinearArrival::Ekf);
-    let mut kf = KalmanFilter::new(s.x0.clone(), s.p0.clone(), s.q.clone(), s.r.clone(), 1).unwrap();
-    let mut mhe = NonlinearMhe::new(s, 1).unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: s.x0.clone(),
+        p0: s.p0.clone(),
+        process_noise: s.q.clone(),
+        measurement_noise: s.r.clone(),
+        inputs: 1,
+    })
+    .unwrap();
+    let mut mhe = new_mhe(s, 1).unwrap();
     let (us, ys) = data(&model, 30, 1);
     for (u, y) in us.iter().zip(&ys) {
-        let xk = kf.step(&model, u, y).unwrap().mean.clone();
+        let xk = kf.step(&model, u, y).unwrap().center.clone();
         let e = mhe.step(&model, u, y).unwrap();
-        assert!((&e.state - &xk).amax() < 1e-8, "{} vs {xk}", e.state);
+        assert!((&e.center - &xk).amax() < 1e-8, "{} vs {xk}", e.center);
         assert_eq!(e.report.unwrap().status, WindowStatus::Converged);
     }
 }
@@ -76,10 +124,6 @@ fn on_a_linear_model_it_is_the_linear_mhe_with_the_same_arrival_recursion() {
     for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper())] {
         let s = settings(3, 2, 5, arrival);
         let mut lin = MheSettings::new(
-            s.x0.clone(),
-            s.p0.clone(),
-            s.q.clone(),
-            s.r.clone(),
             (DVector::repeat(3, f64::NEG_INFINITY), DVector::repeat(3, f64::INFINITY)),
             (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
         );
@@ -89,12 +133,12 @@ fn on_a_linear_model_it_is_the_linear_mhe_with_the_same_arrival_recursion() {
         lin.arrival = ArrivalRecursion::Kalman;
         lin.prior_mean = PriorMean::Smoothed;
         lin.solver = WindowSolver::exact_saddle();
-        let mut reference = MovingHorizonEstimator::new(lin, 1).unwrap();
-        let mut mhe = NonlinearMhe::new(s, 1).unwrap();
+        let mut reference = MovingHorizonEstimator::new(s.setup(1), lin).unwrap();
+        let mut mhe = new_mhe(s, 1).unwrap();
         let (us, ys) = data(&model, 25, 2);
         for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
-            let xr = reference.step(&model, u, y).unwrap().state.clone();
-            let x = mhe.step(&model, u, y).unwrap().state.clone();
+            let xr = reference.step(&model, u, y).unwrap().center.clone();
+            let x = mhe.step(&model, u, y).unwrap().center.clone();
             assert!((&x - &xr).amax() < 1e-8, "{arrival:?} step {k}: {x} vs {xr}");
         }
     }
@@ -138,7 +182,7 @@ impl DifferentiableModel for Pendulum {
 }
 
 /// The window cost written independently of the estimator (full information, prior (x̄0, P0)).
-fn window_cost(s: &NonlinearMheSettings, xs: &[DVector<f64>], us: &[DVector<f64>], ys: &[DVector<f64>]) -> f64 {
+fn window_cost(s: &Case, xs: &[DVector<f64>], us: &[DVector<f64>], ys: &[DVector<f64>]) -> f64 {
     let (p0i, qi, ri) =
         (s.p0.clone().try_inverse().unwrap(), s.q.clone().try_inverse().unwrap(), s.r.clone().try_inverse().unwrap());
     let m = Pendulum;
@@ -160,7 +204,7 @@ fn window_cost(s: &NonlinearMheSettings, xs: &[DVector<f64>], us: &[DVector<f64>
 #[test]
 fn the_window_solution_satisfies_the_optimality_conditions_on_a_nonlinear_model() {
     let s = settings(2, 2, 12, NonlinearArrival::Ukf(UkfParams { alpha: 1.0, beta: 2.0, kappa: 1.0 }));
-    let mut mhe = NonlinearMhe::new(s.clone(), 1).unwrap();
+    let mut mhe = new_mhe(s.clone(), 1).unwrap();
     let (us, ys) = data(&Pendulum, 10, 3);
     for t in 0..us.len() {
         mhe.step(&Pendulum, &us[t], &ys[t]).unwrap();
@@ -190,13 +234,13 @@ fn an_iteration_limit_is_an_outcome_and_bad_input_leaves_the_estimator_unchanged
     let mut s = settings(2, 2, 4, NonlinearArrival::Ukf(UkfParams { alpha: 1.0, beta: 2.0, kappa: 1.0 }));
     s.max_iterations = 1;
     s.x0 = DVector::from_vec(vec![2.5, -1.0]);
-    let mut mhe = NonlinearMhe::new(s, 1).unwrap();
+    let mut mhe = new_mhe(s, 1).unwrap();
     let (us, ys) = data(&Pendulum, 12, 4);
     let mut limited = 0;
     for (u, y) in us.iter().zip(&ys).take(10) {
         let e = mhe.step(&Pendulum, u, y).unwrap();
         limited += usize::from(e.report.unwrap().status == WindowStatus::NotConverged);
-        assert!(e.state.iter().all(|v| v.is_finite()));
+        assert!(e.center.iter().all(|v| v.is_finite()));
     }
     assert!(limited > 0);
     let before = mhe.clone();
@@ -208,15 +252,15 @@ fn an_iteration_limit_is_an_outcome_and_bad_input_leaves_the_estimator_unchanged
     assert!(mhe.step(&linear(), &us[10], &ys[10]).is_err());
     assert_eq!(mhe.time(), before.time());
     let mut twin = before;
-    let a = mhe.step(&Pendulum, &us[10], &ys[10]).unwrap().state.clone();
-    let b = twin.step(&Pendulum, &us[10], &ys[10]).unwrap().state.clone();
+    let a = mhe.step(&Pendulum, &us[10], &ys[10]).unwrap().center.clone();
+    let b = twin.step(&Pendulum, &us[10], &ys[10]).unwrap().center.clone();
     assert_eq!(a, b);
     // Settings.
     let mut bad = settings(2, 2, 0, NonlinearArrival::Fixed);
-    assert!(matches!(NonlinearMhe::new(bad.clone(), 1), Err(EstimatorError::InvalidConfiguration { .. })));
+    assert!(matches!(new_mhe(bad.clone(), 1), Err(EstimatorError::InvalidConfiguration { .. })));
     bad.horizon = 3;
     bad.q[(0, 0)] = -1.0;
-    assert!(NonlinearMhe::new(bad, 1).is_err());
+    assert!(new_mhe(bad, 1).is_err());
 }
 
 #[test]
@@ -224,7 +268,7 @@ fn updates_do_not_allocate() {
     let model = linear();
     let (us, ys) = data(&model, 30, 5);
     for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper()), NonlinearArrival::Fixed] {
-        let mut mhe = NonlinearMhe::new(settings(3, 2, 10, arrival), 1).unwrap();
+        let mut mhe = new_mhe(settings(3, 2, 10, arrival), 1).unwrap();
         let (_, allocations) = count(|| {
             for k in 0..30 {
                 if k % 5 == 2 {
@@ -243,15 +287,22 @@ fn with_the_arrival_filters_own_mean_and_the_ekf_arrival_it_is_the_kalman_filter
     let model = linear();
     let mut s = settings(3, 2, 4, NonlinearArrival::Ekf);
     s.prior = estimators::mhe::NonlinearPrior::ArrivalFilter;
-    let mut kf = KalmanFilter::new(s.x0.clone(), s.p0.clone(), s.q.clone(), s.r.clone(), 1).unwrap();
-    let mut mhe = NonlinearMhe::new(s.clone(), 1).unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: s.x0.clone(),
+        p0: s.p0.clone(),
+        process_noise: s.q.clone(),
+        measurement_noise: s.r.clone(),
+        inputs: 1,
+    })
+    .unwrap();
+    let mut mhe = new_mhe(s.clone(), 1).unwrap();
     s.arrival = NonlinearArrival::Ukf(UkfParams::paper());
-    let mut mhe_ukf = NonlinearMhe::new(s, 1).unwrap();
+    let mut mhe_ukf = new_mhe(s, 1).unwrap();
     let (us, ys) = data(&model, 30, 6);
     for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
-        let xk = kf.step(&model, u, y).unwrap().mean.clone();
-        let x = mhe.step(&model, u, y).unwrap().state.clone();
-        let xu = mhe_ukf.step(&model, u, y).unwrap().state.clone();
+        let xk = kf.step(&model, u, y).unwrap().center.clone();
+        let x = mhe.step(&model, u, y).unwrap().center.clone();
+        let xu = mhe_ukf.step(&model, u, y).unwrap().center.clone();
         assert!((&x - &xk).amax() < 1e-8, "step {k}: {x} vs {xk}");
         assert!((&xu - &xk).amax() < 1e-8, "UKF arrival, step {k}: {xu} vs {xk}");
     }
@@ -269,10 +320,6 @@ fn boxes_on_the_disturbances_give_the_linear_mhes_box_constrained_solution() {
     wide.w_box = Some((DVector::repeat(3, -1e3), DVector::repeat(3, 1e3)));
     wide.v_box = Some((DVector::repeat(2, -1e3), DVector::repeat(2, 1e3)));
     let mut lin = MheSettings::new(
-        s.x0.clone(),
-        s.p0.clone(),
-        s.q.clone(),
-        s.r.clone(),
         (DVector::repeat(3, -w), DVector::repeat(3, w)),
         (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
     );
@@ -280,17 +327,17 @@ fn boxes_on_the_disturbances_give_the_linear_mhes_box_constrained_solution() {
     lin.blocks = vec![1; 30];
     lin.cost = MheCost::LeastSquares;
     lin.solver = WindowSolver::exact_saddle();
-    let mut reference = MovingHorizonEstimator::new(lin, 1).unwrap();
-    let mut boxed = NonlinearMhe::new(s.clone(), 1).unwrap();
-    let mut inactive = NonlinearMhe::new(wide, 1).unwrap();
-    let mut free = NonlinearMhe::new(settings(3, 2, 30, NonlinearArrival::Ekf), 1).unwrap();
+    let mut reference = MovingHorizonEstimator::new(s.setup(1), lin).unwrap();
+    let mut boxed = new_mhe(s.clone(), 1).unwrap();
+    let mut inactive = new_mhe(wide, 1).unwrap();
+    let mut free = new_mhe(settings(3, 2, 30, NonlinearArrival::Ekf), 1).unwrap();
     let (us, ys) = data(&model, 12, 7);
     let mut active = 0;
     for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
-        let xr = reference.step(&model, u, y).unwrap().state.clone();
-        let xb = boxed.step(&model, u, y).unwrap().state.clone();
-        let xi = inactive.step(&model, u, y).unwrap().state.clone();
-        let xf = free.step(&model, u, y).unwrap().state.clone();
+        let xr = reference.step(&model, u, y).unwrap().center.clone();
+        let xb = boxed.step(&model, u, y).unwrap().center.clone();
+        let xi = inactive.step(&model, u, y).unwrap().center.clone();
+        let xf = free.step(&model, u, y).unwrap().center.clone();
         assert!((&xb - &xr).amax() < 1e-6, "step {k}: {xb} vs {xr}");
         assert!((&xi - &xf).amax() < 1e-6, "inactive boxes change nothing, step {k}: {xi} vs {xf}");
         active += usize::from((&xf - &xb).amax() > 1e-4);
@@ -310,29 +357,29 @@ fn boxes_on_the_measurement_residuals_hold_at_the_solution_and_infeasibility_is_
     let v = 0.08;
     let mut s = settings(2, 2, 6, NonlinearArrival::Ukf(UkfParams { alpha: 1.0, beta: 2.0, kappa: 1.0 }));
     s.v_box = Some((DVector::repeat(2, -v), DVector::repeat(2, v)));
-    let mut mhe = NonlinearMhe::new(s.clone(), 1).unwrap();
+    let mut mhe = new_mhe(s.clone(), 1).unwrap();
     let (us, ys) = data(&Pendulum, 15, 8);
     let mut h = DVector::zeros(2);
     for (u, y) in us.iter().zip(&ys) {
         let e = mhe.step(&Pendulum, u, y).unwrap();
         assert_eq!(e.report.unwrap().status, WindowStatus::Converged);
         // The last sample's residual (measured with input u) is inside the box.
-        let x = e.state.clone();
+        let x = e.center.clone();
         Pendulum.h(&x, u, &mut h).unwrap();
         assert!((y - &h).amax() <= v + 1e-6, "ν = {} beyond {v}", y - &h);
     }
     // Boxes that cannot hold together (no disturbance allowed, tiny residuals, noisy data).
     s.w_box = Some((DVector::repeat(2, -1e-9), DVector::repeat(2, 1e-9)));
     s.v_box = Some((DVector::repeat(2, -1e-6), DVector::repeat(2, 1e-6)));
-    let mut tight = NonlinearMhe::new(s, 1).unwrap();
+    let mut tight = new_mhe(s, 1).unwrap();
     let mut infeasible = 0;
     for (u, y) in us.iter().zip(&ys) {
         let e = tight.step(&Pendulum, u, y).unwrap();
-        assert!(e.state.iter().all(|v| v.is_finite()));
+        assert!(e.center.iter().all(|v| v.is_finite()));
         infeasible += usize::from(e.report.unwrap().status == WindowStatus::Infeasible);
     }
     assert!(infeasible > 0);
     let mut bad = settings(2, 2, 6, NonlinearArrival::Fixed);
     bad.w_box = Some((DVector::repeat(2, 1.0), DVector::repeat(2, -1.0)));
-    assert!(matches!(NonlinearMhe::new(bad, 1), Err(EstimatorError::InvalidConfiguration { .. })));
+    assert!(matches!(new_mhe(bad, 1), Err(EstimatorError::InvalidConfiguration { .. })));
 }

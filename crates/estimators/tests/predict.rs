@@ -4,6 +4,7 @@
 //! Kalman filter's on a linear model, and bad input leaves the filters unchanged.
 
 use carrier_dynamics::{CarrierModel, CarrierParams};
+use estimators::Setup;
 use estimators::{DynEstimator, ExtendedKalmanFilter, KalmanFilter, LinearModel, SetMembershipFilter, StepModel};
 use models::{ConstantModel, Noise, SimulationConfig, simulate_ltv};
 use nalgebra::{DMatrix, DVector};
@@ -29,8 +30,14 @@ fn sets_with_gaps_still_contain_the_truth_and_grow_while_blind() {
             },
         )
         .unwrap();
-        let mut f =
-            SetMembershipFilter::two_multiplier(DVector::zeros(4), p0.clone(), q.clone(), r.clone(), 8).unwrap();
+        let mut f = SetMembershipFilter::new(Setup {
+            x0: DVector::zeros(4),
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: 8,
+        })
+        .unwrap();
         let mut worst = 0.0f64;
         let mut previous_trace = f64::INFINITY;
         for k in 0..run.steps() {
@@ -62,20 +69,35 @@ fn kalman_and_extended_kalman_predictions() {
     let x0 = DVector::from_vec(vec![1.0, -1.0]);
     let u = DVector::from_vec(vec![0.5]);
     let model = StepModel::new(&a, &b, &c);
-    let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 1).unwrap();
-    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 1).unwrap();
+    let mut kf = KalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 1,
+    })
+    .unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 1,
+    })
+    .unwrap();
     let e = kf.predict(&model, &u).unwrap().clone();
-    assert!((&e.mean - (&a * &x0 + &b * &u)).amax() < 1e-15);
+    assert!((&e.center - (&a * &x0 + &b * &u)).amax() < 1e-15);
     assert!((&e.covariance - (&a * &p0 * a.transpose() + &q)).amax() < 1e-15);
     let g = ekf.predict(&model, &u).unwrap();
-    assert!((&g.mean - &e.mean).amax() < 1e-15 && (&g.covariance - &e.covariance).amax() < 1e-15);
+    assert!((&g.center - &e.center).amax() < 1e-15 && (&g.covariance - &e.covariance).amax() < 1e-15);
     // Through the registry's object-safe face, and bad input leaves the filter unchanged.
     let mut boxed: Box<dyn for<'m> DynEstimator<dyn LinearModel + 'm>> = Box::new(kf.clone());
     let before = boxed.estimate_dyn().center().clone();
     assert!(boxed.predict_dyn(&model, &DVector::from_vec(vec![f64::NAN])).is_err());
     assert_eq!(boxed.estimate_dyn().center(), &before);
     assert!(boxed.predict_dyn(&model, &u).is_ok());
-    let mut smf = SetMembershipFilter::two_multiplier(x0, p0, q, r, 1).unwrap();
+    let mut smf =
+        SetMembershipFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 1 }).unwrap();
     let snapshot = smf.estimate().clone();
     assert!(smf.predict(&model, &DVector::zeros(2)).is_err());
     assert_eq!(smf.estimate(), &snapshot);

@@ -4,9 +4,9 @@
 //! refused with the state unchanged, and no allocation per step.
 
 use counting_allocator::{Counting, count};
+use estimators::Setup;
 use estimators::{
-    EstimatorError, ExtendedKalmanFilter, KalmanFilter, StepModel, UkfParams, UnscentedKalmanFilter,
-    registry::{self, GaussianSetup, NonlinearSetup},
+    EstimatorError, ExtendedKalmanFilter, KalmanFilter, StepModel, UkfParams, UnscentedKalmanFilter, registry,
 };
 use models::{DifferentiableModel, Dims, DiscreteModel, ModelError, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
@@ -35,22 +35,33 @@ fn equals_the_kalman_filter_on_linear_models() {
         let r = DMatrix::identity(m, m) * 0.3;
         let p0 = DMatrix::identity(n, n) * 2.0;
         let x0 = DVector::from_fn(n, |i, _| i as f64 * 0.1);
-        let mut kf = KalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), p).unwrap();
-        let mut ukf = UnscentedKalmanFilter::new(x0, p0, q, r, p, params).unwrap();
+        let mut kf = KalmanFilter::new(Setup {
+            x0: x0.clone(),
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: p,
+        })
+        .unwrap();
+        let mut ukf = UnscentedKalmanFilter::new(
+            Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: p },
+            params,
+        )
+        .unwrap();
         let model = StepModel::new(&a, &b, &c);
         for k in 0..30 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
             let y = random(&mut rng, m, 1).column(0).into_owned();
             let (km, kp) = if k % 5 == 4 {
                 let e = kf.predict(&model, &u).unwrap();
-                (e.mean.clone(), e.covariance.clone())
+                (e.center.clone(), e.covariance.clone())
             } else {
                 let e = kf.step(&model, &u, &y).unwrap();
-                (e.mean.clone(), e.covariance.clone())
+                (e.center.clone(), e.covariance.clone())
             };
             let e = if k % 5 == 4 { ukf.predict(&model, &u).unwrap() } else { ukf.step(&model, &u, &y).unwrap() };
             let scale = kp.amax().max(1.0);
-            worst = worst.max((&e.mean - &km).amax() / scale).max((&e.covariance - &kp).amax() / scale);
+            worst = worst.max((&e.center - &km).amax() / scale).max((&e.covariance - &kp).amax() / scale);
         }
         assert_eq!(ukf.report().guard_total, 0);
     }
@@ -105,8 +116,19 @@ fn close_to_the_ekf_on_a_mildly_nonlinear_model() {
     let p0 = DMatrix::identity(3, 3) * 1e-3;
     let q = DMatrix::identity(3, 3) * 1e-5;
     let r = DMatrix::identity(2, 2) * 1e-3;
-    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 1).unwrap();
-    let mut ukf = UnscentedKalmanFilter::new(x0.clone(), p0, q, r, 1, UkfParams::paper()).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 1,
+    })
+    .unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(
+        Setup { x0: x0.clone(), p0: p0, process_noise: q, measurement_noise: r, inputs: 1 },
+        UkfParams::paper(),
+    )
+    .unwrap();
     let mut rng = Xoshiro256StarStar::seed_from_u64(8);
     let mut x = x0;
     let (mut xn, mut y) = (DVector::zeros(3), DVector::zeros(2));
@@ -122,7 +144,7 @@ fn close_to_the_ekf_on_a_mildly_nonlinear_model() {
         let s = ukf.step(&Mild, &u, &y).unwrap();
         // Differences in units of the EKF's own standard deviation.
         for i in 0..3 {
-            worst = worst.max((s.mean[i] - e.mean[i]).abs() / e.std_dev[i]);
+            worst = worst.max((s.center[i] - e.center[i]).abs() / e.std_dev[i]);
             worst = worst.max((s.std_dev[i] / e.std_dev[i] - 1.0).abs());
         }
     }
@@ -145,8 +167,19 @@ fn vessel_setup() -> (DVector<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
 fn tracks_the_vessel_like_the_ekf_without_the_guard() {
     let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
     let (x0, p0, q, r) = vessel_setup();
-    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3).unwrap();
-    let mut ukf = UnscentedKalmanFilter::new(x0.clone(), p0, q, r, 3, UkfParams::paper()).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q.clone(),
+        measurement_noise: r.clone(),
+        inputs: 3,
+    })
+    .unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(
+        Setup { x0: x0.clone(), p0: p0, process_noise: q, measurement_noise: r, inputs: 3 },
+        UkfParams::paper(),
+    )
+    .unwrap();
     assert_eq!(ukf.weights(), (-5.0, -2.25, 0.5));
     let mut rng = Xoshiro256StarStar::seed_from_u64(21);
     let mut x = x0;
@@ -163,9 +196,9 @@ fn tracks_the_vessel_like_the_ekf_without_the_guard() {
             y[i] += s * rng.standard_normal();
         }
         let e = ekf.step(&model, &u, &y).unwrap();
-        se += (&e.mean - &x).rows(0, 3).norm_squared();
+        se += (&e.center - &x).rows(0, 3).norm_squared();
         let s = ukf.step(&model, &u, &y).unwrap();
-        su += (&s.mean - &x).rows(0, 3).norm_squared();
+        su += (&s.center - &x).rows(0, 3).norm_squared();
     }
     let (re, ru) = ((se / steps as f64).sqrt(), (su / steps as f64).sqrt());
     assert!((ru / re - 1.0).abs() < 0.05, "RMSE of position/heading: EKF {re}, UKF {ru}");
@@ -196,11 +229,13 @@ fn guard_keeps_the_prediction_positive_definite() {
     let params = UkfParams { alpha: 1.0, beta: -10.0, kappa: 0.0 };
     let q = DMatrix::identity(3, 3) * 1e-6;
     let mut ukf = UnscentedKalmanFilter::new(
-        DVector::zeros(3),
-        DMatrix::identity(3, 3),
-        q.clone(),
-        DMatrix::identity(1, 1),
-        1,
+        Setup {
+            x0: DVector::zeros(3),
+            p0: DMatrix::identity(3, 3),
+            process_noise: q.clone(),
+            measurement_noise: DMatrix::identity(1, 1),
+            inputs: 1,
+        },
         params,
     )
     .unwrap();
@@ -217,7 +252,7 @@ fn guard_keeps_the_prediction_positive_definite() {
     assert!((&e.covariance - &want).amax() < 1e-12, "{}", e.covariance);
     // The mean is Y₀ + S with S = Σ W_i d_i = [0, 1, 0], and the unguarded (1, 1) entry would be
     // Σ W_i d_i,1² + (β − α²) S₁² = 4 − 11 = −7 < 0.
-    assert!((e.mean[1] - 1.0).abs() < 1e-12);
+    assert!((e.center[1] - 1.0).abs() < 1e-12);
     assert!(e.covariance.clone().cholesky().is_some());
 }
 
@@ -225,8 +260,11 @@ fn guard_keeps_the_prediction_positive_definite() {
 fn bad_input_is_refused_and_leaves_the_filter_unchanged() {
     let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
     let (x0, p0, q, r) = vessel_setup();
-    let mut ukf =
-        UnscentedKalmanFilter::new(x0.clone(), p0.clone(), q.clone(), r.clone(), 3, UkfParams::paper()).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(
+        Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 },
+        UkfParams::paper(),
+    )
+    .unwrap();
     let u = DVector::from_vec(vec![1e5, 0.0, 0.0]);
     let y = DVector::from_vec(vec![0.5, -0.2, 0.01]);
     ukf.step(&model, &u, &y).unwrap();
@@ -254,11 +292,7 @@ fn bad_input_is_refused_and_leaves_the_filter_unchanged() {
     // Construction.
     assert!(matches!(
         UnscentedKalmanFilter::new(
-            x0.clone(),
-            p0.clone(),
-            q.clone(),
-            r.clone(),
-            3,
+            Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 },
             UkfParams { kappa: -6.0, ..UkfParams::paper() }
         ),
         Err(EstimatorError::InvalidSetting { .. })
@@ -266,26 +300,31 @@ fn bad_input_is_refused_and_leaves_the_filter_unchanged() {
     let mut bad_p0 = p0.clone();
     bad_p0[(0, 0)] = -1.0;
     assert!(matches!(
-        UnscentedKalmanFilter::new(x0.clone(), bad_p0, q.clone(), r.clone(), 3, UkfParams::paper()),
+        UnscentedKalmanFilter::new(
+            Setup { x0: x0.clone(), p0: bad_p0, process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 },
+            UkfParams::paper()
+        ),
         Err(EstimatorError::NotPositiveDefinite { what: "P0" })
     ));
     assert!(ukf.set_process_noise(&DMatrix::zeros(6, 6)).is_err());
     assert_eq!(ukf.estimate(), &before);
     // The registry builds it by name.
-    let setup = NonlinearSetup {
-        gaussian: GaussianSetup { x0, p0, noise: estimators::NoiseSettings::new(q, r), inputs: 3 },
-        ukf: UkfParams::paper(),
-    };
-    let mut boxed = registry::nonlinear("ukf", &setup).unwrap();
-    assert!(boxed.step_dyn(&model, &u, &y).is_ok());
-    assert!(matches!(registry::nonlinear("mhe?", &setup), Err(EstimatorError::UnknownEstimator { .. })));
+    let setup = Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 3 };
+    let settings = registry::EstimatorSettings::Unscented(UkfParams::paper());
+    let mut boxed = registry::build("ukf", setup.clone(), Some(settings)).unwrap();
+    assert!(boxed.step(&model, &u, &y).is_ok());
+    assert!(matches!(registry::build("mhe?", setup, None), Err(EstimatorError::UnknownEstimator { .. })));
 }
 
 #[test]
 fn a_step_does_not_allocate() {
     let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
     let (x0, p0, q, r) = vessel_setup();
-    let mut ukf = UnscentedKalmanFilter::new(x0, p0, q, r, 3, UkfParams::paper()).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(
+        Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 3 },
+        UkfParams::paper(),
+    )
+    .unwrap();
     let u = DVector::from_vec(vec![1e5, 2e4, 1e6]);
     let ys: Vec<DVector<f64>> = (0..50).map(|k| DVector::from_fn(3, |i, _| ((k * 3 + i) as f64).sin())).collect();
     ukf.step(&model, &u, &ys[0]).unwrap();

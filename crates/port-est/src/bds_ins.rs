@@ -27,6 +27,7 @@
 //! system (three inputs `[N, RTK, d]`, e.g. an edited copy of
 //! `crates/fuzzy-inference/systems/bds_ins.toml`); `--scaling none` runs the plain Kalman filter.
 
+use estimators::Setup;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -242,9 +243,17 @@ fn run<R: Read, W: Write>(
 ) -> Result<BdsInsSummary, Error> {
     let wio = |e| Error::io(out_path, e);
     writeln!(out, "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d").map_err(wio)?;
-    let mut filter =
-        AdaptiveKalmanFilter::new(DVector::zeros(STATES), s.p0.clone(), s.model.q.clone(), s.r.clone(), 0, scaling)
-            .map_err(|e| Error::Usage(format!("filter: {e}")))?;
+    let mut filter = AdaptiveKalmanFilter::new(
+        Setup {
+            x0: DVector::zeros(STATES),
+            p0: s.p0.clone(),
+            process_noise: s.model.q.clone(),
+            measurement_noise: s.r.clone(),
+            inputs: 0,
+        },
+        scaling,
+    )
+    .map_err(|e| Error::Usage(format!("filter: {e}")))?;
     let mut row = DataRow::zeros(3, 5);
     let u = DVector::zeros(0);
     let mut y = DVector::zeros(3);

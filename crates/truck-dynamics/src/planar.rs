@@ -465,6 +465,15 @@ impl DifferentiableModel for TruckEkfModel {
     }
 }
 
+impl models::AnyModel for TruckEkfModel {
+    fn discrete(&self) -> &dyn models::DiscreteModel {
+        self
+    }
+    fn differentiable(&self) -> Option<&dyn models::DifferentiableModel> {
+        Some(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

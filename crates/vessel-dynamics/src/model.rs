@@ -223,6 +223,15 @@ impl DifferentiableModel for DiscreteVessel {
     }
 }
 
+impl models::AnyModel for DiscreteVessel {
+    fn discrete(&self) -> &dyn models::DiscreteModel {
+        self
+    }
+    fn differentiable(&self) -> Option<&dyn models::DifferentiableModel> {
+        Some(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

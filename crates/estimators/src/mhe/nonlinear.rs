@@ -29,8 +29,8 @@ use models::{DifferentiableModel, Dims};
 
 use crate::error::EstimatorError;
 use crate::kalman::GaussianEstimate;
-use crate::mhe::solve::WindowStatus;
 use crate::mhe::estimator::window_outcome;
+use crate::mhe::solve::WindowStatus;
 use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::ukf::{UkfParams, UnscentedKalmanFilter};
 use crate::validate::{InitialData, check_initial, check_vec};

@@ -377,7 +377,11 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     /// [`EstimatorError::UpdateWithoutPrediction`] when no prediction is pending (the update is
     /// joint with a prediction; a second update of the same step has none); otherwise as
     /// [`SetMembershipFilter::step`].
-    pub fn update<M: LinearModel + ?Sized>(&mut self, model: &M, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
+    pub fn update<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
         check_vec("y", y, self.m)?;
         if !self.pending.armed {
@@ -435,8 +439,9 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
             check_in_box(u, lower, upper)?;
         }
-        let Self { q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, pending, .. } =
-            self;
+        let Self {
+            q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, pending, ..
+        } = self;
         let (n, m) = (*n, *m);
         let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
         let warm = est.report.tau;
@@ -611,7 +616,11 @@ impl Estimate for SetEstimate {
             _ if r.consistency.is_consistent() => DataCheck::Consistent,
             _ => DataCheck::Inconsistent,
         };
-        StepStatus { outcome: r.outcome, data, guarantee: if r.guaranteed { Guarantee::Holds } else { Guarantee::Lost } }
+        StepStatus {
+            outcome: r.outcome,
+            data,
+            guarantee: if r.guaranteed { Guarantee::Holds } else { Guarantee::Lost },
+        }
     }
     fn details(&self) -> StepDetails {
         StepDetails::SetMembership(self.report)

@@ -2,6 +2,7 @@
 //! filters on identical data (`docs/bds-ins-fuzzy-kf.md` §3 "Experiments"), and per-epoch
 //! accumulators over the Monte Carlo seeds.
 
+use estimators::Setup;
 use std::time::Instant;
 
 use bds_ins_dynamics::{
@@ -198,11 +199,13 @@ pub fn run_filter(
 ) -> Result<Trace, String> {
     let scaling = RunScaling { mode: v.mode, fis: FuzzyScaling::bds_ins_default(), epoch: 0, variance_factor: 1.0 };
     let mut f = AdaptiveKalmanFilter::new(
-        DVector::zeros(bds_ins_dynamics::STATES),
-        scenario::initial_covariance(),
-        model.q.clone(),
-        scenario::nominal_r(),
-        0,
+        Setup {
+            x0: DVector::zeros(bds_ins_dynamics::STATES),
+            p0: scenario::initial_covariance(),
+            process_noise: model.q.clone(),
+            measurement_noise: scenario::nominal_r(),
+            inputs: 0,
+        },
         scaling,
     )
     .map_err(|e| format!("{}: {e}", v.id))?;
@@ -234,7 +237,7 @@ pub fn run_filter(
                 s.epoch = k;
                 s.variance_factor = variance_factor(k);
                 let t0 = Instant::now();
-                let step = f.step(model, &u, &y, &status);
+                let step = f.step_with_status(model, &u, &y, &status);
                 trace.step_ns.push(t0.elapsed().as_nanos() as u64);
                 step.map_err(|e| format!("{} at epoch {k}: {e}", v.id))?.scale
             }

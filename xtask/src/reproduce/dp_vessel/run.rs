@@ -4,6 +4,7 @@
 //!
 //! The estimators come from [`ESTIMATORS`]; the MHE will be one more line there.
 
+use estimators::Setup;
 use estimators::registry::BoxedDifferentiableEstimator;
 use estimators::{EstimatorError, ExtendedKalmanFilter, UkfParams, UnscentedKalmanFilter};
 use models::{DifferentiableModel, Noise};
@@ -69,13 +70,22 @@ pub struct EstimatorSpec {
 
 fn build_ekf(s: &FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
     let (x0, p0, q, r) = s.matrices();
-    Ok(Box::new(ExtendedKalmanFilter::new(x0, p0, q, r, 3)?))
+    Ok(Box::new(ExtendedKalmanFilter::new(Setup {
+        x0: x0,
+        p0: p0,
+        process_noise: q,
+        measurement_noise: r,
+        inputs: 3,
+    })?))
 }
 
 fn build_ukf(s: &FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
     let (x0, p0, q, r) = s.matrices();
     let params = UkfParams { alpha: s.ukf[0], beta: s.ukf[1], kappa: s.ukf[2] };
-    Ok(Box::new(UnscentedKalmanFilter::new(x0, p0, q, r, 3, params)?))
+    Ok(Box::new(UnscentedKalmanFilter::new(
+        Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 3 },
+        params,
+    )?))
 }
 
 fn mhe(

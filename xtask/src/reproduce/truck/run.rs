@@ -1,6 +1,7 @@
 //! One EKF run over a truth trajectory (the digest's settings, seeded measurement noise), its
 //! timing, and its metrics (digest §5 "Metrics").
 
+use estimators::Setup;
 use std::time::Instant;
 
 use estimators::{ExtendedKalmanFilter, KalmanFilter, StepModel};
@@ -106,8 +107,14 @@ pub fn run_ekf(truth: &TruthTrajectory, model: &TruckEkfModel, case: &Case, seed
     }
     let (q, r, p0) = noise_matrices(model.ts());
     let x0 = DVector::from_vec(vec![X0[0], X0[1] + case.vy0_error, X0[2]]);
-    let mut ekf = ExtendedKalmanFilter::new(x0.clone(), p0.clone(), q, r, model.dims().inputs)
-        .map_err(|e| format!("{}: EKF: {e}", case.id))?;
+    let mut ekf = ExtendedKalmanFilter::new(Setup {
+        x0: x0.clone(),
+        p0: p0.clone(),
+        process_noise: q,
+        measurement_noise: r,
+        inputs: model.dims().inputs,
+    })
+    .map_err(|e| format!("{}: EKF: {e}", case.id))?;
     let (mut meas, mut wheels) = streams(seed);
     let mut trace = Trace {
         t: Vec::with_capacity(n),
@@ -166,7 +173,8 @@ pub fn kalman_step_timing(truth: &TruthTrajectory, model: &TruckEkfModel, seed: 
     model.f_jacobian(&x0, &u0, &mut a).map_err(|e| e.to_string())?;
     model.h_jacobian(&x0, &u0, &mut c).map_err(|e| e.to_string())?;
     let (q, r, p0) = noise_matrices(model.ts());
-    let mut kf = KalmanFilter::new(x0, p0, q, r, d.inputs).map_err(|e| e.to_string())?;
+    let mut kf = KalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: d.inputs })
+        .map_err(|e| e.to_string())?;
     let lin = StepModel::new(&a, &b, &c);
     let (mut meas, _) = streams(seed);
     let mut y = DVector::zeros(3);
