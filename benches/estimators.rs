@@ -90,7 +90,7 @@ fn steps(crit: &mut Criterion) {
                 if advance(&mut k, cs.ys.len()) {
                     kf = kf0.clone();
                 }
-                black_box(kf.step(&model, &cs.u, &cs.ys[k]).unwrap().mean[0])
+                black_box(kf.step(&model, &cs.u, &cs.ys[k]).unwrap().center[0])
             })
         });
 
@@ -182,7 +182,7 @@ fn truck(crit: &mut Criterion) {
     group.bench_function("ekf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
-            black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
+            black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })
     });
     // The tyre part: the four model evaluations one EKF step makes.
@@ -209,7 +209,7 @@ fn truck(crit: &mut Criterion) {
     group.bench_function("kalman-same-size", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
-            black_box(kf.step(&lin, &inputs[k], &ys[k]).unwrap().mean[0])
+            black_box(kf.step(&lin, &inputs[k], &ys[k]).unwrap().center[0])
         })
     });
     group.finish();
@@ -254,7 +254,7 @@ fn vessel(crit: &mut Criterion) {
                 )
                 .unwrap();
             }
-            black_box(ukf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
+            black_box(ukf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })
     });
     let mut ekf = ExtendedKalmanFilter::new(Setup {
@@ -278,7 +278,7 @@ fn vessel(crit: &mut Criterion) {
                 })
                 .unwrap();
             }
-            black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().mean[0])
+            black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })
     });
     let ctrl = Nsampc::new(&VesselParams::paper(), NsampcParams::paper()).unwrap();

@@ -30,11 +30,14 @@ fn bench(c: &mut Criterion) {
         ys.push(model.c() * &x + vn.sample(&mut rng));
     }
     let w = bounds.process_vector();
+    let setup = Setup {
+        x0: DVector::from_row_slice(&car_dynamics::DIGEST_INITIAL_STATE),
+        p0: DMatrix::identity(4, 4) * 0.01,
+        process_noise: DMatrix::identity(4, 4) * 9e-4,
+        measurement_noise: DMatrix::from_element(1, 1, 0.1),
+        inputs: 1,
+    };
     let base = MheSettings::new(
-        DVector::from_row_slice(&car_dynamics::DIGEST_INITIAL_STATE),
-        DMatrix::identity(4, 4) * 0.01,
-        DMatrix::identity(4, 4) * 9e-4,
-        DMatrix::from_element(1, 1, 0.1),
         (DVector::from_fn(4, |i, _| -w[i]), DVector::from_fn(4, |i, _| w[i])),
         (DVector::from_element(1, -1.0), DVector::from_element(1, 1.0)),
     );
@@ -52,7 +55,7 @@ fn bench(c: &mut Criterion) {
         let mut s = base.clone().with_preset(6, preset).unwrap();
         s.cost = cost;
         s.solver = solver;
-        let mut warm = MovingHorizonEstimator::new(s, 1).unwrap();
+        let mut warm = MovingHorizonEstimator::new(setup.clone(), s).unwrap();
         // Warm up to k = 20 (a full window in the middle of the manoeuvre).
         for k in 0..20 {
             warm.step(&model, &inputs[k], &ys[k]).unwrap();
@@ -61,7 +64,7 @@ fn bench(c: &mut Criterion) {
             b.iter_batched(
                 || warm.clone(),
                 |mut e| {
-                    black_box(e.step(&model, &inputs[20], &ys[20]).unwrap().state[0]);
+                    black_box(e.step(&model, &inputs[20], &ys[20]).unwrap().center[0]);
                     e
                 },
                 BatchSize::SmallInput,
@@ -109,9 +112,11 @@ fn vessel(c: &mut Criterion) {
     for (name, arrival) in
         [("mhe-ukf-arrival", NonlinearArrival::Ukf(UkfParams::paper())), ("mhe-ekf-arrival", NonlinearArrival::Ekf)]
     {
-        let mut s = NonlinearMheSettings::new(x0.clone(), p0.clone(), q.clone(), r.clone());
+        let mut s = NonlinearMheSettings::paper();
         s.arrival = arrival;
-        let mut warm = NonlinearMhe::new(s, 3).unwrap();
+        let setup =
+            Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 };
+        let mut warm = NonlinearMhe::new(setup, s).unwrap();
         for k in 0..20 {
             warm.step(&model, &us[k], &ys[k]).unwrap();
         }
@@ -125,7 +130,7 @@ fn vessel(c: &mut Criterion) {
             b.iter_batched(
                 || warm.clone(),
                 |mut e| {
-                    black_box(e.step(&model, &us[20], &ys[20]).unwrap().state[0]);
+                    black_box(e.step(&model, &us[20], &ys[20]).unwrap().center[0]);
                     e
                 },
                 BatchSize::SmallInput,
@@ -144,7 +149,7 @@ fn vessel(c: &mut Criterion) {
         b.iter_batched(
             || ukf.clone(),
             |mut e| {
-                black_box(e.step(&model, &us[20], &ys[20]).unwrap().mean[0]);
+                black_box(e.step(&model, &us[20], &ys[20]).unwrap().center[0]);
                 e
             },
             BatchSize::SmallInput,

@@ -22,7 +22,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels"]),
-    ("vessel-control", &["models", "dense-kernels", "vessel-dynamics"]),
+    ("vessel-control", &["models", "dense-kernels", "vessel-dynamics", "estimators"]),
     ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi", "fuzzy-inference"]),
     ("port-est", &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics", "fuzzy-inference"]),
 ];

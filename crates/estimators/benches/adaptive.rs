@@ -62,7 +62,7 @@ fn steps(c: &mut Criterion) {
     let mut k = 0;
     group.bench_function("kalman", |b| {
         b.iter(|| {
-            let _ = black_box(kf.step(&d.model, &u, &d.ys[k]).map(|e| e.mean[0]));
+            let _ = black_box(kf.step(&d.model, &u, &d.ys[k]).map(|e| e.center[0]));
             k = (k + 1) % STEPS;
         })
     });

@@ -303,10 +303,35 @@ impl EstimatorEntry {
     }
 }
 
+/// The registered names, for code that runs a particular estimator (the reproduction): every name
+/// is written here once.
+pub mod names {
+    /// The improved set-membership filter.
+    pub const SMF: &str = "smf";
+    /// The Kalman filter.
+    pub const KF: &str = "kf";
+    /// The Yang–Li reconstruction (a), input unused.
+    pub const YANG_LI: &str = "yang-li";
+    /// The Yang–Li reconstruction (b), input in the predictor.
+    pub const YANG_LI_WITH_INPUT: &str = "yang-li-with-input";
+    /// The robust min–max moving-horizon estimator.
+    pub const RMHE: &str = "rmhe";
+    /// Plain least-squares moving-horizon estimation.
+    pub const MHE: &str = "mhe";
+    /// The fuzzy-adaptive Kalman filter.
+    pub const FKF: &str = "fkf";
+    /// The extended Kalman filter.
+    pub const EKF: &str = "ekf";
+    /// The unscented Kalman filter.
+    pub const UKF: &str = "ukf";
+    /// The nonlinear moving-horizon estimator with a UKF arrival cost.
+    pub const MHE_UKF: &str = "mhe-ukf";
+}
+
 /// Every registered estimator, in display order.
 pub static ESTIMATORS: &[EstimatorEntry] = &[
     EstimatorEntry {
-        name: "smf",
+        name: names::SMF,
         kind: EstimateKind::GuaranteedEllipsoid,
         summary: "improved set-membership filter (carrier paper (13)-(29)), certified containment",
         needs: Capability::Linear,
@@ -322,7 +347,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "kf",
+        name: names::KF,
         kind: EstimateKind::Gaussian,
         summary: "Kalman filter, Joseph form (Q, R, P0 as covariances)",
         needs: Capability::Linear,
@@ -331,7 +356,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         build: |e, setup, _| Ok(on_linear(e, KalmanFilter::new(setup)?)),
     },
     EstimatorEntry {
-        name: "yang-li",
+        name: names::YANG_LI,
         kind: EstimateKind::GuaranteedEllipsoid,
         summary: "reconstruction (a) of the carrier paper's reference [17]: input unused, bounded by its box",
         needs: Capability::Linear,
@@ -347,7 +372,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "yang-li-with-input",
+        name: names::YANG_LI_WITH_INPUT,
         kind: EstimateKind::GuaranteedEllipsoid,
         summary: "reconstruction (b) of [17]: the input in the predictor (equal to smf)",
         needs: Capability::Linear,
@@ -363,7 +388,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "rmhe",
+        name: names::RMHE,
         kind: EstimateKind::Point,
         summary: "robust min-max moving-horizon estimator with disturbance blocking (car paper), box-bounded noise; \
                   Q, R, P0 as weights",
@@ -376,7 +401,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "mhe",
+        name: names::MHE,
         kind: EstimateKind::Point,
         summary: "plain least-squares moving-horizon estimator: the rmhe settings with the least-squares cost \
                   (lambda_v -> infinity)",
@@ -390,7 +415,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "fkf",
+        name: names::FKF,
         kind: EstimateKind::Gaussian,
         summary: "fuzzy-adaptive Kalman filter (BDS/INS paper): R scaled every epoch by a Mamdani system of the \
                   receiver status; measurement [y, satellites, RTK code], RTK 0 = no fix",
@@ -406,7 +431,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "ekf",
+        name: names::EKF,
         kind: EstimateKind::Gaussian,
         summary: "extended Kalman filter, Joseph form (truck paper (7)-(11)); Q, R, P0 as covariances",
         needs: Capability::Differentiable,
@@ -415,7 +440,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         build: |e, setup, _| Ok(on_differentiable(e, ExtendedKalmanFilter::new(setup)?)),
     },
     EstimatorEntry {
-        name: "ukf",
+        name: names::UKF,
         kind: EstimateKind::Gaussian,
         summary: "unscented Kalman filter, scaled sigma points with a positive-definiteness guard (dp-vessel note); \
                   Q, R, P0 as covariances",
@@ -428,7 +453,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         },
     },
     EstimatorEntry {
-        name: "mhe-ukf",
+        name: names::MHE_UKF,
         kind: EstimateKind::Point,
         summary: "nonlinear moving-horizon estimator, N = 10, Gauss-Newton on the banded window, UKF arrival cost \
                   (vessel paper (21)-(37)); Q, R, P0 as weights",

@@ -27,14 +27,16 @@
 //! system (three inputs `[N, RTK, d]`, e.g. an edited copy of
 //! `crates/fuzzy-inference/systems/bds_ins.toml`); `--scaling none` runs the plain Kalman filter.
 
-use estimators::Setup;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use bds_ins_dynamics::{
     DiscreteInsModel, Earth, InsErrorModel, InsNoise, InsParams, RtkStatus, STATES, correct, idx, measurement, scenario,
 };
-use estimators::{AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, FuzzyScaling, NoiseScaling, ReceiverStatus};
+use estimators::{
+    AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, Estimate, Estimator, EstimatorError, FuzzyScaling,
+    NoiseScaling, Setup, StepDetails,
+};
 use fuzzy_inference::FuzzySystem;
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
@@ -42,6 +44,7 @@ use serde::Deserialize;
 use crate::data::{DataReader, DataRow};
 use crate::error::Error;
 use crate::output::OutputFile;
+use crate::run::{StatusPolicy, StatusTally, enforce};
 
 /// How the RTK column is coded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -67,6 +70,8 @@ pub struct BdsInsOptions {
     pub fuzzy: bool,
     /// Coding of the RTK column.
     pub rtk_coding: RtkCoding,
+    /// What a step that does not end cleanly does.
+    pub status: StatusPolicy,
 }
 
 /// What a run did.
@@ -76,6 +81,8 @@ pub struct BdsInsSummary {
     pub epochs: u64,
     /// Epochs without a fix (prediction only).
     pub outages: u64,
+    /// How the steps ended.
+    pub tally: StatusTally,
 }
 
 /// The settings file, as written.
@@ -184,7 +191,7 @@ pub fn bds_ins(options: &BdsInsOptions) -> Result<BdsInsSummary, Error> {
     let settings = read_config(options.config.as_deref())?;
     let scaling = scaling(options, settings.sigma0)?;
     let mut data = DataReader::open(&options.input, 3, 5)?;
-    let summary = run(&settings, scaling, options.rtk_coding, &mut data, &mut out, &options.output)?;
+    let summary = run(&settings, scaling, options.rtk_coding, options.status, &mut data, &mut out, &options.output)?;
     out.commit()?;
     Ok(summary)
 }
@@ -193,11 +200,11 @@ pub fn bds_ins(options: &BdsInsOptions) -> Result<BdsInsSummary, Error> {
 const SATELLITES_COLUMN: usize = 7;
 const RTK_COLUMN: usize = 8;
 
-/// The status of a row, `None` for "no fix".
-fn status_of<R: Read>(row: &DataRow, coding: RtkCoding, data: &DataReader<R>) -> Result<Option<ReceiverStatus>, Error> {
+/// The paper's RTK code of a row (0: no fix), from the paper's coding or a GGA quality.
+fn rtk_code<R: Read>(row: &DataRow, coding: RtkCoding, data: &DataReader<R>) -> Result<f64, Error> {
     let code = row.y[4];
-    let paper_code = match coding {
-        RtkCoding::Paper => code,
+    match coding {
+        RtkCoding::Paper => Ok(code),
         RtkCoding::Gga => {
             let mapped = (code.fract() == 0.0 && (0.0..=255.0).contains(&code))
                 .then(|| {
@@ -208,98 +215,91 @@ fn status_of<R: Read>(row: &DataRow, coding: RtkCoding, data: &DataReader<R>) ->
                     }
                 })
                 .flatten();
-            match mapped {
-                Some(c) => c,
-                None => {
-                    return Err(Error::at(
-                        data.locate(Some(RTK_COLUMN)),
-                        format!("y5 = {code} is not an NMEA GGA quality this filter knows (0 no fix, 1, 2, 4, 5)"),
-                    ));
-                }
-            }
+            mapped.ok_or_else(|| {
+                Error::at(
+                    data.locate(Some(RTK_COLUMN)),
+                    format!("y5 = {code} is not an NMEA GGA quality this filter knows (0 no fix, 1, 2, 4, 5)"),
+                )
+            })
         }
-    };
-    if paper_code == 0.0 {
-        return Ok(None);
     }
-    ReceiverStatus::new(row.y[3], paper_code).map(Some).map_err(|e| {
-        let column = if matches!(e, AdaptiveError::RtkOutOfRange(_)) { RTK_COLUMN } else { SATELLITES_COLUMN };
-        let hint = if coding == RtkCoding::Paper && matches!(e, AdaptiveError::RtkOutOfRange(_)) {
-            " (0 marks an epoch without a fix; --gga reads NMEA GGA qualities)"
-        } else {
-            ""
-        };
-        Error::at(data.locate(Some(column)), format!("{e}{hint}"))
-    })
+}
+
+/// A step's error at its data row: the receiver status at its cell, with a hint for RTK codes.
+fn step_error<R: Read>(e: EstimatorError, data: &DataReader<R>, k: u64, coding: RtkCoding) -> Error {
+    match e {
+        EstimatorError::Adaptive { index: Some(i), source } => {
+            let column = if i == 3 { SATELLITES_COLUMN } else { RTK_COLUMN };
+            let hint = if coding == RtkCoding::Paper && matches!(*source, AdaptiveError::RtkOutOfRange(_)) {
+                " (0 marks an epoch without a fix; --gga reads NMEA GGA qualities)"
+            } else {
+                ""
+            };
+            Error::at(data.locate(Some(column)), format!("{source}{hint}"))
+        }
+        e => crate::run::step_error(e, data, k),
+    }
 }
 
 fn run<R: Read, W: Write>(
     s: &Settings,
     scaling: Scaling,
     coding: RtkCoding,
+    status: StatusPolicy,
     data: &mut DataReader<R>,
     out: &mut W,
     out_path: &Path,
 ) -> Result<BdsInsSummary, Error> {
     let wio = |e| Error::io(out_path, e);
-    writeln!(out, "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d").map_err(wio)?;
-    let mut filter = AdaptiveKalmanFilter::new(
-        Setup {
-            x0: DVector::zeros(STATES),
-            p0: s.p0.clone(),
-            process_noise: s.model.q.clone(),
-            measurement_noise: s.r.clone(),
-            inputs: 0,
-        },
-        scaling,
-    )
-    .map_err(|e| Error::Usage(format!("filter: {e}")))?;
+    writeln!(out, "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d,status").map_err(wio)?;
+    let setup = Setup {
+        x0: DVector::zeros(STATES),
+        p0: s.p0.clone(),
+        process_noise: s.model.q.clone(),
+        measurement_noise: s.r.clone(),
+        inputs: 0,
+    };
+    let mut filter = AdaptiveKalmanFilter::new(setup, scaling).map_err(|e| Error::Usage(format!("filter: {e}")))?;
     let mut row = DataRow::zeros(3, 5);
     let u = DVector::zeros(0);
-    let mut y = DVector::zeros(3);
-    let mut summary = BdsInsSummary { epochs: 0, outages: 0 };
+    // The measurement the filter consumes: the INS-minus-BDS difference (13) and the receiver
+    // status [N, RTK] of the epoch (RTK 0: no fix, a prediction only).
+    let mut y = DVector::zeros(5);
+    let mut tally = StatusTally::default();
     while data.read_row(&mut row)? {
         let ins = [row.u[0], row.u[1], row.u[2]];
-        let status = status_of(&row, coding, data)?;
-        let step_error = |e: AdaptiveError, data: &DataReader<R>| match e {
-            AdaptiveError::Filter(source) => Error::Step { at: data.locate(Some(0)), k: row.k, source },
-            other => Error::at(data.locate(Some(0)), format!("step k = {}: {other}", row.k)),
-        };
-        let report = match status {
-            Some(status) => {
-                let z = measurement(ins, [row.y[0], row.y[1], row.y[2]]);
-                y.copy_from_slice(&z);
-                Some(filter.step(&s.model, &u, &y, &status).map_err(|e| step_error(e, data))?)
-            }
-            None => {
-                filter.predict(&s.model, &u).map_err(|e| step_error(e, data))?;
-                summary.outages += 1;
-                None
-            }
-        };
+        let code = rtk_code(&row, coding, data)?;
+        let z = measurement(ins, [row.y[0], row.y[1], row.y[2]]);
+        y.rows_mut(0, 3).copy_from_slice(&z);
+        y[3] = row.y[3];
+        y[4] = code;
+        let e = Estimator::step(&mut filter, &s.model, &u, &y).map_err(|e| step_error(e, data, row.k, coding))?;
+        enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
+        tally.record(e.status());
         let Some(label) = row.k.checked_add(1) else {
             return Err(Error::at(data.locate(Some(0)), format!("k = {} is too large", row.k)));
         };
-        let e = filter.estimate();
-        let c = correct(ins, &e.mean).map_err(|e| Error::Usage(e.to_string()))?;
-        let (dx, dy, dpsi) = (e.mean[idx::DX], e.mean[idx::DY], e.mean[idx::DPSI]);
+        let c = correct(ins, &e.center).map_err(|e| Error::Usage(e.to_string()))?;
+        let (dx, dy, dpsi) = (e.center[idx::DX], e.center[idx::DY], e.center[idx::DPSI]);
         let sd = |i: usize| e.std_dev[i];
-        let (t, d) =
-            report.map_or((String::new(), String::new()), |r| (format!("{:e}", r.scale), format!("{:e}", r.distance)));
+        let (t, d) = match e.details {
+            StepDetails::Adaptive(Some(r)) => (format!("{:e}", r.scale), format!("{:e}", r.distance)),
+            _ => (String::new(), String::new()),
+        };
         writeln!(
             out,
-            "{label},{:e},{:e},{:e},{dx:e},{dy:e},{dpsi:e},{:e},{:e},{:e},{t},{d}",
+            "{label},{:e},{:e},{:e},{dx:e},{dy:e},{dpsi:e},{:e},{:e},{:e},{t},{d},{}",
             c[0],
             c[1],
             c[2],
             sd(idx::DX),
             sd(idx::DY),
-            sd(idx::DPSI)
+            sd(idx::DPSI),
+            e.status
         )
         .map_err(wio)?;
-        summary.epochs += 1;
     }
-    Ok(summary)
+    Ok(BdsInsSummary { epochs: tally.steps, outages: tally.predicted, tally })
 }
 
 #[cfg(test)]
@@ -349,11 +349,12 @@ mod tests {
             fis: None,
             fuzzy,
             rtk_coding: coding,
+            status: StatusPolicy::Warn,
         };
         let scaling = scaling(&options, settings.sigma0)?;
         let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5)?;
         let mut out = Vec::new();
-        let summary = run(&settings, scaling, coding, &mut data, &mut out, Path::new("o.csv"))?;
+        let summary = run(&settings, scaling, coding, StatusPolicy::Warn, &mut data, &mut out, Path::new("o.csv"))?;
         Ok((String::from_utf8(out).unwrap(), summary))
     }
 
@@ -361,9 +362,9 @@ mod tests {
     fn the_filter_corrects_the_ins_on_a_logged_route() {
         let (text, truth) = log(900, 10);
         let (out, summary) = run_text(&text, true, RtkCoding::Paper).unwrap();
-        assert_eq!(summary, BdsInsSummary { epochs: 900, outages: 90 });
+        assert_eq!((summary.epochs, summary.outages, summary.tally.unclean()), (900, 90, 0));
         let lines: Vec<&str> = out.lines().collect();
-        assert_eq!(lines[0], "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d");
+        assert_eq!(lines[0], "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d,status");
         let mut sq = 0.0;
         let mut ins_sq = 0.0;
         let (mut scaled_before, mut scaled_after) = (0.0, 0.0);
@@ -374,7 +375,7 @@ mod tests {
             sq += (v[1] - truth[k][0]).powi(2) + (v[2] - truth[k][1]).powi(2);
             ins_sq += (v[1] + v[4] - truth[k][0]).powi(2) + (v[2] + v[5] - truth[k][1]).powi(2);
             if k % 10 == 9 {
-                assert_eq!((cells[10], cells[11]), ("", ""), "outage row {k}");
+                assert_eq!((cells[10], cells[11], cells[12]), ("", "", "predicted"), "outage row {k}");
             } else if k < 600 {
                 scaled_before += cells[10].parse::<f64>().unwrap();
             } else {
@@ -389,7 +390,9 @@ mod tests {
         assert!(scaled_after / 270.0 > 2.0 * scaled_before / 450.0, "{scaled_before} {scaled_after}");
         // The plain KF on the same file: t = 1 throughout.
         let (plain, _) = run_text(&text, false, RtkCoding::Paper).unwrap();
-        assert!(plain.lines().skip(1).filter(|l| !l.ends_with(",,")).all(|l| l.split(',').nth(10) == Some("1e0")));
+        assert!(
+            plain.lines().skip(1).filter(|l| !l.ends_with(",,predicted")).all(|l| l.split(',').nth(10) == Some("1e0"))
+        );
     }
 
     #[test]
@@ -448,6 +451,7 @@ mod tests {
             fis: Some(fis.to_owned()),
             fuzzy: true,
             rtk_coding: RtkCoding::Paper,
+            status: StatusPolicy::Warn,
         };
         assert!(scaling(&options(&fis), 0.2).is_ok());
         std::fs::write(&fis, "default_output = 1\n").unwrap();

@@ -54,11 +54,18 @@ pub struct TruckArgs {
     /// Settings overriding the digest's defaults: ts, x0, p0, q, r (TOML)
     #[arg(short, long, value_name = "CONFIG.toml")]
     pub config: Option<PathBuf>,
+    /// Refuse any step that does not end cleanly (see `port-est filter --help`)
+    #[arg(long)]
+    pub strict: bool,
+}
+
+fn status_policy(strict: bool) -> crate::StatusPolicy {
+    if strict { crate::StatusPolicy::Error } else { crate::StatusPolicy::Warn }
 }
 
 impl From<TruckArgs> for crate::truck::TruckOptions {
     fn from(a: TruckArgs) -> Self {
-        Self { input: a.input, output: a.output, config: a.config }
+        Self { input: a.input, output: a.output, config: a.config, status: status_policy(a.strict) }
     }
 }
 
@@ -105,6 +112,9 @@ pub struct BdsInsArgs {
     /// Read y5 as an NMEA GGA quality indicator instead of the paper's RTK code
     #[arg(long)]
     pub gga: bool,
+    /// Refuse any step that does not end cleanly (see `port-est filter --help`)
+    #[arg(long)]
+    pub strict: bool,
 }
 
 impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
@@ -116,6 +126,7 @@ impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
             fis: a.fis,
             fuzzy: a.scaling == "fuzzy",
             rtk_coding: if a.gga { crate::bds_ins::RtkCoding::Gga } else { crate::bds_ins::RtkCoding::Paper },
+            status: status_policy(a.strict),
         }
     }
 }
@@ -132,10 +143,18 @@ Files:
               rmhe-of) or `blocks`, `lambda_v` or `alpha`, `solver` (coordinate-rotation,
               exact-saddle), `inner`, `max_sweeps`, `tolerance`, `arrival`, `theta`, `prior_mean`,
               `block_weighting`, `output_constraint` (see crates/port-est/README.md).
-  DATA.csv    header `k,u1,…,up,y1,…,ym`; row k holds the input u_k and the measurement y_{k+1}.
-  OUT.csv     header `k,xhat1,…,xhatn,lo1,…,lon,hi1,…,hin,trace` (plus `tau1,tau2,tau3` for the
-              set-membership filters); one row per step, labelled k+1. It is written to a temporary
-              file beside it and renamed on success, and may not be the model or the input.
+  DATA.csv    header `k,u1,…,up,y1,…,ym`; row k holds the input u_k and the measurement y_{k+1}
+              (fkf: two more columns, the satellite count and the RTK code, 0 = no fix).
+  OUT.csv     one row per step, labelled k+1: `k,xhat1,…,xhatn`, then by kind of estimate
+              `sd1,…,sdn,trace_cov` (Gaussian: one standard deviation per state),
+              `lo1,…,lon,hi1,…,hin,trace_shape` (guaranteed intervals), or nothing (point
+              estimates of the moving-horizon estimators: no bounds), then the estimator's own
+              numbers (`tau1,tau2,tau3`; `scale,distance`; `iterations`) and `status`: converged,
+              predicted, not-converged, fallback or relaxed, with `+inconsistent` and
+              `+not-guaranteed` where they apply. Steps that do not end cleanly are counted in a
+              warning on stderr; --strict makes the first one an error. The file is written to a
+              temporary file beside it and renamed on success, and may not be the model or the
+              input.
 
 Malformed files are reported at their file:line:column.
 
@@ -166,25 +185,38 @@ pub struct FilterArgs {
     /// a row for each missing step
     #[arg(long, value_name = "POLICY", default_value = "error", value_parser = ["error", "bridge"])]
     pub gaps: String,
+    /// Refuse any step that does not end cleanly (a solver that did not converge, a fallback, a
+    /// relaxed problem, inconsistent data, a set no longer guaranteed) instead of writing it with
+    /// its status and warning
+    #[arg(long)]
+    pub strict: bool,
 }
 
-/// The registry's estimators, with their summaries for `--help`.
+/// The registry's estimators that run on the linear model of a model file, with their summaries
+/// for `--help`.
 fn estimator_names() -> PossibleValuesParser {
-    PossibleValuesParser::new(registry::LINEAR_ESTIMATORS.iter().map(|e| PossibleValue::new(e.name).help(e.summary)))
+    PossibleValuesParser::new(registry::ESTIMATORS.iter().map(|e| PossibleValue::new(e.name).help(e.summary)))
 }
 
 /// The solvers this build has.
 fn solver_names() -> PossibleValuesParser {
-    PossibleValuesParser::new(registry::solver_names().into_iter().map(|s| {
-        let help = if s == registry::TWO_MULTIPLIER { "exact two-multiplier method (fastest)" } else { "SDP backend" };
-        PossibleValue::new(s).help(help)
-    }))
+    PossibleValuesParser::new(
+        registry::SmfSolver::names().into_iter().map(|s| PossibleValue::new(s).help(registry::SmfSolver::summary(s))),
+    )
 }
 
 impl From<FilterArgs> for crate::FilterOptions {
     fn from(a: FilterArgs) -> Self {
         let gaps = if a.gaps == "bridge" { crate::filter::GapPolicy::Bridge } else { crate::filter::GapPolicy::Error };
-        Self { model: a.model, input: a.input, output: a.output, estimator: a.estimator, solver: a.solver, gaps }
+        Self {
+            model: a.model,
+            input: a.input,
+            output: a.output,
+            estimator: a.estimator,
+            solver: a.solver,
+            gaps,
+            status: status_policy(a.strict),
+        }
     }
 }
 
@@ -204,7 +236,7 @@ mod tests {
             Cli::try_parse_from(["port-est", "filter", "-m", "m.toml", "--input", "d.csv", "-o", "o.csv"]).unwrap();
         let Command::Filter(a) = cli.command else { panic!("not filter") };
         assert_eq!((a.estimator.as_str(), a.solver), ("smf", None));
-        let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d", "-o", "o", "-e", "ukf"]).unwrap_err();
+        let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d", "-o", "o", "-e", "nope"]).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::InvalidValue);
         let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d"]).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::MissingRequiredArgument);

@@ -1,15 +1,18 @@
 //! `port-est filter`: run a registered estimator over logged data, one output row per step.
 //!
-//! `OUT.csv` has the header `k,xhat1,…,xhatn,lo1,…,lon,hi1,…,hin,trace`, plus `tau1,tau2,tau3`
-//! (the S-procedure multipliers) when the estimator's estimate has them (the set-membership
-//! filters); the row of step `k` is labelled `k + 1` (it estimates `x_{k+1}`). Numbers are
-//! written in Rust's `{:e}` notation, exact to the last bit.
+//! `OUT.csv` has the header `k,xhat1,…,xhatn`, then columns named after what the numbers are
+//! ([`EstimateColumns`]: `sd1…,trace_cov` for Gaussian estimates, `lo1…,hi1…,trace_shape` for
+//! guaranteed sets, none for point estimates), the estimator's own numbers (`tau1,tau2,tau3`,
+//! `scale,distance`, `iterations`) and `status`; the row of step `k` is labelled `k + 1` (it
+//! estimates `x_{k+1}`). Numbers are written in Rust's `{:e}` notation, exact to the last bit.
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimators::registry::{self, EstimatorInfo, LinearSetup, TWO_MULTIPLIER};
-use estimators::{Estimate, EstimatorError, NoiseSettings};
+use estimators::registry::{
+    self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
+};
+use estimators::{AnyEstimator, EstimatorError, Setup};
 use models::StepModel;
 use nalgebra::DVector;
 
@@ -17,6 +20,7 @@ use crate::data::{DataReader, DataRow};
 use crate::error::{Error, echo};
 use crate::model::{Model, read_model};
 use crate::output::OutputFile;
+use crate::run::{EstimateColumns, StatusPolicy, StatusTally, enforce, step_error};
 
 /// What `port-est filter` is asked to do.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -27,13 +31,15 @@ pub struct FilterOptions {
     pub input: PathBuf,
     /// `OUT.csv`.
     pub output: PathBuf,
-    /// A name of [`estimators::LINEAR_ESTIMATORS`].
+    /// A name of [`registry::ESTIMATORS`].
     pub estimator: String,
-    /// How a set-membership filter solves (29) (`None`: [`TWO_MULTIPLIER`]); only for the
-    /// estimators that use a solver.
+    /// How a set-membership filter solves (29) (`None`: the two-multiplier method); only for the
+    /// estimators whose settings have a solver.
     pub solver: Option<String>,
     /// What a gap in `k` does: an error naming the row (default), or prediction-only steps.
     pub gaps: GapPolicy,
+    /// What a step that does not end cleanly does: a warning (default) or an error (`--strict`).
+    pub status: StatusPolicy,
 }
 
 /// The largest number of states for which `port-est filter` runs a set-membership filter with an
@@ -60,10 +66,8 @@ pub enum GapPolicy {
 pub struct FilterSummary {
     /// The estimator's registry name.
     pub estimator: &'static str,
-    /// Steps run (rows written).
-    pub steps: u64,
-    /// Steps whose solver failed and that published a fallback (still certified) estimate.
-    pub fallbacks: u64,
+    /// How the steps ended (rows written, not converged, fallbacks…).
+    pub tally: StatusTally,
 }
 
 /// The registry entry of `estimator` and the solver to use, checked against each other.
@@ -71,34 +75,33 @@ pub struct FilterSummary {
 /// # Errors
 /// [`Error::Usage`] for an unknown estimator or solver, or a solver given to an estimator
 /// that has none.
-pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static EstimatorInfo, String), Error> {
+pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static EstimatorEntry, Option<SmfSolver>), Error> {
     let known = |names: &mut dyn Iterator<Item = &str>| names.collect::<Vec<_>>().join(", ");
-    let Some(info) = registry::info(estimator) else {
+    let Some(entry) = registry::entry(estimator) else {
         return Err(Error::Usage(format!(
             "unknown estimator {} (known: {})",
             echo(estimator),
-            known(&mut registry::LINEAR_ESTIMATORS.iter().map(|e| e.name))
+            known(&mut registry::ESTIMATORS.iter().map(|e| e.name))
         )));
     };
     let Some(solver) = solver else {
-        return Ok((info, TWO_MULTIPLIER.to_owned()));
+        return Ok((entry, None));
     };
-    if !info.uses_solver {
+    if !entry.settings.uses_smf_solver() {
         return Err(Error::Usage(format!(
             "--solver applies to the estimators that solve the SDP (29) ({}), not {}",
-            known(&mut registry::LINEAR_ESTIMATORS.iter().filter(|e| e.uses_solver).map(|e| e.name)),
-            info.name
+            known(&mut registry::ESTIMATORS.iter().filter(|e| e.settings.uses_smf_solver()).map(|e| e.name)),
+            entry.name
         )));
     }
-    let names = registry::solver_names();
-    if !names.contains(&solver) {
-        return Err(Error::Usage(format!(
+    match SmfSolver::by_name(solver) {
+        Ok(s) => Ok((entry, Some(s))),
+        Err(_) => Err(Error::Usage(format!(
             "unknown solver {} (known: {})",
             echo(solver),
-            known(&mut names.iter().copied())
-        )));
+            known(&mut SmfSolver::names().into_iter())
+        ))),
     }
-    Ok((info, solver.to_owned()))
 }
 
 /// Runs `options`: checks the options and the output, reads the model, streams the data
@@ -107,61 +110,84 @@ pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static Estimat
 ///
 /// # Errors
 /// Every [`Error`]: bad options, an output that would overwrite an input or cannot be written,
-/// malformed files (at their `file:line:column`), a step the estimator rejects.
+/// malformed files (at their `file:line:column`), a step the estimator rejects, and with
+/// [`StatusPolicy::Error`] a step that does not end cleanly.
 pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
-    let (info, solver) = select(&options.estimator, options.solver.as_deref())?;
+    let (entry, solver) = select(&options.estimator, options.solver.as_deref())?;
     let mut out = OutputFile::create(&options.output, &[("input", &options.input), ("model", &options.model)])?;
     let model = read_model(&options.model)?;
-    let mut data = DataReader::open(&options.input, model.inputs(), model.outputs())?;
+    let mut data = DataReader::open(&options.input, model.inputs(), entry.measurement_len(model.outputs()))?;
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
-    let summary = run_filter(&model, &mut data, info, &solver, &mut out, &options.output)?;
+    let summary = run_filter(&model, &mut data, entry, solver, options.status, &mut out, &options.output)?;
     out.commit()?;
     Ok(summary)
 }
 
-/// Builds the estimator `info` for `model` (the errors in the model file's terms).
-fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::BoxedLinearEstimator, Error> {
-    if info.needs_input_bounds && model.input_range.is_none() {
-        return Err(Error::File {
-            path: model.path().to_owned(),
-            message: format!("--estimator {} needs the input range `u_lower`, `u_upper` in the model file", info.name),
-        });
-    }
-    if info.uses_solver && solver != TWO_MULTIPLIER && model.states() > MAX_SDP_STATES {
+/// The settings of `entry` from the model file and the command line, in the model file's terms
+/// when something is missing (`None`: the row's defaults).
+fn settings(
+    model: &Model,
+    entry: &EstimatorEntry,
+    solver: Option<SmfSolver>,
+) -> Result<Option<EstimatorSettings>, Error> {
+    let needs = |what: &str| Error::File {
+        path: model.path().to_owned(),
+        message: format!("--estimator {} needs {what} in the model file (see README)", entry.name),
+    };
+    let smf = SetMembershipSettings { solver: solver.unwrap_or_default(), ..SetMembershipSettings::default() };
+    Ok(match entry.settings {
+        SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(smf)),
+        SettingsKind::SetMembershipInputBox => {
+            let Some((lower, upper)) = model.input_range.clone() else {
+                return Err(needs("the input range `u_lower`, `u_upper`"));
+            };
+            Some(EstimatorSettings::SetMembershipInputBox(smf, InputBox { lower, upper }))
+        }
+        SettingsKind::MovingHorizon => match &model.mhe {
+            Some(s) => Some(EstimatorSettings::MovingHorizon(Box::new(s.clone()))),
+            None => {
+                return Err(needs(
+                    "an `[mhe]` table (at least the noise boxes `w_lower`, `w_upper`, `v_lower`, `v_upper`)",
+                ));
+            }
+        },
+        _ => None,
+    })
+}
+
+/// Builds the estimator `entry` for `model` (the errors in the model file's terms).
+fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver>) -> Result<AnyEstimator, Error> {
+    if let Some(SmfSolver::Sdp { backend, .. }) = &solver
+        && model.states() > MAX_SDP_STATES
+    {
         let (n, m) = (model.states(), model.outputs());
         return Err(Error::Usage(format!(
-            "--solver {solver} solves LMI (28) at every step: for n = {n} states it has order {} and {} unknowns, \
+            "--solver {backend} solves LMI (28) at every step: for n = {n} states it has order {} and {} unknowns, \
              seconds to minutes per step; the SDP solvers are offered up to n = {MAX_SDP_STATES}. Use --solver {} \
              (exact, the same update at a few microseconds per step)",
             3 * n + 1 + m,
             n * (n + 1) / 2 + n * m + n + 3,
-            TWO_MULTIPLIER
+            SmfSolver::TWO_MULTIPLIER
         )));
     }
-    let noise = NoiseSettings::new(model.q.clone(), model.r.clone());
-    let mut setup = LinearSetup::new(model.x0.clone(), model.p0.clone(), noise, model.inputs());
-    setup.input_bounds.clone_from(&model.input_range);
-    setup.mhe.clone_from(&model.mhe);
-    if matches!(info.name, "rmhe" | "mhe") && model.mhe.is_none() {
-        return Err(Error::File {
-            path: model.path().to_owned(),
-            message: format!(
-                "--estimator {} needs an `[mhe]` table in the model file (at least the noise boxes `w_lower`, \
-                 `w_upper`, `v_lower`, `v_upper`; see README)",
-                info.name
-            ),
-        });
-    }
-    solver.clone_into(&mut setup.solver);
-    registry::linear(info.name, &setup).map_err(|e| match e {
-        EstimatorError::Lmi(_) | EstimatorError::UnknownEstimator { .. } | EstimatorError::MissingSetting { .. } => {
-            Error::Estimator(e)
-        }
+    let settings = settings(model, entry, solver)?;
+    let setup = Setup {
+        x0: model.x0.clone(),
+        p0: model.p0.clone(),
+        process_noise: model.q.clone(),
+        measurement_noise: model.r.clone(),
+        inputs: model.inputs(),
+    };
+    entry.build(setup, settings).map_err(|e| match e {
+        EstimatorError::Lmi(_)
+        | EstimatorError::UnknownEstimator { .. }
+        | EstimatorError::MissingSetting { .. }
+        | EstimatorError::WrongSettings { .. } => Error::Estimator(e),
         e => model.estimator_error(e),
     })
 }
 
-/// Runs the estimator `info` (with `solver`) over every row of `data`, writing the output CSV
+/// Runs the estimator `entry` (with `solver`) over every row of `data`, writing the output CSV
 /// to `out` row by row (`out_path` names it in errors).
 ///
 /// # Errors
@@ -169,70 +195,62 @@ fn build(model: &Model, info: &EstimatorInfo, solver: &str) -> Result<registry::
 pub fn run_filter<R: Read, W: Write>(
     model: &Model,
     data: &mut DataReader<R>,
-    info: &EstimatorInfo,
-    solver: &str,
+    entry: &'static EstimatorEntry,
+    solver: Option<SmfSolver>,
+    status: StatusPolicy,
     out: &mut W,
     out_path: &Path,
 ) -> Result<FilterSummary, Error> {
-    let mut est = build(model, info, solver)?;
+    let mut est = build(model, entry, solver)?;
     let wio = |e| Error::io(out_path, e);
-    let n = model.states();
-    let with_tau = est.estimate_dyn().multipliers().is_some();
-    let mut header = String::from("k");
-    for prefix in ["xhat", "lo", "hi"] {
-        for i in 1..=n {
-            header.push_str(&format!(",{prefix}{i}"));
-        }
-    }
-    header.push_str(if with_tau { ",trace,tau1,tau2,tau3" } else { ",trace" });
-    writeln!(out, "{header}").map_err(wio)?;
+    let columns = EstimateColumns::of(est.estimate());
+    writeln!(out, "k{}", columns.header()).map_err(wio)?;
 
     let sm = StepModel::new(&model.a, &model.b, &model.c);
-    let mut row = DataRow::zeros(model.inputs(), model.outputs());
-    let (mut steps, mut fallbacks) = (0, 0);
+    let mut row = DataRow::zeros(model.inputs(), entry.measurement_len(model.outputs()));
+    let mut tally = StatusTally::default();
     let mut last: Option<(u64, DVector<f64>)> = None;
     while data.read_row(&mut row)? {
         // A gap (only with `--gaps bridge`): prediction-only steps with the last input held.
         if let Some((last_k, last_u)) = &last {
             for missing in last_k + 1..row.k {
-                let e = est.predict_dyn(&sm, last_u).map_err(|source| Error::Step {
-                    at: data.locate(Some(0)),
-                    k: missing,
-                    source,
-                })?;
-                write_row(out, missing + 1, e, n, with_tau).map_err(wio)?;
-                steps += 1;
+                let e = est.predict(&sm, last_u).map_err(|source| step_error(source, data, missing))?;
+                enforce(status, e.status(), || data.locate(Some(0)), missing)?;
+                write!(out, "{}", missing + 1).map_err(wio)?;
+                columns.write(out, e).map_err(wio)?;
+                writeln!(out).map_err(wio)?;
+                tally.record(e.status());
             }
         }
         let Some(label) = row.k.checked_add(1) else {
             let message = format!("k = {} is too large (the output row is labelled k + 1)", row.k);
             return Err(Error::at(data.locate(Some(0)), message));
         };
-        let e = match est.step_dyn(&sm, &row.u, &row.y) {
+        let e = match est.step(&sm, &row.u, &row.y) {
             Ok(e) => e,
-            Err(source) => {
-                // Point at the cell at fault when the estimator says which; else at `k`.
-                let cell = match source {
-                    EstimatorError::InputOutsideBounds { index, .. } => 1 + index,
-                    _ => 0,
-                };
-                if let EstimatorError::NumericalFailure(what) = source {
-                    // Not this row's numbers: the model makes the estimate overflow or lose
-                    // positive definiteness (an unstable `a`, huge noise sizes…).
-                    let message = format!(
-                        "step k = {}: numerical failure: {what}; the cause is the model in {} (its `a`, `b`, `c`, `q`, \
-                         `r`, `p0`), not this row's numbers",
-                        row.k,
-                        model.path().display()
-                    );
-                    return Err(Error::At { at: data.locate(Some(cell)), message });
-                }
-                return Err(Error::Step { at: data.locate(Some(cell)), k: row.k, source });
+            Err(EstimatorError::NumericalFailure(what)) => {
+                // Not this row's numbers: the model makes the estimate overflow or lose
+                // positive definiteness (an unstable `a`, huge noise sizes…).
+                let message = format!(
+                    "step k = {}: numerical failure: {what}; the cause is the model in {} (its `a`, `b`, `c`, `q`, \
+                     `r`, `p0`), not this row's numbers",
+                    row.k,
+                    model.path().display()
+                );
+                return Err(Error::At { at: data.locate(Some(0)), message });
             }
+            Err(EstimatorError::Adaptive { index: Some(i), source }) => {
+                // The receiver status columns follow the model's inputs and outputs.
+                let at = data.locate(Some(1 + model.inputs() + i));
+                return Err(Error::At { at, message: format!("step k = {}: {source}", row.k) });
+            }
+            Err(source) => return Err(step_error(source, data, row.k)),
         };
-        write_row(out, label, e, n, with_tau).map_err(wio)?;
-        steps += 1;
-        fallbacks += u64::from(e.fallback_used());
+        enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
+        write!(out, "{label}").map_err(wio)?;
+        columns.write(out, e).map_err(wio)?;
+        writeln!(out).map_err(wio)?;
+        tally.record(e.status());
         match &mut last {
             Some((k, u)) => {
                 *k = row.k;
@@ -241,30 +259,7 @@ pub fn run_filter<R: Read, W: Write>(
             None => last = Some((row.k, row.u.clone())),
         }
     }
-    Ok(FilterSummary { estimator: info.name, steps, fallbacks })
-}
-
-/// One output row: `label`, the centre, the bounds, the trace and (if `with_tau`) `τ`.
-fn write_row<W: Write>(out: &mut W, label: u64, e: &dyn Estimate, n: usize, with_tau: bool) -> std::io::Result<()> {
-    write!(out, "{label}")?;
-    for v in e.center().iter() {
-        write!(out, ",{v:e}")?;
-    }
-    // `bounds(i)` is `Some` for every state `i < n` (the estimator was built for `n`).
-    for i in 0..n {
-        write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.0))?;
-    }
-    for i in 0..n {
-        write!(out, ",{:e}", e.bounds(i).map_or(f64::NAN, |b| b.1))?;
-    }
-    write!(out, ",{:e}", e.shape().trace())?;
-    if with_tau {
-        match e.multipliers() {
-            Some([t1, t2, t3]) => write!(out, ",{t1:e},{t2:e},{t3:e}")?,
-            None => write!(out, ",,,")?,
-        }
-    }
-    writeln!(out)
+    Ok(FilterSummary { estimator: entry.name, tally })
 }
 
 #[cfg(test)]
@@ -275,12 +270,23 @@ mod tests {
     const MODEL: &str = "a = [[1.0, 0.01], [0.0, 0.99]]\nb = [[0.0], [0.01]]\nc = [[1.0, 0.0]]\nq = [[1e-4, 0.0], [0.0, 1e-4]]\nr = [[1e-2]]\np0 = [[1.0, 0.0], [0.0, 1.0]]\nx0 = [0.0, 0.0]\n";
 
     fn run(model: &str, data: &str, estimator: &str, solver: Option<&str>) -> Result<String, Error> {
+        run_with(model, data, estimator, solver, StatusPolicy::Warn).map(|(text, _)| text)
+    }
+
+    fn run_with(
+        model: &str,
+        data: &str,
+        estimator: &str,
+        solver: Option<&str>,
+        status: StatusPolicy,
+    ) -> Result<(String, FilterSummary), Error> {
         let model = parse_model(Path::new("m.toml"), model)?;
-        let mut data = DataReader::from_text(Path::new("d.csv"), data, model.inputs(), model.outputs())?;
-        let (info, solver) = select(estimator, solver)?;
+        let (entry, solver) = select(estimator, solver)?;
+        let m = entry.measurement_len(model.outputs());
+        let mut data = DataReader::from_text(Path::new("d.csv"), data, model.inputs(), m)?;
         let mut out = Vec::new();
-        run_filter(&model, &mut data, info, &solver, &mut out, Path::new("o.csv"))?;
-        Ok(String::from_utf8(out).unwrap())
+        let s = run_filter(&model, &mut data, entry, solver, status, &mut out, Path::new("o.csv"))?;
+        Ok((String::from_utf8(out).unwrap(), s))
     }
 
     fn ramp(rows: u64) -> String {
@@ -297,10 +303,16 @@ mod tests {
             let csv = run(MODEL, &ramp(30), est, solver).unwrap();
             let lines: Vec<&str> = csv.lines().collect();
             assert_eq!(lines.len(), 31, "{est}");
-            assert!(lines[0].starts_with("k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace"));
-            assert_eq!(lines[0].ends_with(",tau1,tau2,tau3"), est != "kf");
+            if est == "kf" {
+                assert_eq!(lines[0], "k,xhat1,xhat2,sd1,sd2,trace_cov,status");
+                assert!(lines[30].ends_with(",converged"), "{}", lines[30]);
+                continue;
+            }
+            assert_eq!(lines[0], "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,status");
             assert!(lines[1].starts_with("1,"));
-            let last: Vec<f64> = lines[30].split(',').map(|v| v.parse().unwrap()).collect();
+            let last: Vec<&str> = lines[30].split(',').collect();
+            assert_eq!(last[11], "converged", "{est}");
+            let last: Vec<f64> = last[..11].iter().map(|v| v.parse().unwrap()).collect();
             assert!(last[3] <= last[1] && last[1] <= last[5], "{est}: lo ≤ xhat ≤ hi");
         }
     }
@@ -363,18 +375,21 @@ mod tests {
                 .collect();
             let mut data = DataReader::from_text(Path::new("d.csv"), gap, 1, 1).unwrap();
             data.set_allow_gaps(true);
-            let (info, solver) = select(est, None).unwrap();
+            let (entry, solver) = select(est, None).unwrap();
             let mut out = Vec::new();
-            let s = run_filter(&model, &mut data, info, &solver, &mut out, Path::new("o.csv")).unwrap();
-            assert_eq!(s.steps, 6, "{est}");
+            let s =
+                run_filter(&model, &mut data, entry, solver, StatusPolicy::Warn, &mut out, Path::new("o.csv")).unwrap();
+            assert_eq!((s.tally.steps, s.tally.predicted), (6, 2), "{est}");
             let text = String::from_utf8(out).unwrap();
             let rows: Vec<Vec<f64>> =
                 text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
             let labels: Vec<f64> = rows.iter().map(|r| r[0]).collect();
             assert_eq!(labels, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "{est}");
-            // Without their measurements the bridged steps 3 and 4 publish larger sets (trace,
-            // column 7) than the same steps with them.
-            assert!(rows[2][7] > all[2][7] && rows[3][7] > all[3][7], "{est}: {text}");
+            // Without their measurements the bridged steps 3 and 4 publish larger sets (trace:
+            // column 7 for the set, 5 for the covariance) than the same steps with them.
+            let t = if est == "kf" { 5 } else { 7 };
+            assert!(rows[2][t] > all[2][t] && rows[3][t] > all[3][t], "{est}: {text}");
+            assert!(text.lines().nth(3).unwrap().ends_with(",predicted"), "{text}");
         }
     }
 

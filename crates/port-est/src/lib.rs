@@ -22,6 +22,7 @@ pub mod filter;
 mod mhe_table;
 pub mod model;
 pub mod output;
+pub mod run;
 pub mod truck;
 
 use std::io::{self, Write};
@@ -30,50 +31,50 @@ pub use cli::{Cli, Command, FilterArgs};
 pub use error::{Error, Location};
 pub use filter::{FilterOptions, FilterSummary, GapPolicy, filter};
 pub use model::{Model, parse_model, read_model};
+pub use run::{StatusPolicy, StatusTally};
 
 use estimators::registry;
 
-/// Runs a parsed command line: `filter` reports what it wrote on `stderr`, `estimators` lists
-/// the registry on `stdout` (a closed pipe is not an error).
+/// Runs a parsed command line: `filter`, `truck` and `bds-ins` report what they wrote on
+/// `stderr`, with one warning per kind of step that did not end cleanly (not converged, fallback,
+/// relaxed, inconsistent data, no longer guaranteed; `--strict` makes them errors); `estimators`
+/// lists the registry on `stdout` (a closed pipe is not an error).
 ///
 /// # Errors
 /// The command's [`Error`].
 pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Result<(), Error> {
+    // A closed stderr is no reason to fail a run whose output is written.
+    let mut report = |what: String, tally: &StatusTally| {
+        let _ = writeln!(stderr, "{what}");
+        for w in tally.warnings() {
+            let _ = writeln!(stderr, "{w}");
+        }
+    };
     match cli.command {
         Command::Filter(args) => {
             let options = FilterOptions::from(args);
             let s = filter(&options)?;
-            let fallbacks = match s.fallbacks {
-                0 => String::new(),
-                f => format!(" ({f} steps fell back to a feasible τ after a solver failure)"),
-            };
-            // A closed stderr is no reason to fail a run whose output is written.
-            let _ = writeln!(
-                stderr,
-                "{} steps of {} written to {}{fallbacks}",
-                s.steps,
-                s.estimator,
-                options.output.display()
-            );
+            let what = format!("{} steps of {} written to {}", s.tally.steps, s.estimator, options.output.display());
+            report(what, &s.tally);
             Ok(())
         }
         Command::Truck(args) => {
             let options = truck::TruckOptions::from(args);
-            let steps = truck::truck(&options)?;
-            let _ = writeln!(stderr, "{steps} steps of ekf written to {}", options.output.display());
+            let tally = truck::truck(&options)?;
+            report(format!("{} steps of the EKF written to {}", tally.steps, options.output.display()), &tally);
             Ok(())
         }
         Command::BdsIns(args) => {
             let options = bds_ins::BdsInsOptions::from(args);
             let s = bds_ins::bds_ins(&options)?;
             let filter = if options.fuzzy { "the fuzzy-adaptive Kalman filter" } else { "the Kalman filter" };
-            let _ = writeln!(
-                stderr,
+            let what = format!(
                 "{} epochs ({} without a fix) of {filter} written to {}",
                 s.epochs,
                 s.outages,
                 options.output.display()
             );
+            report(what, &s.tally);
             Ok(())
         }
         Command::Estimators => match write_estimators(stdout) {
@@ -83,33 +84,33 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
     }
 }
 
-/// Writes the registry: every estimator with its kind and summary, then the solvers.
+/// Writes the registry: every estimator with its kind, the model it needs and its settings, then
+/// the solvers.
 ///
 /// # Errors
 /// When `w` fails.
 pub fn write_estimators(w: &mut dyn Write) -> io::Result<()> {
-    let width = registry::LINEAR_ESTIMATORS.iter().map(|e| e.name.len()).max().unwrap_or(0);
+    let width = registry::ESTIMATORS.iter().map(|e| e.name.len()).max().unwrap_or(0);
     writeln!(w, "Estimators (--estimator NAME, default smf):")?;
-    for e in registry::LINEAR_ESTIMATORS {
-        let mut notes = vec![e.kind.label()];
-        if e.uses_solver {
-            notes.push("uses --solver");
+    for e in registry::ESTIMATORS {
+        let mut notes = vec![e.kind.label().to_owned(), format!("needs a {} model", e.needs.label())];
+        if e.settings.uses_smf_solver() {
+            notes.push("uses --solver".into());
         }
-        if e.needs_input_bounds {
-            notes.push("needs u_lower, u_upper");
+        match e.settings {
+            registry::SettingsKind::SetMembershipInputBox => notes.push("needs u_lower, u_upper".into()),
+            registry::SettingsKind::MovingHorizon => notes.push("needs an [mhe] table".into()),
+            _ => {}
+        }
+        if e.extra_measurements > 0 {
+            notes.push(format!("{} extra measurement columns", e.extra_measurements));
         }
         writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, notes.join("; "))?;
     }
     writeln!(w)?;
-    writeln!(w, "Estimators of nonlinear models in the library's registry (port-est truck runs ekf):")?;
-    for e in registry::DIFFERENTIABLE_ESTIMATORS.iter().chain(registry::NONLINEAR_ESTIMATORS) {
-        writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, e.kind.label())?;
-    }
-    writeln!(w)?;
-    writeln!(w, "Solvers (--solver NAME, default {}):", registry::TWO_MULTIPLIER)?;
-    for s in registry::solver_names() {
-        let what = if s == registry::TWO_MULTIPLIER { "exact two-multiplier method (fastest)" } else { "SDP backend" };
-        writeln!(w, "  {s:width$}  {what}")?;
+    writeln!(w, "Solvers (--solver NAME, default {}):", registry::SmfSolver::TWO_MULTIPLIER)?;
+    for s in registry::SmfSolver::names() {
+        writeln!(w, "  {s:width$}  {}", registry::SmfSolver::summary(s))?;
     }
     Ok(())
 }

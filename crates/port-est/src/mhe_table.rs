@@ -11,7 +11,7 @@ use estimators::mhe::{
     AlphaMap, ArrivalRecursion, BlockWeighting, BlockingPreset, InnerSolver, MheCost, MheSettings, PriorMean,
     WindowSolver,
 };
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -65,19 +65,12 @@ fn vector(v: &Spanned<Vec<f64>>, key: &str, len: usize, allow_infinite: bool) ->
 }
 
 impl MheTable {
-    /// The settings for a model with prior `(x0, p0)` and noise weights `q`, `r`, and the spans of
-    /// the keys given (for later complaints).
-    pub(crate) fn settings(
-        &self,
-        x0: &DVector<f64>,
-        p0: &DMatrix<f64>,
-        q: &DMatrix<f64>,
-        r: &DMatrix<f64>,
-    ) -> Result<(MheSettings, KeySpans), Complaint> {
-        let (n, m) = (x0.len(), r.nrows());
+    /// The settings for a model with `n` states and `m` outputs (the prior and the weights are
+    /// the model's `x0`, `p0`, `q`, `r`), and the spans of the keys given (for later complaints).
+    pub(crate) fn settings(&self, n: usize, m: usize) -> Result<(MheSettings, KeySpans), Complaint> {
         let w = (vector(&self.w_lower, "w_lower", n, true)?, vector(&self.w_upper, "w_upper", n, true)?);
         let v = (vector(&self.v_lower, "v_lower", m, false)?, vector(&self.v_upper, "v_upper", m, false)?);
-        let mut s = MheSettings::new(x0.clone(), p0.clone(), q.clone(), r.clone(), w, v);
+        let mut s = MheSettings::new(w, v);
         let horizon = self.horizon.as_ref().map_or(s.horizon, |h| *h.get_ref());
         s.horizon = horizon;
         s.blocks = match (&self.preset, &self.blocks) {

@@ -300,7 +300,7 @@ pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
         Some(table) => {
             let (settings, spans) = table
                 .get_ref()
-                .settings(&x0, &p0, &q, &r)
+                .settings(x0.len(), r.nrows())
                 .map_err(|(span, message)| Error::at(cx.at(span), message))?;
             let (line, column) = line_col(text, table.span().start);
             keys.push(("mhe", line, column));

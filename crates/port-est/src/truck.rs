@@ -21,8 +21,8 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimators::NoiseSettings;
-use estimators::registry::{self, GaussianSetup};
+use estimators::registry::{self, names};
+use estimators::{AnyEstimator, Setup};
 use models::DiscreteModel;
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
@@ -31,6 +31,7 @@ use truck_dynamics::{TruckEkfModel, TruckParams};
 use crate::data::{DataReader, DataRow};
 use crate::error::Error;
 use crate::output::OutputFile;
+use crate::run::{StatusPolicy, StatusTally, enforce};
 
 /// What `port-est truck` needs.
 #[derive(Debug, Clone)]
@@ -41,6 +42,8 @@ pub struct TruckOptions {
     pub output: PathBuf,
     /// Optional settings file.
     pub config: Option<PathBuf>,
+    /// What a step that does not end cleanly does.
+    pub status: StatusPolicy,
 }
 
 /// The settings file, as written.
@@ -101,7 +104,7 @@ fn read_config(path: Option<&Path>) -> Result<Settings, Error> {
 /// # Errors
 /// Every [`Error`]: the output checks, a malformed settings or data file (at its
 /// `file:line:column`), a step the filter or the model rejects (at its data row).
-pub fn truck(options: &TruckOptions) -> Result<u64, Error> {
+pub fn truck(options: &TruckOptions) -> Result<StatusTally, Error> {
     let mut inputs: Vec<(&'static str, &Path)> = vec![("input", &options.input)];
     if let Some(c) = &options.config {
         inputs.push(("config", c));
@@ -109,9 +112,10 @@ pub fn truck(options: &TruckOptions) -> Result<u64, Error> {
     let mut out = OutputFile::create(&options.output, &inputs)?;
     let settings = read_config(options.config.as_deref())?;
     let mut data = DataReader::open(&options.input, 7, 3)?;
-    let steps = run_truck(&settings_model(&settings)?, &settings, &mut data, &mut out, &options.output)?;
+    let tally =
+        run_truck(&settings_model(&settings)?, &settings, options.status, &mut data, &mut out, &options.output)?;
     out.commit()?;
-    Ok(steps)
+    Ok(tally)
 }
 
 fn settings_model(s: &Settings) -> Result<TruckEkfModel, Error> {
@@ -121,43 +125,56 @@ fn settings_model(s: &Settings) -> Result<TruckEkfModel, Error> {
 fn run_truck<R: Read, W: Write>(
     model: &TruckEkfModel,
     s: &Settings,
+    status: StatusPolicy,
     data: &mut DataReader<R>,
     out: &mut W,
     out_path: &Path,
-) -> Result<u64, Error> {
+) -> Result<StatusTally, Error> {
     let wio = |e| Error::io(out_path, e);
-    writeln!(out, "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma").map_err(wio)?;
+    writeln!(out, "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma,status").map_err(wio)?;
     let mut row = DataRow::zeros(7, 3);
-    let mut est: Option<registry::BoxedDifferentiableEstimator> = None;
-    let mut steps = 0;
+    let mut est: Option<AnyEstimator> = None;
+    let mut tally = StatusTally::default();
     while data.read_row(&mut row)? {
         if est.is_none() {
             let x0 = s.x0.clone().unwrap_or_else(|| DVector::from_vec(vec![row.y[0], 0.0, row.y[2]]));
-            let setup = GaussianSetup {
+            let setup = Setup {
                 x0,
                 p0: s.p0.clone(),
-                noise: NoiseSettings::new(s.q.clone(), s.r.clone()),
+                process_noise: s.q.clone(),
+                measurement_noise: s.r.clone(),
                 inputs: model.dims().inputs,
             };
-            est = Some(registry::differentiable("ekf", &setup).map_err(Error::Estimator)?);
+            est = Some(registry::build(names::EKF, setup, None).map_err(Error::Estimator)?);
         }
         let Some(f) = est.as_mut() else { break };
-        let e = f.step_dyn(model, &row.u, &row.y).map_err(|source| Error::Step {
+        let e = f.step(model, &row.u, &row.y).map_err(|source| Error::Step {
             at: data.locate(Some(0)),
             k: row.k,
             source,
         })?;
+        enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
+        tally.record(e.status());
         let Some(label) = row.k.checked_add(1) else {
             return Err(Error::at(data.locate(Some(0)), format!("k = {} is too large", row.k)));
         };
         let c = e.center();
         let beta = (c[1] / c[0]).atan();
         let sd = |i: usize| e.shape()[(i, i)].max(0.0).sqrt();
-        writeln!(out, "{label},{:e},{:e},{:e},{beta:e},{:e},{:e},{:e}", c[0], c[1], c[2], sd(0), sd(1), sd(2))
-            .map_err(wio)?;
-        steps += 1;
+        writeln!(
+            out,
+            "{label},{:e},{:e},{:e},{beta:e},{:e},{:e},{:e},{}",
+            c[0],
+            c[1],
+            c[2],
+            sd(0),
+            sd(1),
+            sd(2),
+            e.status()
+        )
+        .map_err(wio)?;
     }
-    Ok(steps)
+    Ok(tally)
 }
 
 #[cfg(test)]
@@ -194,14 +211,15 @@ mod tests {
         let model = settings_model(&settings).unwrap();
         let mut data = DataReader::from_text(Path::new("truck.csv"), &text, 7, 3).unwrap();
         let mut out = Vec::new();
-        let steps = run_truck(&model, &settings, &mut data, &mut out, Path::new("o.csv")).unwrap();
-        assert_eq!(steps as usize, betas.len());
+        let tally = run_truck(&model, &settings, StatusPolicy::Warn, &mut data, &mut out, Path::new("o.csv")).unwrap();
+        assert_eq!((tally.steps as usize, tally.unclean()), (betas.len(), 0));
         let out = String::from_utf8(out).unwrap();
         let lines: Vec<&str> = out.lines().collect();
-        assert_eq!(lines[0], "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma");
+        assert_eq!(lines[0], "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma,status");
         let mut sq = 0.0;
         for (line, beta) in lines[1..].iter().zip(&betas).skip(1000) {
-            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            assert!(line.ends_with(",converged"), "{line}");
+            let v: Vec<f64> = line.split(',').take(8).map(|x| x.parse().unwrap()).collect();
             sq += (v[4] - beta).powi(2);
         }
         let rmse = (sq / (betas.len() - 1000) as f64).sqrt().to_degrees();
@@ -215,7 +233,9 @@ mod tests {
         // V_x = 0 in the first measurement: the model divides by it.
         let text = "k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n0,0,0,0,0,0,0,0,0,0,0\n";
         let mut data = DataReader::from_text(Path::new("t.csv"), text, 7, 3).unwrap();
-        let e = run_truck(&model, &settings, &mut data, &mut Vec::new(), Path::new("o.csv")).unwrap_err().to_string();
+        let e = run_truck(&model, &settings, StatusPolicy::Warn, &mut data, &mut Vec::new(), Path::new("o.csv"))
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("t.csv:2:1: step k = 0: model: "), "{e}");
         // A wrong header names the expected column.
         let e = DataReader::from_text(Path::new("t.csv"), "k,delta\n", 7, 3).unwrap_err().to_string();

@@ -17,7 +17,15 @@ fn out_dir() -> PathBuf {
 }
 
 fn options(input: PathBuf, output: PathBuf) -> BdsInsOptions {
-    BdsInsOptions { input, output, config: None, fis: None, fuzzy: true, rtk_coding: RtkCoding::Paper }
+    BdsInsOptions {
+        input,
+        output,
+        config: None,
+        fis: None,
+        fuzzy: true,
+        rtk_coding: RtkCoding::Paper,
+        status: port_est::StatusPolicy::Warn,
+    }
 }
 
 #[test]

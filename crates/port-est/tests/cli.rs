@@ -34,10 +34,10 @@ fn estimators_lists_the_registry_and_the_solvers() {
     let out = port_est(&["estimators"]);
     assert!(out.status.success());
     let list = text(&out.stdout);
-    for e in estimators::registry::LINEAR_ESTIMATORS {
+    for e in estimators::registry::ESTIMATORS {
         assert!(list.contains(e.name) && list.contains(e.summary), "{}", e.name);
     }
-    for s in estimators::registry::solver_names() {
+    for s in estimators::registry::SmfSolver::names() {
         assert!(list.contains(s), "{s}");
     }
 }
@@ -49,7 +49,7 @@ fn usage_errors_exit_2_and_run_errors_exit_1() {
     let out = port_est(&["filter", "--model", "m.toml"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("--input <DATA.csv>"));
-    let out = port_est(&["filter", "-m", "m", "-i", "d", "-o", "o", "--estimator", "ukf"]);
+    let out = port_est(&["filter", "-m", "m", "-i", "d", "-o", "o", "--estimator", "nope"]);
     assert_eq!(out.status.code(), Some(2));
 
     let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter");

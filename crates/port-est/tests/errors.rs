@@ -32,6 +32,7 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
         estimator: "smf".into(),
         solver: None,
         gaps: port_est::GapPolicy::Error,
+        status: port_est::StatusPolicy::Warn,
     };
     (dir, options)
 }

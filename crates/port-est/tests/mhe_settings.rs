@@ -44,8 +44,9 @@ fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
         estimator: estimator.into(),
         solver: None,
         gaps: GapPolicy::Error,
+        status: port_est::StatusPolicy::Warn,
     })
-    .map(|s| s.steps)
+    .map(|s| s.tally.steps)
     .map_err(|e| e.to_string());
     if r.is_err() {
         assert!(!output.exists(), "{name}: no output on error");

@@ -1,41 +1,28 @@
-//! A reusable closed-loop runner: plant → measurement → observer → controller → plant
-//! (docs/dp-vessel.md §3, "closed loop"), generic over any [`DiscreteModel`] plant, an
-//! [`Observer`] and a [`Controller`].
+//! A reusable closed-loop runner: plant → measurement → estimator → controller → plant
+//! (docs/dp-vessel.md §3, "closed loop"), generic over any [`DiscreteModel`] plant, any
+//! estimator of the `estimators` crate (its object-safe [`DynEstimator`] face, over the model the
+//! estimator is given, which may differ from the plant) and a [`Controller`].
 //!
 //! One run, for `k = 0 … steps − 1`:
 //!
 //! ```text
-//! τ_k      = controller(k, x̂_k)                 (x̂_0: the observer's initial estimate)
+//! τ_k      = controller(k, x̂_k)                 (x̂_0: the estimator's initial estimate)
 //! x_{k+1}  = f(x_k, τ_k + w_τ,k) + w_k            (input noise w_τ, e.g. force noise; process noise w)
 //! z_{k+1}  = h(x_{k+1}, τ_k) + v_{k+1}
-//! x̂_{k+1}  = observer(τ_k, z_{k+1})               (the estimator convention: u_k, then y_{k+1})
+//! x̂_{k+1}  = estimator.step(τ_k, z_{k+1})         (the estimator convention: u_k, then y_{k+1})
 //! ```
 //!
-//! The observer sees the commanded `τ_k`, never the noise. `z_0` is drawn and recorded (for
-//! tables of raw measurements) but not given to the observer, whose `x̂_0` is its prior. The three
+//! The estimator sees the commanded `τ_k`, never the noise. `z_0` is drawn and recorded (for
+//! tables of raw measurements) but not given to the estimator, whose `x̂_0` is its prior. The three
 //! noises come from independent streams of one seed (xoshiro256** jumps), so a seed reproduces a
 //! run.
 
 use std::time::Instant;
 
+use estimators::{DynEstimator, EstimatorError};
 use models::{DiscreteModel, ModelError, Noise, Xoshiro256StarStar};
 use nalgebra::DVector;
 use thiserror::Error;
-
-/// A state observer in the loop: anything that turns inputs and measurements into a state
-/// estimate (a Kalman filter, an MHE, …; estimators plug in through an adapter).
-pub trait Observer {
-    /// The observer's error.
-    type Error: std::error::Error + Send + Sync + 'static;
-    /// The current estimate `x̂_k` (before the first update: the prior `x̂_0`).
-    fn estimate(&self) -> &DVector<f64>;
-    /// Consumes the input `u_k` and the measurement `z_{k+1}`; afterwards [`Observer::estimate`]
-    /// is `x̂_{k+1}`.
-    ///
-    /// # Errors
-    /// Whatever the observer rejects.
-    fn update(&mut self, u: &DVector<f64>, z: &DVector<f64>) -> Result<(), Self::Error>;
-}
 
 /// A controller in the loop.
 pub trait Controller {
@@ -102,8 +89,8 @@ pub struct LoopRecord {
     pub reference_dim: usize,
     /// Per step and input: whether `|u_i|` reached its limit (empty without limits).
     pub saturated: Vec<bool>,
-    /// Wall time of each observer update \[s\] (`steps` entries).
-    pub observer_seconds: Vec<f64>,
+    /// Wall time of each estimator step \[s\] (`steps` entries).
+    pub estimator_seconds: Vec<f64>,
 }
 
 impl LoopRecord {
@@ -148,7 +135,7 @@ impl LoopRecord {
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum ClosedLoopError {
-    /// A dimension of the configuration, the observer or the controller does not match the plant.
+    /// A dimension of the configuration, the estimator or the controller does not match the plant.
     #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
     DimensionMismatch {
         /// What has the wrong size.
@@ -180,13 +167,13 @@ pub enum ClosedLoopError {
         /// The first step with a non-finite state.
         step: usize,
     },
-    /// The observer refused an update.
-    #[error("observer at step {step}: {source}")]
-    Observer {
+    /// The estimator refused a step.
+    #[error("estimator at step {step}: {source}")]
+    Estimator {
         /// The step.
         step: usize,
-        /// The observer's error.
-        source: Box<dyn std::error::Error + Send + Sync>,
+        /// The estimator's error.
+        source: EstimatorError,
     },
     /// The controller failed.
     #[error("controller at step {step}: {source}")]
@@ -218,22 +205,26 @@ fn check_dim(what: &'static str, expected: usize, found: usize) -> Result<(), Cl
 ///
 /// # Errors
 /// [`ClosedLoopError`] naming the mismatched dimension, invalid setting, or the step at which the
-/// plant, observer or controller failed.
-pub fn run_closed_loop<P, O, C>(
+/// plant, estimator or controller failed.
+pub fn run_closed_loop<P, M, E, C>(
     plant: &P,
-    observer: &mut O,
+    model: &M,
+    estimator: &mut E,
     controller: &mut C,
     config: &LoopConfig,
 ) -> Result<LoopRecord, ClosedLoopError>
 where
     P: DiscreteModel + ?Sized,
-    O: Observer + ?Sized,
+    M: ?Sized,
+    E: DynEstimator<M> + ?Sized,
     C: Controller + ?Sized,
 {
     let dims = plant.dims();
     let (n, p, m) = (dims.states, dims.inputs, dims.outputs);
     check_dim("x0", n, config.x0.len())?;
-    check_dim("observer estimate", n, observer.estimate().len())?;
+    check_dim("estimator states", n, estimator.estimate_dyn().center().len())?;
+    check_dim("estimator inputs", p, estimator.dims_dyn().inputs)?;
+    check_dim("estimator measurements", m, estimator.dims_dyn().outputs)?;
     check_dim("controller inputs", p, controller.input_dim())?;
     check_dim("input noise", p, config.input_noise.dim())?;
     check_dim("process noise", n, config.process_noise.dim())?;
@@ -272,7 +263,7 @@ where
         references: Vec::new(),
         reference_dim: 0,
         saturated: Vec::new(),
-        observer_seconds: Vec::with_capacity(steps),
+        estimator_seconds: Vec::with_capacity(steps),
     };
     let mut x = config.x0.clone();
     let mut x_next = DVector::zeros(n);
@@ -287,10 +278,10 @@ where
     measure(&x, &u, &mut z, &mut rng_meas, 0)?;
     rec.states.extend(x.iter());
     rec.measurements.extend(z.iter());
-    rec.estimates.extend(observer.estimate().iter());
+    rec.estimates.extend(estimator.estimate_dyn().center().iter());
     for k in 0..steps {
         controller
-            .control(k, observer.estimate(), &mut u)
+            .control(k, estimator.estimate_dyn().center(), &mut u)
             .map_err(|e| ClosedLoopError::Controller { step: k, source: Box::new(e) })?;
         check_dim("controller output", p, u.len())?;
         if let Some(limits) = controller.input_limits() {
@@ -321,12 +312,11 @@ where
         std::mem::swap(&mut x, &mut x_next);
         measure(&x, &u, &mut z, &mut rng_meas, k + 1)?;
         let t0 = Instant::now();
-        observer.update(&u, &z).map_err(|e| ClosedLoopError::Observer { step: k + 1, source: Box::new(e) })?;
-        rec.observer_seconds.push(t0.elapsed().as_secs_f64());
-        check_dim("observer estimate", n, observer.estimate().len())?;
+        estimator.step_dyn(model, &u, &z).map_err(|source| ClosedLoopError::Estimator { step: k + 1, source })?;
+        rec.estimator_seconds.push(t0.elapsed().as_secs_f64());
         rec.states.extend(x.iter());
         rec.measurements.extend(z.iter());
-        rec.estimates.extend(observer.estimate().iter());
+        rec.estimates.extend(estimator.estimate_dyn().center().iter());
     }
     Ok(rec)
 }

@@ -9,10 +9,10 @@
 //!   thrust limits;
 //! * [`reference`](mod@reference): the set point, as a literal step (run A) or through the third-order reference
 //!   filter (run B, assumed);
-//! * [`closed_loop`]: a reusable closed-loop runner — plant → measurement → [`Observer`] →
-//!   [`Controller`] → plant — generic over any [`models::DiscreteModel`] plant; estimators plug
-//!   in through a small adapter implementing [`Observer`] (this crate does not depend on
-//!   `estimators`).
+//! * [`closed_loop`]: a reusable closed-loop runner — plant → measurement → estimator →
+//!   [`Controller`] → plant — generic over any [`models::DiscreteModel`] plant and any estimator
+//!   of the `estimators` crate (through [`estimators::DynEstimator`], so a registry estimator
+//!   chosen by name plugs in as it is).
 //!
 //! # Example
 //!
@@ -32,7 +32,7 @@ pub mod error;
 pub mod nsampc;
 pub mod reference;
 
-pub use closed_loop::{ClosedLoopError, Controller, LoopConfig, LoopRecord, Observer, run_closed_loop};
+pub use closed_loop::{ClosedLoopError, Controller, LoopConfig, LoopRecord, run_closed_loop};
 pub use error::ControlError;
 pub use nsampc::{
     ControlOutput, Gains, LieDerivatives, Nsampc, NsampcParams, Saturation, VesselController, lie_derivatives,

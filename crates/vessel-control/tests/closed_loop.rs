@@ -2,30 +2,74 @@
 //! brings the vessel to (50 m, 50 m, 0°) and holds it there, the thrust never leaves its
 //! limits, and bad settings are typed errors.
 
+use estimators::{Dims, Estimate, EstimateKind, Estimator, EstimatorError, SolveOutcome, StepDetails, StepStatus};
 use models::{DiscreteModel, ModelError, Noise};
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use vessel_control::{
-    ClosedLoopError, Controller, LoopConfig, LoopRecord, Nsampc, NsampcParams, Observer, ReferenceFilter, SetPoint,
+    ClosedLoopError, Controller, LoopConfig, LoopRecord, Nsampc, NsampcParams, ReferenceFilter, SetPoint,
     VesselController, run_closed_loop,
 };
 use vessel_dynamics::{DiscreteVessel, ThrustLimits, VesselParams};
 
-/// Open-loop prediction with the plant's own model: exact when there is no noise.
+/// Open-loop prediction with the plant's own model: exact when there is no noise. A point
+/// estimate whose every step is a prediction.
 struct Predictor {
-    model: DiscreteVessel,
-    x: DVector<f64>,
+    est: Predicted,
     next: DVector<f64>,
 }
 
-impl Observer for Predictor {
-    type Error = ModelError;
-    fn estimate(&self) -> &DVector<f64> {
+struct Predicted {
+    x: DVector<f64>,
+    weight: DMatrix<f64>,
+}
+
+impl Estimate for Predicted {
+    fn kind(&self) -> EstimateKind {
+        EstimateKind::Point
+    }
+    fn center(&self) -> &DVector<f64> {
         &self.x
     }
-    fn update(&mut self, u: &DVector<f64>, _z: &DVector<f64>) -> Result<(), ModelError> {
-        self.model.f(&self.x, u, &mut self.next)?;
-        std::mem::swap(&mut self.x, &mut self.next);
-        Ok(())
+    fn shape(&self) -> &DMatrix<f64> {
+        &self.weight
+    }
+    fn status(&self) -> StepStatus {
+        StepStatus::unchecked(SolveOutcome::Predicted)
+    }
+    fn details(&self) -> StepDetails {
+        StepDetails::None
+    }
+}
+
+impl Predictor {
+    fn new(n: usize) -> Self {
+        Self { est: Predicted { x: DVector::zeros(n), weight: DMatrix::identity(n, n) }, next: DVector::zeros(n) }
+    }
+}
+
+impl Estimator<DiscreteVessel> for Predictor {
+    type Estimate = Predicted;
+    fn step(
+        &mut self,
+        model: &DiscreteVessel,
+        u: &DVector<f64>,
+        _y: &DVector<f64>,
+    ) -> Result<&Predicted, EstimatorError> {
+        self.predict(model, u)
+    }
+    fn predict(&mut self, model: &DiscreteVessel, u: &DVector<f64>) -> Result<&Predicted, EstimatorError> {
+        model.f(&self.est.x, u, &mut self.next)?;
+        std::mem::swap(&mut self.est.x, &mut self.next);
+        Ok(&self.est)
+    }
+    fn update(&mut self, _model: &DiscreteVessel, _y: &DVector<f64>) -> Result<&Predicted, EstimatorError> {
+        Ok(&self.est)
+    }
+    fn estimate(&self) -> &Predicted {
+        &self.est
+    }
+    fn dims(&self) -> Dims {
+        Dims::new(self.est.x.len(), 3, 3)
     }
 }
 
@@ -43,7 +87,7 @@ fn config(steps: usize) -> LoopConfig {
 
 fn run(filtered: bool, steps: usize) -> LoopRecord {
     let plant = DiscreteVessel::paper(VesselParams::paper()).unwrap();
-    let mut obs = Predictor { model: plant.clone(), x: DVector::zeros(6), next: DVector::zeros(6) };
+    let mut obs = Predictor::new(6);
     let target = Vector3::new(50.0, 50.0, 0.0);
     let set_point = if filtered {
         SetPoint::filtered(target, ReferenceFilter::new(0.07, 0.1, Vector3::zeros()).unwrap()).unwrap()
@@ -52,7 +96,7 @@ fn run(filtered: bool, steps: usize) -> LoopRecord {
     };
     let mut ctrl =
         VesselController::new(Nsampc::new(&VesselParams::paper(), NsampcParams::paper()).unwrap(), set_point);
-    run_closed_loop(&plant, &mut obs, &mut ctrl, &config(steps)).unwrap()
+    run_closed_loop(&plant, &plant, &mut obs, &mut ctrl, &config(steps)).unwrap()
 }
 
 fn check_limits(rec: &LoopRecord) -> f64 {
@@ -109,7 +153,7 @@ impl Controller for Lazy {
 #[test]
 fn bad_settings_are_typed_errors() {
     let plant = DiscreteVessel::paper(VesselParams::paper()).unwrap();
-    let mut obs = Predictor { model: plant.clone(), x: DVector::zeros(6), next: DVector::zeros(6) };
+    let mut obs = Predictor::new(6);
     let mut ctrl = VesselController::new(
         Nsampc::new(&VesselParams::paper(), NsampcParams::paper()).unwrap(),
         SetPoint::step(Vector3::new(50.0, 50.0, 0.0)).unwrap(),
@@ -117,25 +161,31 @@ fn bad_settings_are_typed_errors() {
     let mut c = config(10);
     c.x0 = DVector::zeros(5);
     assert!(matches!(
-        run_closed_loop(&plant, &mut obs, &mut ctrl, &c),
+        run_closed_loop(&plant, &plant, &mut obs, &mut ctrl, &c),
         Err(ClosedLoopError::DimensionMismatch { what: "x0", expected: 6, found: 5 })
     ));
     let mut c = config(10);
     c.measurement_noise = Noise::none(2);
-    assert!(matches!(run_closed_loop(&plant, &mut obs, &mut ctrl, &c), Err(ClosedLoopError::DimensionMismatch { .. })));
     assert!(matches!(
-        run_closed_loop(&plant, &mut obs, &mut ctrl, &config(0)),
+        run_closed_loop(&plant, &plant, &mut obs, &mut ctrl, &c),
+        Err(ClosedLoopError::DimensionMismatch { .. })
+    ));
+    assert!(matches!(
+        run_closed_loop(&plant, &plant, &mut obs, &mut ctrl, &config(0)),
         Err(ClosedLoopError::InvalidSetting { .. })
     ));
     let mut c = config(10);
     c.x0[2] = f64::NAN;
-    assert!(matches!(run_closed_loop(&plant, &mut obs, &mut ctrl, &c), Err(ClosedLoopError::InvalidSetting { .. })));
+    assert!(matches!(
+        run_closed_loop(&plant, &plant, &mut obs, &mut ctrl, &c),
+        Err(ClosedLoopError::InvalidSetting { .. })
+    ));
     // A controller that ignores its own limits is caught.
-    let e = run_closed_loop(&plant, &mut obs, &mut Lazy, &config(10)).unwrap_err();
+    let e = run_closed_loop(&plant, &plant, &mut obs, &mut Lazy, &config(10)).unwrap_err();
     assert!(matches!(e, ClosedLoopError::LimitViolated { step: 0, index: 0, .. }), "{e}");
     // An observer of the wrong size.
-    let mut small = Predictor { model: plant.clone(), x: DVector::zeros(4), next: DVector::zeros(4) };
-    assert!(run_closed_loop(&plant, &mut small, &mut ctrl, &config(10)).is_err());
+    let mut small = Predictor::new(4);
+    assert!(run_closed_loop(&plant, &plant, &mut small, &mut ctrl, &config(10)).is_err());
 }
 
 /// A seed reproduces a noisy run; another seed gives another one; the record keeps the
@@ -144,7 +194,7 @@ fn bad_settings_are_typed_errors() {
 fn seeds_reproduce_noisy_runs() {
     let plant = DiscreteVessel::paper(VesselParams::paper()).unwrap();
     let noisy = |seed| {
-        let mut obs = Predictor { model: plant.clone(), x: DVector::zeros(6), next: DVector::zeros(6) };
+        let mut obs = Predictor::new(6);
         let mut ctrl = VesselController::new(
             Nsampc::new(&VesselParams::paper(), NsampcParams::paper()).unwrap(),
             SetPoint::filtered(
@@ -158,7 +208,7 @@ fn seeds_reproduce_noisy_runs() {
         c.measurement_noise =
             Noise::gaussian(nalgebra::DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1]))).unwrap();
         c.seed = seed;
-        run_closed_loop(&plant, &mut obs, &mut ctrl, &c).unwrap()
+        run_closed_loop(&plant, &plant, &mut obs, &mut ctrl, &c).unwrap()
     };
     let (a, b, c) = (noisy(5), noisy(5), noisy(6));
     assert_eq!(a.states, b.states);

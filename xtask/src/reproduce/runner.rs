@@ -2,8 +2,8 @@
 
 use std::time::Instant;
 
-use estimators::registry::BoxedLinearEstimator;
-use estimators::{Estimate, EstimateKind};
+use estimators::registry::{self, AnyEstimator, EstimatorSettings};
+use estimators::{Estimate, EstimateKind, Setup, SolveOutcome, StepDetails};
 use models::{StepMatrices, Trajectory};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -12,24 +12,25 @@ use serde::Serialize;
 pub struct Filter {
     /// Label for tables and legends.
     pub label: String,
-    /// The estimator, driven through the registry's object-safe trait.
-    pub estimator: BoxedLinearEstimator,
+    /// The estimator, built by the registry.
+    pub estimator: AnyEstimator,
 }
 
 impl Filter {
-    /// Builds the registry's estimator `name` from `setup`, labelled `label`.
-    pub fn new(label: &str, name: &str, setup: &estimators::LinearSetup) -> Result<Self, String> {
-        let estimator = estimators::registry::linear(name, setup).map_err(|e| format!("{label}: {e}"))?;
+    /// Builds the registry's estimator `name` from `setup` and `settings` (the row's default when
+    /// `None`), labelled `label`.
+    pub fn new(label: &str, name: &str, setup: Setup, settings: Option<EstimatorSettings>) -> Result<Self, String> {
+        let estimator = registry::build(name, setup, settings).map_err(|e| format!("{label}: {e}"))?;
         Ok(Self { label: label.to_owned(), estimator })
     }
 
     /// Whether the estimate is a guaranteed set rather than a mean/covariance.
     pub fn is_set(&self) -> bool {
-        self.estimator.estimate_dyn().kind() == EstimateKind::GuaranteedEllipsoid
+        self.estimator.estimate().kind() == EstimateKind::GuaranteedEllipsoid
     }
 
     fn current(&self) -> Snapshot {
-        Snapshot::of(self.estimator.estimate_dyn())
+        Snapshot::of(self.estimator.estimate())
     }
 }
 
@@ -39,8 +40,11 @@ impl Snapshot {
         Snapshot {
             centre: e.center().clone(),
             shape: e.shape().clone(),
-            tau: e.multipliers(),
-            fallback: e.fallback_used(),
+            tau: match e.details() {
+                StepDetails::SetMembership(r) => Some(r.tau),
+                _ => None,
+            },
+            fallback: e.status().outcome == SolveOutcome::FallbackUsed,
         }
     }
 }
@@ -84,7 +88,7 @@ pub fn run_filter(
     for k in 0..n {
         let (u, y) = (&traj.inputs[k], &traj.measurements[k + 1]);
         let t0 = Instant::now();
-        let r = filter.estimator.step_dyn(&steps[k].as_step(), u, y).map(|_| ());
+        let r = filter.estimator.step(&steps[k].as_step(), u, y).map(|_| ());
         step_ns.push(t0.elapsed().as_nanos() as u64);
         r.map_err(|e| format!("{} at step {k}: {e}", filter.label))?;
         snapshots.push(filter.current());

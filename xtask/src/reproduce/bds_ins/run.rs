@@ -220,7 +220,7 @@ pub fn run_filter(
         step_ns: Vec::with_capacity(n),
     };
     let e = f.estimate();
-    trace.push(&data.truth[0], &e.mean, &e.std_dev, f64::NAN);
+    trace.push(&data.truth[0], &e.center, &e.std_dev, f64::NAN);
     let u = DVector::zeros(0);
     let mut y = DVector::zeros(3);
     for epoch in &data.epochs {
@@ -250,7 +250,7 @@ pub fn run_filter(
             }
         };
         let e = f.estimate();
-        trace.push(&data.truth[k], &e.mean, &e.std_dev, scale);
+        trace.push(&data.truth[k], &e.center, &e.std_dev, scale);
     }
     Ok(trace)
 }

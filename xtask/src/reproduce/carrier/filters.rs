@@ -1,7 +1,7 @@
 //! The estimators compared in every scenario, built through the `estimators` registry.
 
-use estimators::registry::TWO_MULTIPLIER;
-use estimators::{LinearSetup, NoiseSettings};
+use estimators::Setup;
+use estimators::registry::{EstimatorSettings, InputBox, SetMembershipSettings, SmfSolver, names};
 
 use super::scenarios::Scenario;
 use crate::reproduce::runner::Filter;
@@ -20,26 +20,25 @@ pub const YANG_LI_WITH_INPUT: &str = "[17] with input";
 /// The Kalman filter.
 pub const KALMAN: &str = "Kalman filter";
 
-/// The scenario's initial set, noise shapes (covariances for the Kalman filter) and input box.
-fn setup(sc: &Scenario) -> LinearSetup {
-    let mut s = LinearSetup::new(
-        sc.x_hat0.clone(),
-        sc.p0.clone(),
-        NoiseSettings::new(sc.q.clone(), sc.r.clone()),
-        sc.steps[0].b.ncols(),
-    );
-    s.input_bounds = Some(sc.input_range.clone());
-    s
+/// The scenario's initial set and noise shapes (covariances for the Kalman filter).
+fn setup(sc: &Scenario) -> Setup {
+    Setup {
+        x0: sc.x_hat0.clone(),
+        p0: sc.p0.clone(),
+        process_noise: sc.q.clone(),
+        measurement_noise: sc.r.clone(),
+        inputs: sc.steps[0].b.ncols(),
+    }
 }
 
 /// The improved filter with the two-multiplier solver.
 pub fn proposed(sc: &Scenario) -> Result<Filter, String> {
-    Filter::new(PROPOSED, "smf", &setup(sc))
+    Filter::new(PROPOSED, names::SMF, setup(sc), None)
 }
 
 /// The Kalman filter given `Q`, `R` as covariances and `P₀` as the initial covariance.
 pub fn kalman(sc: &Scenario) -> Result<Filter, String> {
-    Filter::new(KALMAN, "kf", &setup(sc))
+    Filter::new(KALMAN, names::KF, setup(sc), None)
 }
 
 /// An estimator and the number of steps it runs.
@@ -50,21 +49,26 @@ pub type ScheduledFilter = (Filter, usize);
 pub fn for_scenario(sc: &Scenario) -> Result<Vec<ScheduledFilter>, String> {
     let n = sc.len();
     let mut out: Vec<ScheduledFilter> = vec![(proposed(sc)?, n)];
+    let smf = |solver: SmfSolver| {
+        Some(EstimatorSettings::SetMembership(SetMembershipSettings { solver, ..SetMembershipSettings::default() }))
+    };
     for name in lmi::backend_names() {
-        let mut s = setup(sc);
-        s.solver = name.to_owned();
-        out.push((Filter::new(&format!("{PROPOSED_VIA}{name}"), "smf", &s)?, sc.sdp_steps.min(n)));
-        if name == lmi::DEFAULT_BACKEND {
+        let solver = SmfSolver::by_name(name).map_err(|e| e.to_string())?;
+        let label = format!("{PROPOSED_VIA}{name}");
+        out.push((Filter::new(&label, names::SMF, setup(sc), smf(solver.clone()))?, sc.sdp_steps.min(n)));
+        if name == lmi::DEFAULT_BACKEND
+            && let SmfSolver::Sdp { backend, settings } = solver
+        {
             // Side by side in one run: the same backend without the warm start.
-            let mut cold = s.clone();
-            cold.sdp_settings.warm_start = false;
-            out.push((Filter::new(&format!("{PROPOSED_VIA}{name}{COLD_START}"), "smf", &cold)?, sc.sdp_steps.min(n)));
+            let cold = SmfSolver::Sdp { backend, settings: lmi::SolverSettings { warm_start: false, ..settings } };
+            let label = format!("{PROPOSED_VIA}{name}{COLD_START}");
+            out.push((Filter::new(&label, names::SMF, setup(sc), smf(cold))?, sc.sdp_steps.min(n)));
         }
     }
-    let two = setup(sc);
-    debug_assert_eq!(two.solver, TWO_MULTIPLIER);
-    out.push((Filter::new(YANG_LI_NO_INPUT, "yang-li", &two)?, n));
-    out.push((Filter::new(YANG_LI_WITH_INPUT, "yang-li-with-input", &two)?, n));
+    let (lower, upper) = sc.input_range.clone();
+    let boxed = EstimatorSettings::SetMembershipInputBox(SetMembershipSettings::default(), InputBox { lower, upper });
+    out.push((Filter::new(YANG_LI_NO_INPUT, names::YANG_LI, setup(sc), Some(boxed))?, n));
+    out.push((Filter::new(YANG_LI_WITH_INPUT, names::YANG_LI_WITH_INPUT, setup(sc), None)?, n));
     out.push((kalman(sc)?, n));
     Ok(out)
 }

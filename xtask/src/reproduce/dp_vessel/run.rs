@@ -2,17 +2,16 @@
 //! through `vessel_control::run_closed_loop`) and its metrics: settling, overshoot, saturation,
 //! total variation of the forces, RMSE of the estimate, Table 1 statistics and time per step.
 //!
-//! The estimators come from [`ESTIMATORS`]; the MHE will be one more line there.
+//! The estimators come from [`ESTIMATORS`], each built by the registry and stepped by the loop
+//! through the estimator trait.
 
-use estimators::Setup;
-use estimators::registry::BoxedDifferentiableEstimator;
-use estimators::{EstimatorError, ExtendedKalmanFilter, UkfParams, UnscentedKalmanFilter};
-use models::{DifferentiableModel, Noise};
+use estimators::registry::{self, AnyEstimator, EstimatorSettings, names};
+use estimators::{EstimatorError, Setup, UkfParams};
+use models::{AnyModel, Noise};
 use nalgebra::{DMatrix, DVector, Vector3};
 use serde::Serialize;
 use vessel_control::{
-    LoopConfig, LoopRecord, Nsampc, NsampcParams, Observer, ReferenceFilter, SetPoint, VesselController,
-    run_closed_loop,
+    LoopConfig, LoopRecord, Nsampc, NsampcParams, ReferenceFilter, SetPoint, VesselController, run_closed_loop,
 };
 use vessel_dynamics::{DiscreteVessel, ForceNoise, VesselParams};
 
@@ -58,65 +57,58 @@ impl FilterSettings {
     }
 }
 
-/// A registered estimator of the reproduction.
+/// An estimator of the reproduction.
 pub struct EstimatorSpec {
     /// Identifier (file names, JSON).
     pub id: &'static str,
     /// Label for tables and figures.
     pub label: &'static str,
-    /// Builds a fresh estimator.
-    pub build: fn(&FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError>,
+    /// Builds a fresh estimator (through the registry).
+    pub build: fn(&FilterSettings) -> Result<AnyEstimator, EstimatorError>,
 }
 
-fn build_ekf(s: &FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
-    let (x0, p0, q, r) = s.matrices();
-    Ok(Box::new(ExtendedKalmanFilter::new(Setup {
-        x0: x0,
-        p0: p0,
-        process_noise: q,
-        measurement_noise: r,
-        inputs: 3,
-    })?))
+fn setup(s: &FilterSettings) -> Setup {
+    let (x0, p0, process_noise, measurement_noise) = s.matrices();
+    Setup { x0, p0, process_noise, measurement_noise, inputs: 3 }
 }
 
-fn build_ukf(s: &FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
-    let (x0, p0, q, r) = s.matrices();
-    let params = UkfParams { alpha: s.ukf[0], beta: s.ukf[1], kappa: s.ukf[2] };
-    Ok(Box::new(UnscentedKalmanFilter::new(
-        Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 3 },
-        params,
-    )?))
+fn ukf_params(s: &FilterSettings) -> UkfParams {
+    UkfParams { alpha: s.ukf[0], beta: s.ukf[1], kappa: s.ukf[2] }
 }
 
-fn mhe(
-    s: &FilterSettings,
-    prior: estimators::mhe::NonlinearPrior,
-) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
-    use estimators::mhe::{NonlinearArrival, NonlinearMhe, NonlinearMheSettings};
-    let (x0, p0, q, r) = s.matrices();
-    let mut settings = NonlinearMheSettings::new(x0, p0, q, r);
-    settings.arrival = NonlinearArrival::Ukf(UkfParams { alpha: s.ukf[0], beta: s.ukf[1], kappa: s.ukf[2] });
+fn build_ekf(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
+    registry::build(names::EKF, setup(s), None)
+}
+
+fn build_ukf(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
+    registry::build(names::UKF, setup(s), Some(EstimatorSettings::Unscented(ukf_params(s))))
+}
+
+fn mhe(s: &FilterSettings, prior: estimators::mhe::NonlinearPrior) -> Result<AnyEstimator, EstimatorError> {
+    use estimators::mhe::{NonlinearArrival, NonlinearMheSettings};
+    let mut settings = NonlinearMheSettings::paper();
+    settings.arrival = NonlinearArrival::Ukf(ukf_params(s));
     settings.prior = prior;
-    Ok(Box::new(NonlinearMhe::new(settings, 3)?))
+    registry::build(names::MHE_UKF, setup(s), Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(settings))))
 }
 
 /// The paper's MHE: prior mean `x̂_{s+1|T}` (the previous estimate), UKF arrival weight.
-fn build_mhe(s: &FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
+fn build_mhe(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
     mhe(s, estimators::mhe::NonlinearPrior::Smoothed)
 }
 
 /// The MHE whose arrival UKF keeps its own mean (no measurement counted twice).
-fn build_mhe_own_mean(s: &FilterSettings) -> Result<BoxedDifferentiableEstimator, EstimatorError> {
+fn build_mhe_own_mean(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
     mhe(s, estimators::mhe::NonlinearPrior::ArrivalFilter)
 }
 
 /// The estimators in the loop, in table order: the paper's MHE with a UKF arrival cost
 /// (N = 10, Gauss–Newton on the window), then the EKF and the UKF as baselines.
 pub const ESTIMATORS: &[EstimatorSpec] = &[
-    EstimatorSpec { id: "mhe-ukf", label: "MHE, UKF arrival cost (N = 10)", build: build_mhe },
+    EstimatorSpec { id: names::MHE_UKF, label: "MHE, UKF arrival cost (N = 10)", build: build_mhe },
     EstimatorSpec { id: "mhe-ukf-own", label: "MHE, arrival UKF with its own mean", build: build_mhe_own_mean },
-    EstimatorSpec { id: "ekf", label: "EKF", build: build_ekf },
-    EstimatorSpec { id: "ukf", label: "UKF (α = 0.5, β = 2, κ = −2)", build: build_ukf },
+    EstimatorSpec { id: names::EKF, label: "EKF", build: build_ekf },
+    EstimatorSpec { id: names::UKF, label: "UKF (α = 0.5, β = 2, κ = −2)", build: build_ukf },
 ];
 
 /// A scenario: how the set point is given and how noisy the heading sensor is.
@@ -198,36 +190,6 @@ pub fn matched_q_diag() -> Result<Vec<f64>, String> {
     Ok(q)
 }
 
-/// A registry estimator as the loop's observer (the adapter between `estimators` and
-/// `vessel-control`, which do not know each other).
-pub struct EstimatorObserver<'a> {
-    estimator: BoxedDifferentiableEstimator,
-    model: &'a DiscreteVessel,
-    mean: DVector<f64>,
-}
-
-impl<'a> EstimatorObserver<'a> {
-    /// Wraps `estimator` running on `model`.
-    #[must_use]
-    pub fn new(estimator: BoxedDifferentiableEstimator, model: &'a DiscreteVessel) -> Self {
-        let mean = estimator.estimate_dyn().center().clone();
-        Self { estimator, model, mean }
-    }
-}
-
-impl Observer for EstimatorObserver<'_> {
-    type Error = EstimatorError;
-    fn estimate(&self) -> &DVector<f64> {
-        &self.mean
-    }
-    fn update(&mut self, u: &DVector<f64>, z: &DVector<f64>) -> Result<(), EstimatorError> {
-        let model: &dyn DifferentiableModel = self.model;
-        let e = self.estimator.step_dyn(model, u, z)?;
-        self.mean.copy_from(e.center());
-        Ok(())
-    }
-}
-
 /// Runs one closed loop of `duration_s` seconds.
 ///
 /// # Errors
@@ -239,8 +201,7 @@ pub fn run_one(scenario: &Scenario, spec: &EstimatorSpec, steps: usize, seed: u6
     if scenario.matched_q {
         settings.q_diag = matched_q_diag()?;
     }
-    let est = (spec.build)(&settings).map_err(|e| format!("{}: {e}", spec.id))?;
-    let mut observer = EstimatorObserver::new(est, &plant);
+    let mut est = (spec.build)(&settings).map_err(|e| format!("{}: {e}", spec.id))?;
     let target = Vector3::from(TARGET);
     let set_point = if scenario.reference_filter {
         let f = ReferenceFilter::new(ReferenceFilter::DIGEST_OMEGA, plant.ts(), Vector3::zeros())
@@ -263,7 +224,8 @@ pub fn run_one(scenario: &Scenario, spec: &EstimatorSpec, steps: usize, seed: u6
         measurement_noise,
         seed,
     };
-    run_closed_loop(&plant, &mut observer, &mut controller, &config)
+    let model: &dyn AnyModel = &plant;
+    run_closed_loop(&plant, model, &mut est, &mut controller, &config)
         .map_err(|e| format!("{} / {} / seed {seed}: {e}", scenario.id, spec.id))
 }
 
@@ -390,7 +352,7 @@ pub fn metrics(rec: &LoopRecord, seed: u64, steady_from_s: f64, limits: [f64; 3]
         raw,
         filtered,
         steady_max_position_error_m,
-        step_ns: rec.observer_seconds.iter().map(|s| (s * 1e9).round() as u64).collect(),
+        step_ns: rec.estimator_seconds.iter().map(|s| (s * 1e9).round() as u64).collect(),
     }
 }
 

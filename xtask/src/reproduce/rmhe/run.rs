@@ -1,6 +1,7 @@
 //! The estimator variants, the simulated double lane change and the Monte Carlo runs.
 
 use car_dynamics::{CarModel, CarParams, NoiseBounds, double_lane_change_inputs};
+use estimators::Setup;
 use estimators::mhe::{
     BlockingPreset, InnerSolver, MheCost, MheSettings, MovingHorizonEstimator, WindowSolver, WindowStatus,
 };
@@ -195,20 +196,23 @@ impl Experiment {
         Ok(Self { model, inputs, steps, ts })
     }
 
-    /// The estimator settings of `variant` with `prior`.
+    /// The estimator's setup (prior, weights) and settings of `variant` with `prior`.
     #[must_use]
-    pub fn settings(&self, variant: &Variant, prior: Prior) -> MheSettings {
+    pub fn settings(&self, variant: &Variant, prior: Prior) -> (Setup, MheSettings) {
         let bounds = NoiseBounds::digest();
         let w = bounds.process_vector();
         let x0 = match prior {
             Prior::Correct => DVector::from_row_slice(&car_dynamics::DIGEST_INITIAL_STATE),
             Prior::Wrong => DVector::zeros(4),
         };
-        let mut s = MheSettings::new(
+        let setup = Setup {
             x0,
-            DMatrix::identity(4, 4) * 0.01,
-            DMatrix::identity(4, 4) * 9e-4,
-            DMatrix::from_element(1, 1, 0.1),
+            p0: DMatrix::identity(4, 4) * 0.01,
+            process_noise: DMatrix::identity(4, 4) * 9e-4,
+            measurement_noise: DMatrix::from_element(1, 1, 0.1),
+            inputs: 1,
+        };
+        let mut s = MheSettings::new(
             (DVector::from_fn(4, |i, _| -w[i]), DVector::from_fn(4, |i, _| w[i])),
             (DVector::from_element(1, -1.0), DVector::from_element(1, 1.0)),
         );
@@ -217,7 +221,7 @@ impl Experiment {
         s.cost = variant.cost;
         s.solver = variant.solver;
         s.output_constraint = variant.output_constraint;
-        s
+        (setup, s)
     }
 
     /// Simulates the truth `x_0..x_steps` and the measurements `y_0..y_steps` of one seed.
@@ -271,8 +275,8 @@ pub struct Trace {
 ///
 /// # Errors
 /// An estimator error (named).
-pub fn run(exp: &Experiment, settings: MheSettings, ys: &[DVector<f64>]) -> Result<Trace, String> {
-    let mut e = MovingHorizonEstimator::new(settings, 1).map_err(|e| e.to_string())?;
+pub fn run(exp: &Experiment, (setup, settings): (Setup, MheSettings), ys: &[DVector<f64>]) -> Result<Trace, String> {
+    let mut e = MovingHorizonEstimator::new(setup, settings).map_err(|e| e.to_string())?;
     let n = exp.steps + 1;
     let mut t = Trace {
         estimates: Vec::with_capacity(n),
@@ -294,7 +298,7 @@ pub fn run(exp: &Experiment, settings: MheSettings, ys: &[DVector<f64>]) -> Resu
 }
 
 fn record(e: &MovingHorizonEstimator, t: &mut Trace) {
-    t.estimates.push(e.estimate().state.clone());
+    t.estimates.push(e.estimate().center.clone());
     if let Some(r) = e.report() {
         t.update_ns.push(r.elapsed.as_nanos() as u64);
         t.sweeps.push(r.solve.sweeps);

@@ -148,7 +148,7 @@ pub fn run_ekf(truth: &TruthTrajectory, model: &TruckEkfModel, case: &Case, seed
         let result = ekf.step(model, &u, &y);
         let ns = t0.elapsed().as_nanos();
         let est = result.map_err(|e| format!("{}: EKF step {k}: {e}", case.id))?;
-        let (e, s) = with_sideslip(&est.mean, &est.covariance).map_err(|e| format!("{}: step {k}: {e}", case.id))?;
+        let (e, s) = with_sideslip(&est.center, &est.covariance).map_err(|e| format!("{}: step {k}: {e}", case.id))?;
         trace.step_ns.push(u64::try_from(ns).unwrap_or(u64::MAX));
         trace.t.push(truth.samples[k + 1].t);
         trace.truth.push(truth_row(k + 1));
