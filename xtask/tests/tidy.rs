@@ -18,6 +18,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("dense-kernels", &[]),
     ("counting-allocator", &[]),
     ("fuzzy-inference", &[]),
+    ("atomic-output", &[]),
     ("models", &["dense-kernels"]),
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
