@@ -25,7 +25,10 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("*-dynamics", &["models", "dense-kernels"]),
     ("vessel-control", &["models", "dense-kernels", "vessel-dynamics"]),
     ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi", "fuzzy-inference"]),
-    ("port-est", &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics", "fuzzy-inference"]),
+    (
+        "port-est",
+        &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics", "fuzzy-inference", "atomic-output"],
+    ),
 ];
 
 fn root() -> PathBuf {
