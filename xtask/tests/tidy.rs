@@ -19,6 +19,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("counting-allocator", &[]),
     ("fuzzy-inference", &[]),
     ("atomic-output", &[]),
+    ("svg-plot", &[]),
     ("models", &["dense-kernels"]),
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
