@@ -28,7 +28,16 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi", "fuzzy-inference"]),
     (
         "port-est",
-        &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics", "fuzzy-inference", "atomic-output"],
+        &[
+            "estimators",
+            "models",
+            "dense-kernels",
+            "ellipsoid",
+            "lmi",
+            "*-dynamics",
+            "fuzzy-inference",
+            "atomic-output",
+        ],
     ),
 ];
 
