@@ -10,10 +10,6 @@ use svg_plot::{BarChart, Chart, Grid};
 
 use super::runner::Run;
 
-/// Writes `bytes` to `path` atomically (a temporary file beside it, synced, then renamed over it;
-/// on error `path` is untouched and no temporary file is left).
-pub use atomic_output::write_atomic;
-
 /// A short description of the machine (CPU model and core count).
 #[must_use]
 pub fn machine() -> String {
@@ -25,6 +21,16 @@ pub fn machine() -> String {
         .unwrap_or_else(|| "unknown CPU".into());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     format!("{cpu}, {cores} cores")
+}
+
+/// Writes `bytes` to `path` atomically with [`atomic_output::write_atomic`]: to a temporary file
+/// in the same directory, synced, then renamed over `path`. On error the temporary file is removed
+/// and `path` is untouched.
+///
+/// # Errors
+/// The temporary file cannot be created, written or renamed over `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    atomic_output::write_atomic(path, bytes)
 }
 
 /// Writing a figure of [`svg_plot`] (which renders SVG documents but writes no files):
