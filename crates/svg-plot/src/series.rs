@@ -29,7 +29,7 @@ pub enum Style {
     },
 }
 
-/// One data series of a [`Chart`].
+/// One data series of a [`Chart`](crate::Chart).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
     /// Legend text; empty to leave the series out of the legend.
@@ -64,7 +64,7 @@ impl Series {
     }
 
     /// An XY track: a solid line through the points `(x[k], y[k])` in sample order, where `x` need
-    /// not increase (e.g. a vehicle's path, north against east). Usually drawn on [`Chart::xy`].
+    /// not increase (e.g. a vehicle's path, north against east). Usually drawn on [`Chart::xy`](crate::Chart::xy).
     pub fn track(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>, color: &'static str) -> Self {
         Self::line(label, x, y, color)
     }
