@@ -3,6 +3,5 @@
 
 pub mod args;
 
-pub mod plot;
 pub mod reproduce;
 pub mod sdplib;

@@ -18,13 +18,27 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("dense-kernels", &[]),
     ("counting-allocator", &[]),
     ("fuzzy-inference", &[]),
+    ("atomic-output", &[]),
+    ("svg-plot", &[]),
     ("models", &["dense-kernels"]),
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels"]),
     ("vessel-control", &["models", "dense-kernels", "vessel-dynamics", "estimators"]),
     ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi", "fuzzy-inference"]),
-    ("port-est", &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "*-dynamics", "fuzzy-inference"]),
+    (
+        "port-est",
+        &[
+            "estimators",
+            "models",
+            "dense-kernels",
+            "ellipsoid",
+            "lmi",
+            "*-dynamics",
+            "fuzzy-inference",
+            "atomic-output",
+        ],
+    ),
 ];
 
 fn root() -> PathBuf {

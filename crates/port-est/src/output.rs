@@ -1,11 +1,13 @@
 //! `--output`, written safely: never one of the input files, the directory checked before any
 //! computation, rows streamed into a temporary file beside the target and renamed over it only
 //! on success, so that a failed run leaves no half-written output (and an older output intact).
+//! The temporary file and the rename are [`atomic_output`]'s; the checks are this module's.
 
-use std::ffi::OsString;
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+use atomic_output::AtomicFile;
 
 use crate::error::Error;
 
@@ -13,13 +15,19 @@ use crate::error::Error;
 /// committing removes the temporary file.
 #[derive(Debug)]
 pub struct OutputFile {
-    writer: Option<BufWriter<File>>,
+    /// `None` once committed.
+    sink: Option<Sink>,
     /// The path as the user gave it (for messages).
     shown: PathBuf,
-    /// Where the content lands (the canonical target) and, for a regular file, the temporary
-    /// file it is written to first.
-    target: PathBuf,
-    temporary: Option<PathBuf>,
+}
+
+/// Where the rows go.
+#[derive(Debug)]
+enum Sink {
+    /// A temporary file beside the (canonical) target, renamed over it on commit.
+    Atomic(AtomicFile),
+    /// An existing non-regular file (a device, a pipe), written in place.
+    InPlace(BufWriter<File>),
 }
 
 /// The canonical form of `path`, `None` if it cannot be resolved (it does not exist).
@@ -99,47 +107,20 @@ impl OutputFile {
                 return Err(Error::SameFile { role, output: output.to_owned(), other: path.to_path_buf() });
             }
         }
-        match existing {
+        let sink = match existing {
             Some(meta) if !meta.is_file() => {
                 // A device or a pipe: nothing to replace, nothing half-written to clean up.
                 let file =
                     OpenOptions::new().write(true).truncate(true).open(&target).map_err(|e| refuse(e.to_string()))?;
-                Ok(Self { writer: Some(BufWriter::new(file)), shown: output.to_owned(), target, temporary: None })
+                Sink::InPlace(BufWriter::new(file))
             }
-            _ => {
-                let (file, temporary) = Self::temporary_beside(&target)
-                    .map_err(|(dir, e)| refuse(format!("cannot write in directory {}: {e}", dir.display())))?;
-                if let Some(meta) = fs::metadata(&target).ok().filter(|m| m.is_file()) {
-                    // Keep the replaced file's permissions.
-                    let _ = fs::set_permissions(&temporary, meta.permissions());
-                }
-                Ok(Self {
-                    writer: Some(BufWriter::new(file)),
-                    shown: output.to_owned(),
-                    target,
-                    temporary: Some(temporary),
-                })
-            }
-        }
-    }
-
-    /// Creates `.NAME.port-est-PID-N.tmp` beside `target`.
-    fn temporary_beside(target: &Path) -> Result<(File, PathBuf), (PathBuf, io::Error)> {
-        let dir = target.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-        let name = target.file_name().unwrap_or_default();
-        let mut last = io::Error::other("no temporary name left");
-        for n in 0..100u32 {
-            let mut tmp = OsString::from(".");
-            tmp.push(name);
-            tmp.push(format!(".port-est-{}-{n}.tmp", std::process::id()));
-            let path = dir.join(tmp);
-            match OpenOptions::new().write(true).create_new(true).open(&path) {
-                Ok(f) => return Ok((f, path)),
-                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last = e,
-                Err(e) => return Err((dir, e)),
-            }
-        }
-        Err((dir, last))
+            // The temporary file beside the target (keeping a replaced file's permissions).
+            _ => Sink::Atomic(AtomicFile::create(&target).map_err(|e| {
+                let dir = target.parent().unwrap_or(Path::new("."));
+                refuse(format!("cannot write in directory {}: {e}", dir.display()))
+            })?),
+        };
+        Ok(Self { sink: Some(sink), shown: output.to_owned() })
     }
 
     /// The path as given.
@@ -154,41 +135,28 @@ impl OutputFile {
     /// [`Error::Io`] if writing, syncing or renaming fails (the temporary file is removed).
     pub fn commit(mut self) -> Result<(), Error> {
         let io = |e| Error::io(&self.shown, e);
-        if let Some(w) = self.writer.take() {
-            let file = w.into_inner().map_err(|e| io(e.into_error()))?;
-            if self.temporary.is_some() {
-                file.sync_all().map_err(io)?;
-            }
-        }
-        if let Some(tmp) = &self.temporary {
-            fs::rename(tmp, &self.target).map_err(io)?;
-            self.temporary = None;
-        }
-        Ok(())
-    }
-}
-
-impl Write for OutputFile {
-    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        match &mut self.writer {
-            Some(w) => w.write(buf),
-            None => Err(io::Error::other("output already committed")),
-        }
-    }
-
-    fn flush(&mut self) -> io::Result<()> {
-        match &mut self.writer {
-            Some(w) => w.flush(),
+        match self.sink.take() {
+            Some(Sink::Atomic(file)) => file.commit().map_err(io),
+            Some(Sink::InPlace(w)) => w.into_inner().map(drop).map_err(|e| io(e.into_error())),
             None => Ok(()),
         }
     }
 }
 
-impl Drop for OutputFile {
-    fn drop(&mut self) {
-        drop(self.writer.take());
-        if let Some(tmp) = self.temporary.take() {
-            let _ = fs::remove_file(tmp);
+impl Write for OutputFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match &mut self.sink {
+            Some(Sink::Atomic(f)) => f.write(buf),
+            Some(Sink::InPlace(w)) => w.write(buf),
+            None => Err(io::Error::other("output already committed")),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match &mut self.sink {
+            Some(Sink::Atomic(f)) => f.flush(),
+            Some(Sink::InPlace(w)) => w.flush(),
+            None => Ok(()),
         }
     }
 }

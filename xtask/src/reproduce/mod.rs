@@ -4,7 +4,7 @@
 //!
 //! One module per paper (scenarios, runner, report) implements [`Paper`]; the pieces they share
 //! are written once: [`runner`] (driving registry estimators over simulated data, metrics),
-//! [`outputs`] (CSV, atomic writes) and the figures of `crate::plot`.
+//! [`outputs`] (CSV, atomic writes, writing the figures of [`svg_plot`]).
 
 pub mod bds_ins;
 pub mod carrier;

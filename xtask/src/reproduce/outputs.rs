@@ -3,10 +3,10 @@
 //! half-written output is ever left behind).
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
 use nalgebra::DVector;
+use svg_plot::{BarChart, Chart, Grid};
 
 use super::runner::Run;
 
@@ -23,23 +23,53 @@ pub fn machine() -> String {
     format!("{cpu}, {cores} cores")
 }
 
-/// Writes `bytes` to `path` atomically: to a temporary file in the same directory, flushed and
-/// synced, then renamed over `path`. On error the temporary file is removed and `path` is
-/// untouched.
+/// Writes `bytes` to `path` atomically with [`atomic_output::write_atomic`]: to a temporary file
+/// in the same directory, synced, then renamed over `path`. On error the temporary file is removed
+/// and `path` is untouched.
+///
+/// # Errors
+/// The temporary file cannot be created, written or renamed over `path`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().ok_or_else(|| std::io::Error::other(format!("{}: not a file path", path.display())))?;
-    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    atomic_output::write_atomic(path, bytes)
+}
+
+/// Writing a figure of [`svg_plot`] (which renders SVG documents but writes no files):
+/// `figure.write(path)` writes its SVG document to `path` with [`write_atomic`], creating missing
+/// parent directories.
+pub trait WriteFigure {
+    /// The figure as a standalone SVG document.
+    fn svg(&self) -> String;
+
+    /// Writes [`WriteFigure::svg`] to `path`, creating missing parent directories; the document
+    /// goes to a temporary file in the same directory first and is then renamed, so that no
+    /// half-written figure is ever left at `path`.
+    ///
+    /// # Errors
+    /// The directory cannot be created or the file cannot be written.
+    fn write(&self, path: &Path) -> std::io::Result<()> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        write_atomic(path, self.svg().as_bytes())
     }
-    result
+}
+
+impl WriteFigure for Chart {
+    fn svg(&self) -> String {
+        self.to_svg()
+    }
+}
+
+impl WriteFigure for BarChart {
+    fn svg(&self) -> String {
+        self.to_svg()
+    }
+}
+
+impl WriteFigure for Grid {
+    fn svg(&self) -> String {
+        self.to_svg()
+    }
 }
 
 /// A file-name-safe identifier of an estimator label.
@@ -128,5 +158,28 @@ mod tests {
         assert_eq!(names.len(), 2, "{names:?}");
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(slug("[17] without input"), "17_without_input");
+    }
+
+    #[test]
+    fn figures_are_written_whole() {
+        let dir = std::env::temp_dir().join(format!("xtask-figures-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let path = dir.join("nested").join("fig.svg");
+        let mut chart = Chart::new("a chart", "t [s]", "y");
+        chart.add(svg_plot::Series::line("y", vec![0.0, 1.0, 2.0], vec![1.0, 0.0, 1.0], svg_plot::PALETTE[1]));
+        chart.write(&path).expect("write");
+        chart.write(&path).expect("overwrite");
+        assert_eq!(std::fs::read_to_string(&path).expect("read"), chart.to_svg());
+        let names: Vec<_> =
+            std::fs::read_dir(path.parent().unwrap()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, ["fig.svg"], "no temporary file is left");
+        let bars = BarChart::new("", "", "", ["a"]);
+        bars.write(&dir.join("bars.svg")).expect("bars");
+        assert_eq!(std::fs::read_to_string(dir.join("bars.svg")).expect("read"), bars.to_svg());
+        Grid::new(2).write(&dir.join("grid.svg")).expect("grid");
+        // A parent that is a file, and a path without a file name: errors, not panics.
+        assert!(chart.write(&path.join("below-a-file.svg")).is_err());
+        assert!(chart.write(Path::new("")).is_err());
+        std::fs::remove_dir_all(&dir).expect("clean up");
     }
 }

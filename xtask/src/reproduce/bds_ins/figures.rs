@@ -4,9 +4,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use svg_plot::{BarChart, Bars, Chart, Grid, PALETTE, Series};
+
 use super::outputs;
+use super::outputs::WriteFigure as _;
 use super::run::{Accumulator, VARIANTS_A, VARIANTS_B};
-use crate::plot::{BarChart, Bars, Chart, Grid, PALETTE, Series};
 
 /// The variants of (a) drawn in Figs 7–9: KF, FKF scripted/online (float), the reference.
 const DRAWN_A: [&str; 4] = ["kf", "fkf_scripted_float", "fkf_online_float", "oracle"];

@@ -3,9 +3,10 @@
 use std::path::Path;
 
 use nalgebra::DVector;
+use svg_plot::{Chart, PALETTE, Series};
 
 use super::scenarios::{STATES, TS};
-use crate::plot::{Chart, PALETTE, Series};
+use crate::reproduce::outputs::WriteFigure as _;
 use crate::reproduce::runner::Run;
 
 /// Colour of the `j`-th estimator: the palette without black (the truth) and the pale yellow.

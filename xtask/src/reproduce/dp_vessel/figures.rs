@@ -4,12 +4,13 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use svg_plot::{Chart, Grid, PALETTE, Series};
 use vessel_control::LoopRecord;
 
 use super::ResultSummary;
 use super::outputs;
+use super::outputs::WriteFigure as _;
 use super::run::{EstimatorSpec, Scenario, TARGET};
-use crate::plot::{Chart, Grid, PALETTE, Series};
 
 const DEG: f64 = 180.0 / std::f64::consts::PI;
 

@@ -16,11 +16,12 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
+use svg_plot::{Chart, Grid, PALETTE, Series};
 
 use super::outputs;
+use super::outputs::WriteFigure as _;
 use super::runner::StepTiming;
 use super::{Options, Paper, PaperOutcome};
-use crate::plot::{Chart, Grid, PALETTE, Series};
 use run::{Case, Experiment, Prior, Variant};
 
 /// The paper in the index.

@@ -4,10 +4,12 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use svg_plot::{BarChart, Bars, Chart, Grid, PALETTE, Series};
+
 use super::cases::Case;
+use super::outputs::WriteFigure as _;
 use super::run::Trace;
 use super::{CaseSummary, outputs};
-use crate::plot::{BarChart, Bars, Chart, Grid, PALETTE, Series};
 
 /// The plotted signals: index into `[V_x, V_y, γ, β]`, name, unit and the factor from SI.
 const SIGNALS: [(usize, &str, &str, f64); 3] =
