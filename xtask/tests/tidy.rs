@@ -5,6 +5,10 @@
 //!   vehicle-free models and set algebra and SDPs, then vehicles (which know nothing of
 //!   estimation), then estimators (which know nothing of vehicles), then the tools. A new crate
 //!   must be added to [`LAYERS`].
+//! * **Rooms of one job.** No Rust source file of the repository has more than 1 000 lines.
+//! * **One registry.** Only `estimators::registry` dispatches on estimator names: library code of
+//!   the command line and of the reproduction compares, matches or looks up no estimator name
+//!   written as a literal (it uses `registry::names` or the registry's rows).
 //! * **No unwrap on input.** Library code (`crates/*/src`, outside `#[cfg(test)]` modules) has no
 //!   `.unwrap()` or `.expect(` unless the line or the one above carries a
 //!   `// tidy: invariant — <why it cannot fail>` comment.
@@ -172,4 +176,95 @@ fn library_code_does_not_unwrap() {
 fn the_unwrap_scanner_sees_what_it_should() {
     let text = "fn a() {\n    x.unwrap();\n    // tidy: invariant — checked above\n    y.expect(\"ok\");\n    // z.unwrap() in a comment\n}\n#[cfg(test)]\nmod tests { fn t() { q.unwrap(); } }\n";
     assert_eq!(unannotated_unwraps(text), vec![2]);
+}
+
+/// Every `.rs` file of the repository (crates, xtask, the facade's src, tests and benches).
+fn all_rust_files() -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    for dir in ["crates", "xtask", "src", "tests", "benches"] {
+        let d = root().join(dir);
+        if d.is_dir() {
+            rust_files(&d, &mut files);
+        }
+    }
+    files.retain(|f| !f.components().any(|c| c.as_os_str() == "target"));
+    files
+}
+
+#[test]
+fn no_source_file_is_over_a_thousand_lines() {
+    let files = all_rust_files();
+    assert!(files.len() > 100, "found only {} files", files.len());
+    let long: Vec<String> = files
+        .iter()
+        .filter_map(|f| {
+            let n = std::fs::read_to_string(f).unwrap().lines().count();
+            (n > 1000).then(|| format!("{}: {n} lines", f.display()))
+        })
+        .collect();
+    assert!(long.is_empty(), "files over 1 000 lines (split them by job):\n{}", long.join("\n"));
+}
+
+/// Lines of library code (before the first `#[cfg(test)]`, outside comments) that dispatch on
+/// one of `names` written as a literal: compare with it, match it, look it up in the registry or
+/// default to it.
+fn name_dispatches(text: &str, names: &[&str]) -> Vec<usize> {
+    let mut hits = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim_start();
+        if t.starts_with("#[cfg(test)]") {
+            break;
+        }
+        if t.starts_with("//") {
+            continue;
+        }
+        let code = t.split("//").next().unwrap_or("");
+        let hit = names.iter().any(|n| {
+            let q = format!("\"{n}\"");
+            [
+                format!("== {q}"),
+                format!("!= {q}"),
+                format!("{q} =>"),
+                format!("{q} |"),
+                format!("| {q}"),
+                format!("build({q}"),
+                format!("entry({q}"),
+                format!("lookup({q}"),
+                format!("default_value = {q}"),
+            ]
+            .iter()
+            .any(|p| code.contains(p.as_str()))
+        });
+        if hit {
+            hits.push(i + 1);
+        }
+    }
+    hits
+}
+
+#[test]
+fn only_the_registry_dispatches_on_estimator_names() {
+    let names: Vec<&str> = estimators::registry::ESTIMATORS.iter().map(|e| e.name).collect();
+    let mut files = Vec::new();
+    for dir in ["crates/port-est/src", "xtask/src", "crates/vessel-control/src"] {
+        rust_files(&root().join(dir), &mut files);
+    }
+    assert!(files.len() > 20, "found only {} files", files.len());
+    let mut hits = Vec::new();
+    for f in &files {
+        for line in name_dispatches(&std::fs::read_to_string(f).unwrap(), &names) {
+            hits.push(format!("{}:{line}", f.display()));
+        }
+    }
+    assert!(
+        hits.is_empty(),
+        "estimator names dispatched on outside the registry (use estimators::registry::names or the rows):\n{}",
+        hits.join("\n")
+    );
+}
+
+#[test]
+fn the_name_scanner_sees_what_it_should() {
+    let text = "fn a() {\n    let x = registry::build(\"kf\", s, None);\n    let p = \"kf_scripted\";\n    if id == names::KF {}\n    matches!(n, \"rmhe\" | \"mhe\");\n}\n#[cfg(test)]\nmod t { fn f() { build(\"kf\") } }\n";
+    assert_eq!(name_dispatches(text, &["kf", "mhe", "rmhe"]), vec![2, 5]);
 }

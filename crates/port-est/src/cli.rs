@@ -175,7 +175,7 @@ pub struct FilterArgs {
     #[arg(short, long, value_name = "OUT.csv")]
     pub output: PathBuf,
     /// The estimator
-    #[arg(short, long, value_name = "NAME", default_value = "smf", value_parser = estimator_names())]
+    #[arg(short, long, value_name = "NAME", default_value = registry::names::SMF, value_parser = estimator_names())]
     pub estimator: String,
     /// How the set-membership filters solve their SDP (29) [default: two-multiplier]
     #[arg(short, long, value_name = "NAME", value_parser = solver_names())]

@@ -118,3 +118,43 @@ fn the_data_may_come_from_a_pipe() {
     let err = text(&out.stderr);
     assert!(err.starts_with("error: /dev/stdin:3:8: y1 = \"bad\" is not a number"), "{err}");
 }
+
+/// A robust MHE whose coordinate rotation cannot converge (`lambda_v` near 1, one sweep): every
+/// row says so in its status, stderr warns with the count, `--strict` refuses the run at the
+/// first such row and writes nothing; the point estimates have no bound columns.
+#[test]
+fn non_converged_windows_are_reported_and_can_be_refused() {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter");
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-rmhe");
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = std::fs::read_to_string(examples.join("model.toml"))
+        .unwrap()
+        .replace("lambda_v = 10.0", "lambda_v = 1.2\nmax_sweeps = 1");
+    let model_path = dir.join("model.toml");
+    std::fs::write(&model_path, model).unwrap();
+    let out_file = dir.join("out.csv");
+    let run = |strict: bool| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_port-est"));
+        c.arg("filter").arg("--model").arg(&model_path).arg("--input").arg(examples.join("data.csv"));
+        c.arg("--output").arg(&out_file).args(["--estimator", "rmhe"]);
+        if strict {
+            c.arg("--strict");
+        }
+        c.output().unwrap()
+    };
+    let out = run(false);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    let csv = std::fs::read_to_string(&out_file).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "k,xhat1,xhat2,iterations,status", "no bounds for a point estimate");
+    let not_converged = lines[1..].iter().filter(|l| l.ends_with(",not-converged")).count();
+    assert!(not_converged > 0, "{csv}");
+    assert!(err.contains(&format!("warning: {not_converged} of 40 steps did not converge")), "{err}");
+    std::fs::remove_file(&out_file).unwrap();
+    let out = run(true);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(err.contains("ended not-converged and --strict refuses"), "{err}");
+    assert!(!out_file.exists(), "nothing is written when a step is refused");
+}

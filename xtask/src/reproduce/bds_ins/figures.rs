@@ -1,6 +1,7 @@
 //! Figures 7–9 of experiment (a) (errors, `√P11`, `√P22`), the scale `t_k`, the field analogue's
 //! errors and Table 1 as bars, and the CSV files.
 
+use estimators::registry::names;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -11,7 +12,7 @@ use super::outputs::WriteFigure as _;
 use super::run::{Accumulator, VARIANTS_A, VARIANTS_B};
 
 /// The variants of (a) drawn in Figs 7–9: KF, FKF scripted/online (float), the reference.
-const DRAWN_A: [&str; 4] = ["kf", "fkf_scripted_float", "fkf_online_float", "oracle"];
+const DRAWN_A: [&str; 4] = [names::KF, "fkf_scripted_float", "fkf_online_float", "oracle"];
 
 /// The first `skip` epochs (convergence from the 2 m initial error) are left out of automatic
 /// vertical ranges.
@@ -19,8 +20,8 @@ const SKIP: usize = 50;
 
 fn color(id: &str) -> &'static str {
     match id {
-        "kf" => PALETTE[0],
-        "fkf_scripted_float" | "fkf" => PALETTE[2],
+        names::KF => PALETTE[0],
+        "fkf_scripted_float" | names::FKF => PALETTE[2],
         "fkf_online_float" => PALETTE[1],
         "fkf_scripted_single" => PALETTE[5],
         "fkf_online_single" => PALETTE[4],
@@ -100,7 +101,7 @@ pub fn reading_figures(
         let mut c = Chart::new(format!("{name} = estimate − truth"), "time t [s]", format!("{name} [m]"));
         c.height = 300;
         let mut ranges: Vec<Vec<f64>> = Vec::new();
-        for vid in ["kf", "fkf_scripted_float", "fkf_online_float"] {
+        for vid in [names::KF, "fkf_scripted_float", "fkf_online_float"] {
             if let Some((v, a)) = pick(vid)
                 && let Some(tr) = &a.first
             {
@@ -146,7 +147,7 @@ pub fn reading_figures(
     // The scale t_k.
     let mut c = Chart::new(format!("Noise scale t_k, mean over seeds (noise {label})"), "time t [s]", "t_k");
     for (v, a) in VARIANTS_A.iter().zip(acc) {
-        if v.id == "kf" {
+        if v.id == names::KF {
             continue;
         }
         c.add(Series::line(v.label, t.clone(), a.per_epoch().mean_scale, color(v.id)));
@@ -215,7 +216,7 @@ pub fn field_figures(
     grid.add(c);
     let mut c = Chart::new("noise scale t_k of the FKF (first seed)", "time t [s]", "t_k");
     c.height = 240;
-    if let Some((v, a)) = VARIANTS_B.iter().zip(acc).find(|(v, _)| v.id == "fkf")
+    if let Some((v, a)) = VARIANTS_B.iter().zip(acc).find(|(v, _)| v.id == names::FKF)
         && let Some(tr) = &a.first
     {
         c.add(Series::line(v.label, t.clone(), tr.scale.clone(), color(v.id)));

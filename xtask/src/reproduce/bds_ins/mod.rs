@@ -17,6 +17,7 @@ pub mod figures;
 pub mod report;
 pub mod run;
 
+use estimators::registry::names;
 use std::path::Path;
 use std::time::Instant;
 
@@ -364,7 +365,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         let id = if r == 0 { "variance" } else { "std" };
         if r == 0 {
             for (v, a) in VARIANTS_A.iter().zip(&acc) {
-                if matches!(v.id, "kf" | "fkf_online_float") {
+                if matches!(v.id, names::KF | "fkf_online_float") {
                     timing.push((v.label.to_owned(), StepTiming::of(a.step_ns.clone())));
                 }
             }

@@ -1,5 +1,6 @@
 //! The paper's claims judged with numbers, and `report.md`.
 
+use estimators::registry::names;
 use std::fmt::Write as _;
 
 use serde::Serialize;
@@ -50,7 +51,7 @@ pub fn claims(readings: &[ReadingSummary], field: &FieldSummary) -> Vec<Claim> {
     let mut out = Vec::new();
     let Some(first) = readings.first() else { return out };
     let (Some(kf), Some(scripted), Some(online)) =
-        (find(first, "kf"), find(first, "fkf_scripted_float"), find(first, "fkf_online_float"))
+        (find(first, names::KF), find(first, "fkf_scripted_float"), find(first, "fkf_online_float"))
     else {
         return out;
     };
@@ -89,7 +90,7 @@ pub fn claims(readings: &[ReadingSummary], field: &FieldSummary) -> Vec<Claim> {
     let mut better = 0;
     let mut total = 0;
     for r in readings {
-        let Some(kf) = find(r, "kf") else { continue };
+        let Some(kf) = find(r, names::KF) else { continue };
         let k = kf.windows[1].mean_horizontal;
         let oracle = find(r, "oracle").map_or(f64::NAN, |o| o.windows[1].mean_horizontal / k - 1.0);
         let mut parts = Vec::new();
@@ -134,14 +135,14 @@ pub fn claims(readings: &[ReadingSummary], field: &FieldSummary) -> Vec<Claim> {
     let mut consistent_all = true;
     let mut consistent_variants = Vec::new();
     for r in readings {
-        for id in ["kf", "fkf_scripted_float", "fkf_online_float"] {
+        for id in [names::KF, "fkf_scripted_float", "fkf_online_float"] {
             let Some(f) = find(r, id) else { continue };
             let [_, s700, s1200] = f.sigma_x_at_600_700_1200;
             let w = &f.windows[1];
             let settled = settled_fraction(f) < SETTLED_FRACTION;
             let consistent = (CONSISTENT.0..=CONSISTENT.1).contains(&w.consistency_x)
                 && (CONSISTENT.0..=CONSISTENT.1).contains(&w.consistency_y);
-            if id != "kf" {
+            if id != names::KF {
                 settled_all &= settled;
                 consistent_all &= consistent;
                 if consistent {
@@ -185,7 +186,7 @@ pub fn claims(readings: &[ReadingSummary], field: &FieldSummary) -> Vec<Claim> {
     });
     // 4.–6. The field analogue.
     let (Some(fkf), Some(kfb)) =
-        (field.filters.iter().find(|f| f.id == "fkf"), field.filters.iter().find(|f| f.id == "kf"))
+        (field.filters.iter().find(|f| f.id == names::FKF), field.filters.iter().find(|f| f.id == names::KF))
     else {
         return out;
     };
@@ -399,7 +400,9 @@ pub fn markdown(s: &Summary) -> String {
         100.0 * TARGET_KF_INCREASE,
         if f.tuned { "" } else { "; NOT reached" }
     );
-    if let (Some(kf), Some(fkf)) = (f.filters.iter().find(|x| x.id == "kf"), f.filters.iter().find(|x| x.id == "fkf")) {
+    if let (Some(kf), Some(fkf)) =
+        (f.filters.iter().find(|x| x.id == names::KF), f.filters.iter().find(|x| x.id == names::FKF))
+    {
         for (i, z) in f.zones.iter().enumerate() {
             let _ = writeln!(
                 md,
@@ -477,7 +480,8 @@ pub fn markdown(s: &Summary) -> String {
 fn observations(s: &Summary) -> String {
     let mut o = String::from("## Observations\n\n");
     for r in &s.readings {
-        let (Some(kf), Some(or), Some(on)) = (find(r, "kf"), find(r, "oracle"), find(r, "fkf_online_float")) else {
+        let (Some(kf), Some(or), Some(on)) = (find(r, names::KF), find(r, "oracle"), find(r, "fkf_online_float"))
+        else {
             continue;
         };
         let _ = writeln!(
@@ -494,7 +498,9 @@ fn observations(s: &Summary) -> String {
         );
     }
     let f = &s.field;
-    if let (Some(kf), Some(fkf)) = (f.filters.iter().find(|x| x.id == "kf"), f.filters.iter().find(|x| x.id == "fkf")) {
+    if let (Some(kf), Some(fkf)) =
+        (f.filters.iter().find(|x| x.id == names::KF), f.filters.iter().find(|x| x.id == names::FKF))
+    {
         let _ = writeln!(
             o,
             "- Field analogue: under the crane the FIS sees \"single\" with N = 5 and answers t ≈ {} whatever d is, so \

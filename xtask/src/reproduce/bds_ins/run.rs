@@ -3,6 +3,7 @@
 //! accumulators over the Monte Carlo seeds.
 
 use estimators::Setup;
+use estimators::registry::names;
 use std::time::Instant;
 
 use bds_ins_dynamics::{
@@ -41,7 +42,7 @@ pub struct Variant {
 
 /// The filters of experiment (a), run on identical data.
 pub const VARIANTS_A: [Variant; 6] = [
-    Variant { id: "kf", label: "KF (t ≡ 1)", mode: Mode::Unit, rtk_after: None },
+    Variant { id: names::KF, label: "KF (t ≡ 1)", mode: Mode::Unit, rtk_after: None },
     Variant { id: "fkf_scripted_float", label: "FKF, scripted d, float", mode: Mode::FisScripted, rtk_after: Some(4) },
     Variant { id: "fkf_online_float", label: "FKF, online d, float", mode: Mode::FisOnline, rtk_after: Some(4) },
     Variant {
@@ -56,8 +57,8 @@ pub const VARIANTS_A: [Variant; 6] = [
 
 /// The filters of experiment (b).
 pub const VARIANTS_B: [Variant; 2] = [
-    Variant { id: "kf", label: "KF (t ≡ 1)", mode: Mode::Unit, rtk_after: None },
-    Variant { id: "fkf", label: "FKF (online d)", mode: Mode::FisOnline, rtk_after: None },
+    Variant { id: names::KF, label: "KF (t ≡ 1)", mode: Mode::Unit, rtk_after: None },
+    Variant { id: names::FKF, label: "FKF (online d)", mode: Mode::FisOnline, rtk_after: None },
 ];
 
 /// The scaling of one variant: the FIS of the workspace (`FuzzyScaling::bds_ins_default`,
