@@ -233,7 +233,13 @@ impl SettingsKind {
             SettingsKind::SetMembershipInputBox | SettingsKind::MovingHorizon => None,
             SettingsKind::Unscented => Some(EstimatorSettings::Unscented(UkfParams::default())),
             SettingsKind::NonlinearMovingHorizon => {
-                Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(NonlinearMheSettings::paper())))
+                // The paper's settings with sigma points valid for every n (the paper's κ = −2
+                // needs n > 2).
+                let settings = NonlinearMheSettings {
+                    arrival: crate::mhe::NonlinearArrival::Ukf(UkfParams::default()),
+                    ..NonlinearMheSettings::paper()
+                };
+                Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(settings)))
             }
             SettingsKind::FuzzyAdaptive => {
                 Some(EstimatorSettings::FuzzyAdaptive(Box::new(FuzzyAdaptiveSettings::default())))
