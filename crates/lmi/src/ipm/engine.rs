@@ -1046,7 +1046,7 @@ impl Workspace {
             self.cb[i] = self.c[i] + b;
             self.q[i] = b - self.c[i];
         }
-        dense::cholesky_solve(&self.lfac, m, &mut self.q, self.legacy);
+        dense::cholesky_solve(&self.lfac, m, &mut self.q);
         // β − (b + c)ᵀq = ‖Tᵀ(F₀ − A(q))T‖², computed in that form (no cancellation).
         self.coef[0] = 1.0;
         for i in 0..m {
@@ -1271,7 +1271,7 @@ impl Workspace {
             self.p[i] = self.rhs[i] + self.tr[i + 1];
         }
         let g0 = self.tr[0];
-        dense::cholesky_solve(&self.lfac, m, &mut self.p, self.legacy);
+        dense::cholesky_solve(&self.lfac, m, &mut self.p);
         let cbp = dense::dot(&self.cb, &self.p);
         let num = dtau_rhs + cbp - g0 + dkappa / st.tau;
         let den = st.den0 + st.kappa / st.tau;
@@ -1353,10 +1353,6 @@ impl Workspace {
         if st.dkappa < 0.0 {
             alpha = alpha.min(-st.kappa / st.dkappa);
         }
-        // The predictor's step only sets σ: two halvings (step known to within 1/4) since issue
-        // 15 (fewer Cholesky tests, and on the filter LMI and SDPLIB as few or fewer iterations);
-        // three in legacy mode.
-        let halvings = if self.legacy { 3 } else { 2 };
         for blk in &mut self.blocks {
             let n = blk.n;
             for primal in [true, false] {
@@ -1366,7 +1362,7 @@ impl Workspace {
                     // within HKM_STEP_RTOL.
                     let base = if primal { &blk.x } else { &blk.y };
                     alpha = if coarse {
-                        max_step_pencil(base, dir, &mut blk.tmp2, n, alpha, halvings, f64::INFINITY)
+                        max_step_pencil(base, dir, &mut blk.tmp2, n, alpha, PREDICTOR_HALVINGS, f64::INFINITY)
                     } else {
                         max_step_pencil(base, dir, &mut blk.tmp2, n, alpha, 0, HKM_STEP_RTOL)
                     };
@@ -1378,7 +1374,7 @@ impl Workspace {
                         }
                     }
                     alpha = if coarse {
-                        max_step_coarse(&blk.tmp, &mut blk.tmp2, n, alpha, halvings)
+                        max_step_coarse(&blk.tmp, &mut blk.tmp2, n, alpha, PREDICTOR_HALVINGS)
                     } else {
                         max_step(&mut blk.tmp, &mut blk.tmp2, n, alpha, &mut blk.ev, &mut blk.ee)?
                     };
@@ -1475,6 +1471,10 @@ const PRECISION_LOSS: f64 = 1e-6;
 /// Relative accuracy of the HKM corrector's step length (Cholesky bisection; the step taken is
 /// the feasible end of the bracket, so at worst this fraction shorter than the boundary's).
 const HKM_STEP_RTOL: f64 = 1.0 / 64.0;
+
+/// Cholesky-test halvings of the predictor's step, which only sets `σ` (step known to within
+/// 1/4; three halvings cost more tests and gave no fewer iterations on the filter LMI and SDPLIB).
+const PREDICTOR_HALVINGS: u32 = 2;
 
 /// Fraction of the step to the boundary of the cone that is taken.
 const STEP_FRACTION: f64 = 0.99;
