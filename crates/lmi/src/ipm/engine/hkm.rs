@@ -1,10 +1,12 @@
-//! The Helmberg–Kojima–Monteiro direction (`docs/sdp.md` §3.6): scaling of the dense blocks from
-//! Cholesky factors and the Schur matrix `tr(Fᵢ Y Fⱼ X⁻¹)`.
+//! The Helmberg–Kojima–Monteiro direction on the dense blocks (`docs/sdp.md` §3.6): the scaling
+//! from Cholesky factors, the Schur matrix `tr(Fᵢ Y Fⱼ X⁻¹)`, and the block formulas of the
+//! Newton step (unscaled).
 
 use faer::dyn_stack::MemStack;
 
 use super::super::dense::{self, view};
 use super::super::workspace::{BlockWs, Ent, SchurKind, Workspace};
+use super::Ws;
 use super::nonneg::{assemble_diag, scale_diag};
 
 /// HKM version of the NT whole-block assembly: with `ξ_a = X⁻¹ w_a`, `η_a = Y w_a`,
@@ -71,6 +73,61 @@ fn assemble_grouped_hkm(blk: &mut BlockWs, mhat: &mut [f64], mp: usize) {
             mhat[i + j * mp] += s;
             h0 = h1;
         }
+    }
+}
+
+/// Adds `⟨H, sym(Y H X⁻¹)⟩ = ‖L₁⁻¹ H L₂‖² = ⟨H Y, X⁻¹ H⟩` to `den`, `H = F₀ − A(q)` in `tmp2`:
+/// the block's part of the `τ` row's coefficient.
+#[inline(always)]
+pub(super) fn add_tau_term(blk: &mut BlockWs, den: &mut f64) {
+    let n = blk.n;
+    dense::mul(&mut blk.tmp, n, view(&blk.tmp2, n), view(&blk.y, n));
+    dense::mul(&mut blk.g, n, view(&blk.xinv, n), view(&blk.tmp2, n));
+    *den += dense::dot(&blk.tmp, &blk.g);
+}
+
+/// The predictor's right-hand side: HKM keeps `w_s` unscaled, `w_s = −Y`.
+#[inline(always)]
+pub(super) fn affine_rhs(blk: &mut BlockWs) {
+    for (w, y) in blk.ws.iter_mut().zip(&blk.y) {
+        *w = -y;
+    }
+}
+
+/// The corrector's right-hand side: `(Y + ΔY)(X + ΔX) = σμI` linearised with the predictor's
+/// second-order term, times `X⁻¹`, gives `ΔY = w_s − sym(Y ΔX X⁻¹)` with
+/// `w_s = σμX⁻¹ − Y − sym(ΔYₐ ΔXₐ X⁻¹)`; `smu = σμ`.
+#[inline(always)]
+pub(super) fn corrector_rhs(blk: &mut BlockWs, smu: f64) {
+    let n = blk.n;
+    dense::mul(&mut blk.k, n, view(&blk.dxs_a, n), view(&blk.xinv, n));
+    dense::mul(&mut blk.tmp, n, view(&blk.dys_a, n), view(&blk.k, n));
+    dense::symmetrize(&mut blk.tmp, n);
+    for ((w, t), (xi, y)) in blk.ws.iter_mut().zip(&blk.tmp).zip(blk.xinv.iter().zip(&blk.y)) {
+        *w = smu * xi - y - t;
+    }
+}
+
+/// From `ΔX` (`e`), unscaled: `Δx̃ = ΔX`, `Δỹ = ΔY = w_s − sym(Y ΔX X⁻¹)` (copied to `dy` if
+/// `with_dy`).
+#[inline(always)]
+pub(super) fn recover_direction(blk: &mut BlockWs, ws: Ws, with_dy: bool) {
+    let n = blk.n;
+    blk.dxs.copy_from_slice(&blk.e);
+    dense::mul(&mut blk.k, n, view(&blk.e, n), view(&blk.xinv, n));
+    dense::mul(&mut blk.tmp, n, view(&blk.y, n), view(&blk.k, n));
+    dense::symmetrize(&mut blk.tmp, n);
+    if ws == Ws::Zero {
+        for (dy, t) in blk.dys.iter_mut().zip(&blk.tmp) {
+            *dy = -t;
+        }
+    } else {
+        for (dy, (w, t)) in blk.dys.iter_mut().zip(blk.ws.iter().zip(&blk.tmp)) {
+            *dy = w - t;
+        }
+    }
+    if with_dy {
+        blk.dy.copy_from_slice(&blk.dys);
     }
 }
 

@@ -1,9 +1,10 @@
 //! One predictor–corrector step: the Newton solves through the factored Schur matrix, the
-//! corrector's accuracy check with one step of iterative refinement, and the update.
+//! corrector's accuracy check with one step of iterative refinement, and the update. The
+//! per-block formulas of each direction are in [`nt`], [`hkm`] and [`nonneg`].
 
-use super::super::dense::{self, view};
+use super::super::dense;
 use super::step_length::STEP_FRACTION;
-use super::{State, Workspace, Ws, combine, traces};
+use super::{State, Workspace, Ws, combine, hkm, nonneg, nt, traces};
 
 /// Sentinel returned by `step` when the normal equations lost too much accuracy.
 pub(super) const NEED_PRECISION: f64 = -1.0;
@@ -23,47 +24,31 @@ impl Workspace {
             self.q[i] = b - self.c[i];
         }
         dense::cholesky_solve(&self.lfac, m, &mut self.q);
-        // β − (b + c)ᵀq = ‖Tᵀ(F₀ − A(q))T‖², computed in that form (no cancellation).
+        // β − (b + c)ᵀq, computed block by block from H = F₀ − A(q) (NT: ‖TᵀHT‖²) instead of by
+        // the subtraction (no cancellation).
         self.coef[0] = 1.0;
         for i in 0..m {
             self.coef[i + 1] = -self.q[i];
         }
         st.den0 = 0.0;
         for blk in &mut self.blocks {
-            let n = blk.n;
             combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.tmp2);
             if blk.psd && self.hkm_on {
-                // HKM: ⟨H, sym(Y H X⁻¹)⟩ = ‖L₁⁻¹ H L₂‖² (`l1 = L₁⁻¹`, `Y = L₂L₂ᵀ`) = ⟨H Y, X⁻¹ H⟩.
-                dense::mul(&mut blk.tmp, n, view(&blk.tmp2, n), view(&blk.y, n));
-                dense::mul(&mut blk.g, n, view(&blk.xinv, n), view(&blk.tmp2, n));
-                st.den0 += dense::dot(&blk.tmp, &blk.g);
+                hkm::add_tau_term(blk, &mut st.den0);
             } else if blk.psd {
-                dense::congruence(&mut blk.g, &mut blk.tmp, &blk.t, &blk.tmp2, n, true);
-                st.den0 += dense::norm2(&blk.g);
+                nt::add_tau_term(blk, &mut st.den0);
             } else {
-                for i in 0..n {
-                    let v = blk.d[i] * blk.tmp2[i];
-                    st.den0 += v * v;
-                }
+                nonneg::add_tau_term(blk, &mut st.den0);
             }
         }
         // Predictor (affine scaling): w_s = −Λ.
         for blk in &mut self.blocks {
-            let n = blk.n;
             if blk.psd && self.hkm_on {
-                // HKM keeps `w_s` unscaled: the affine right-hand side is `−Y`.
-                for (w, y) in blk.ws.iter_mut().zip(&blk.y) {
-                    *w = -y;
-                }
+                hkm::affine_rhs(blk);
             } else if blk.psd {
-                blk.ws.fill(0.0);
-                for i in 0..n {
-                    blk.ws[i + i * n] = -blk.lam[i];
-                }
+                nt::affine_rhs(blk);
             } else {
-                for i in 0..n {
-                    blk.ws[i] = -blk.lam[i];
-                }
+                nonneg::affine_rhs(blk);
             }
         }
         let dk = -st.tau * st.kappa;
@@ -79,32 +64,12 @@ impl Workspace {
         let smu = sigma * st.mu;
         // Corrector: λ ∘ (Δx̃ + Δỹ) = −λ∘λ + σμI − Δx̃ₐ∘Δỹₐ.
         for blk in &mut self.blocks {
-            let n = blk.n;
             if blk.psd && self.hkm_on {
-                // HKM: (Y + ΔY)(X + ΔX) = σμI linearised with the predictor's second-order
-                // term, times X⁻¹: ΔY = σμX⁻¹ − Y − sym(ΔYₐ ΔXₐ X⁻¹) − sym(Y ΔX X⁻¹).
-                dense::mul(&mut blk.k, n, view(&blk.dxs_a, n), view(&blk.xinv, n));
-                dense::mul(&mut blk.tmp, n, view(&blk.dys_a, n), view(&blk.k, n));
-                dense::symmetrize(&mut blk.tmp, n);
-                for ((w, t), (xi, y)) in blk.ws.iter_mut().zip(&blk.tmp).zip(blk.xinv.iter().zip(&blk.y)) {
-                    *w = smu * xi - y - t;
-                }
+                hkm::corrector_rhs(blk, smu);
             } else if blk.psd {
-                dense::mul(&mut blk.tmp, n, view(&blk.dxs_a, n), view(&blk.dys_a, n));
-                for j in 0..n {
-                    for i in 0..n {
-                        let mut r = -0.5 * (blk.tmp[i + j * n] + blk.tmp[j + i * n]);
-                        if i == j {
-                            r += smu - blk.lam[i] * blk.lam[i];
-                        }
-                        blk.ws[i + j * n] = 2.0 * r / (blk.lam[i] + blk.lam[j]);
-                    }
-                }
+                nt::corrector_rhs(blk, smu);
             } else {
-                for i in 0..n {
-                    let r = -blk.lam[i] * blk.lam[i] + smu - blk.dxs_a[i] * blk.dys_a[i];
-                    blk.ws[i] = r / blk.lam[i];
-                }
+                nonneg::corrector_rhs(blk, smu);
             }
         }
         let dk = -st.tau * st.kappa + smu - st.dtau_a * st.dkappa_a;
@@ -262,7 +227,6 @@ impl Workspace {
         self.coef[0] = -dtau;
         self.coef[1..].copy_from_slice(&self.dx);
         for blk in &mut self.blocks {
-            let n = blk.n;
             combine((&blk.nz_p1, &blk.nz_p2, &blk.nz_v, &blk.nz_start), &self.coef, &mut blk.e);
             if eta != 0.0 {
                 for (e, r) in blk.e.iter_mut().zip(&blk.rz) {
@@ -270,49 +234,11 @@ impl Workspace {
                 }
             }
             if blk.psd && self.hkm_on {
-                // HKM, unscaled: Δx̃ = ΔX, Δỹ = ΔY = w_s − sym(Y ΔX X⁻¹).
-                blk.dxs.copy_from_slice(&blk.e);
-                dense::mul(&mut blk.k, n, view(&blk.e, n), view(&blk.xinv, n));
-                dense::mul(&mut blk.tmp, n, view(&blk.y, n), view(&blk.k, n));
-                dense::symmetrize(&mut blk.tmp, n);
-                if ws == Ws::Zero {
-                    for (dy, t) in blk.dys.iter_mut().zip(&blk.tmp) {
-                        *dy = -t;
-                    }
-                } else {
-                    for (dy, (w, t)) in blk.dys.iter_mut().zip(blk.ws.iter().zip(&blk.tmp)) {
-                        *dy = w - t;
-                    }
-                }
-                if with_dy {
-                    blk.dy.copy_from_slice(&blk.dys);
-                }
-                continue;
-            }
-            if blk.psd {
-                dense::congruence(&mut blk.dxs, &mut blk.tmp, &blk.t, &blk.e, n, true);
+                hkm::recover_direction(blk, ws, with_dy);
+            } else if blk.psd {
+                nt::recover_direction(blk, ws, with_dy);
             } else {
-                for i in 0..n {
-                    blk.dxs[i] = blk.d[i] * blk.e[i];
-                }
-            }
-            if ws == Ws::Zero {
-                for (dy, dx) in blk.dys.iter_mut().zip(&blk.dxs) {
-                    *dy = -dx;
-                }
-            } else {
-                for (dy, (w, dx)) in blk.dys.iter_mut().zip(blk.ws.iter().zip(&blk.dxs)) {
-                    *dy = w - dx;
-                }
-            }
-            if with_dy {
-                if blk.psd {
-                    dense::congruence(&mut blk.dy, &mut blk.tmp, &blk.t, &blk.dys, n, false);
-                } else {
-                    for i in 0..n {
-                        blk.dy[i] = blk.d[i] * blk.dys[i];
-                    }
-                }
+                nonneg::recover_direction(blk, ws, with_dy);
             }
         }
         Some((dtau, dkap))

@@ -1,10 +1,12 @@
-//! The Nesterov–Todd direction: scaling of the dense blocks and the Schur matrix `tr(Fᵢ D Fⱼ D)`.
+//! The Nesterov–Todd direction on the dense blocks: the scaling, the Schur matrix
+//! `tr(Fᵢ D Fⱼ D)`, and the block formulas of the Newton step in the scaled space.
 
 use faer::dyn_stack::MemStack;
 
 use super::super::dense::{self, view};
 use super::super::eig::sym_eig;
 use super::super::workspace::{BlockWs, Ent, SchurKind, Workspace};
+use super::Ws;
 use super::nonneg::{assemble_diag, scale_diag};
 
 /// Schur contributions of one dense block from all pairs of groups at once: every `Fᵢ` is a sum
@@ -60,6 +62,61 @@ fn assemble_grouped(blk: &mut BlockWs, mhat: &mut [f64], mp: usize) {
             mhat[i + j * mp] += 2.0 * s;
             h0 = h1;
         }
+    }
+}
+
+/// Adds `‖TᵀHT‖²` to `den`, `H = F₀ − A(q)` in `tmp2`: the block's part of the `τ` row's
+/// coefficient `⟨H, DHD⟩`.
+#[inline(always)]
+pub(super) fn add_tau_term(blk: &mut BlockWs, den: &mut f64) {
+    let n = blk.n;
+    dense::congruence(&mut blk.g, &mut blk.tmp, &blk.t, &blk.tmp2, n, true);
+    *den += dense::norm2(&blk.g);
+}
+
+/// The predictor's scaled right-hand side `w_s = −Λ`.
+#[inline(always)]
+pub(super) fn affine_rhs(blk: &mut BlockWs) {
+    let n = blk.n;
+    blk.ws.fill(0.0);
+    for i in 0..n {
+        blk.ws[i + i * n] = -blk.lam[i];
+    }
+}
+
+/// The corrector's scaled right-hand side: `λ ∘ w_s = −λ∘λ + σμI − Δx̃ₐ∘Δỹₐ`, solved entrywise
+/// (`Λ` is diagonal); `smu = σμ`.
+#[inline(always)]
+pub(super) fn corrector_rhs(blk: &mut BlockWs, smu: f64) {
+    let n = blk.n;
+    dense::mul(&mut blk.tmp, n, view(&blk.dxs_a, n), view(&blk.dys_a, n));
+    for j in 0..n {
+        for i in 0..n {
+            let mut r = -0.5 * (blk.tmp[i + j * n] + blk.tmp[j + i * n]);
+            if i == j {
+                r += smu - blk.lam[i] * blk.lam[i];
+            }
+            blk.ws[i + j * n] = 2.0 * r / (blk.lam[i] + blk.lam[j]);
+        }
+    }
+}
+
+/// From `ΔX` (`e`): `Δx̃ = TᵀΔXT`, `Δỹ = w_s − Δx̃` and, if `with_dy`, `ΔY = TΔỹTᵀ`.
+#[inline(always)]
+pub(super) fn recover_direction(blk: &mut BlockWs, ws: Ws, with_dy: bool) {
+    let n = blk.n;
+    dense::congruence(&mut blk.dxs, &mut blk.tmp, &blk.t, &blk.e, n, true);
+    if ws == Ws::Zero {
+        for (dy, dx) in blk.dys.iter_mut().zip(&blk.dxs) {
+            *dy = -dx;
+        }
+    } else {
+        for (dy, (w, dx)) in blk.dys.iter_mut().zip(blk.ws.iter().zip(&blk.dxs)) {
+            *dy = w - dx;
+        }
+    }
+    if with_dy {
+        dense::congruence(&mut blk.dy, &mut blk.tmp, &blk.t, &blk.dys, n, false);
     }
 }
 
