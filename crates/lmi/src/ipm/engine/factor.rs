@@ -3,8 +3,8 @@
 
 use faer::dyn_stack::MemStack;
 
-use super::super::dense;
-use super::super::workspace::{Ent, Workspace};
+use crate::ipm::dense;
+use crate::ipm::workspace::{Ent, Workspace};
 
 impl Workspace {
     /// Cholesky of the `m × m` Schur matrix, with a tiny diagonal shift on failure.

@@ -4,10 +4,10 @@
 
 use faer::dyn_stack::MemStack;
 
-use super::super::dense::{self, view};
-use super::super::workspace::{BlockWs, Ent, SchurKind, Workspace};
 use super::Ws;
 use super::nonneg::{assemble_diag, scale_diag};
+use crate::ipm::dense::{self, view};
+use crate::ipm::workspace::{BlockWs, Ent, SchurKind, Workspace};
 
 /// HKM version of the NT whole-block assembly: with `ξ_a = X⁻¹ w_a`, `η_a = Y w_a`,
 /// `Zˣ = Wᵀ X⁻¹ W`, `Zʸ = Wᵀ Y W`, a pair of active groups `a ∈ i`, `h ∈ j` adds

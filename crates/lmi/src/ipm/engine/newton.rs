@@ -2,9 +2,9 @@
 //! corrector's accuracy check with one step of iterative refinement, and the update. The
 //! per-block formulas of each direction are in [`nt`], [`hkm`] and [`nonneg`].
 
-use super::super::dense;
 use super::step_length::STEP_FRACTION;
 use super::{State, Workspace, Ws, combine, hkm, nonneg, nt, traces};
+use crate::ipm::dense;
 
 /// Sentinel returned by `step` when the normal equations lost too much accuracy.
 pub(super) const NEED_PRECISION: f64 = -1.0;

@@ -1,8 +1,8 @@
 //! Nonnegative blocks: their diagonal scaling, Schur contributions and block formulas of the
 //! Newton step, the same for the NT and HKM directions.
 
-use super::super::workspace::BlockWs;
 use super::Ws;
+use crate::ipm::workspace::BlockWs;
 
 /// Schur contributions `Σ_r Fᵢ[r] d_r² Fⱼ[r]` of a nonnegative block (NT and HKM alike).
 #[inline(always)]

@@ -3,11 +3,11 @@
 
 use faer::dyn_stack::MemStack;
 
-use super::super::dense::{self, view};
-use super::super::eig::sym_eig;
-use super::super::workspace::{BlockWs, Ent, SchurKind, Workspace};
 use super::Ws;
 use super::nonneg::{assemble_diag, scale_diag};
+use crate::ipm::dense::{self, view};
+use crate::ipm::eig::sym_eig;
+use crate::ipm::workspace::{BlockWs, Ent, SchurKind, Workspace};
 
 /// Schur contributions of one dense block from all pairs of groups at once: every `Fᵢ` is a sum
 /// over its groups `e_c wᵀ + w e_cᵀ`, and with `y_h = D w_h`, `Z = Wᵀ D W`,

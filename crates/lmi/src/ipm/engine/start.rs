@@ -2,8 +2,8 @@
 
 use faer::dyn_stack::MemStack;
 
-use super::super::dense;
-use super::super::workspace::Workspace;
+use crate::ipm::dense;
+use crate::ipm::workspace::Workspace;
 
 /// Frobenius norm of `Fᵢ` (all blocks).
 fn matrix_norm(ws: &Workspace, i: usize) -> f64 {
@@ -24,6 +24,7 @@ fn matrix_norm(ws: &Workspace, i: usize) -> f64 {
 pub(crate) const WARM_WEIGHT: f64 = 0.99;
 
 impl Workspace {
+    /// Frobenius norm of `F₀`.
     pub(super) fn norm_f0(&self) -> f64 {
         let mut s = 0.0;
         for blk in &self.blocks {

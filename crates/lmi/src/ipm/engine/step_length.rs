@@ -1,7 +1,7 @@
 //! Step lengths: the largest step that keeps every block and `τ`, `κ` in their cones.
 
-use super::super::eig::{max_step, max_step_coarse, max_step_pencil};
 use super::{State, Workspace};
+use crate::ipm::eig::{max_step, max_step_coarse, max_step_pencil};
 
 /// Relative accuracy of the HKM corrector's step length (Cholesky bisection; the step taken is
 /// the feasible end of the bracket, so at worst this fraction shorter than the boundary's).

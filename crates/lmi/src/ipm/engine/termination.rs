@@ -3,8 +3,8 @@
 
 use crate::solver::{SdpSolution, SolveStatus, SolverSettings};
 
-use super::super::dense;
 use super::{State, Workspace, combine, traces};
+use crate::ipm::dense;
 
 /// Tolerances of one level (strict, or relaxed by `reduced_tol_factor`).
 pub(super) struct Tols {
