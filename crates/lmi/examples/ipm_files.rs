@@ -1,14 +1,14 @@
 //! Solves SDPA files with `faer-ipm` and prints per-file outcomes and timing statistics: a tool
-//! for profiling (`valgrind --tool=callgrind`) and for comparing the method with its pre-issue-15
-//! variant ([`FaerIpm::set_legacy`]) on the same problems, side by side in one run.
+//! for profiling (`valgrind --tool=callgrind`) and for comparing the search directions on the
+//! same problems, side by side in one run.
 //!
-//! `cargo run --release -p lmi --example ipm_files -- [--reps N] [--legacy | --both | --hkm |
-//! --hkm-only] [--quiet] [--verbose] FILE_OR_DIR…`
+//! `cargo run --release -p lmi --example ipm_files -- [--reps N] [--hkm | --hkm-only] [--quiet]
+//! [--verbose] FILE_OR_DIR…`
 //!
-//! With `--both`, every file is solved by both variants, alternately, and the fastest of the
-//! `N` repetitions of each is kept (the minimum is the figure least disturbed by other processes
-//! on a shared machine). `--hkm` compares the NT direction (the default) with the HKM direction
-//! ([`FaerIpm::set_direction`]) in the same way; `--hkm-only` runs HKM alone.
+//! Every file is solved `N` times and the fastest repetition is kept (the minimum is the figure
+//! least disturbed by other processes on a shared machine). `--hkm` solves every file with both
+//! the NT direction (the default) and the HKM direction ([`FaerIpm::set_direction`]),
+//! alternately; `--hkm-only` runs HKM alone.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -41,8 +41,7 @@ impl Tally {
 
 fn main() {
     let mut reps = 1usize;
-    // 0: legacy, 1: new (NT), 2: new with the HKM direction.
-    let mut variants: Vec<u8> = vec![1];
+    let mut directions = vec![SearchDirection::NesterovTodd];
     let mut quiet = false;
     let mut verbose = false;
     let mut files: Vec<PathBuf> = Vec::new();
@@ -50,10 +49,8 @@ fn main() {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--reps" => reps = args.next().and_then(|v| v.parse().ok()).expect("--reps N"),
-            "--legacy" => variants = vec![0],
-            "--both" => variants = vec![0, 1],
-            "--hkm" => variants = vec![1, 2],
-            "--hkm-only" => variants = vec![2],
+            "--hkm" => directions = vec![SearchDirection::NesterovTodd, SearchDirection::Hkm],
+            "--hkm-only" => directions = vec![SearchDirection::Hkm],
             "--quiet" => quiet = true,
             "--verbose" => verbose = true,
             _ => {
@@ -73,17 +70,14 @@ fn main() {
         }
     }
     let settings = SolverSettings::builder().verbose(verbose).build().expect("settings");
-    let mut tallies: Vec<Tally> = variants.iter().map(|_| Tally::default()).collect();
+    let mut tallies: Vec<Tally> = directions.iter().map(|_| Tally::default()).collect();
     for f in &files {
         let problem = read_sdpa_file(f).expect("SDPA file");
-        let mut solvers: Vec<(FaerIpm, SdpSolution, f64)> = variants
+        let mut solvers: Vec<(FaerIpm, SdpSolution, f64)> = directions
             .iter()
-            .map(|&variant| {
+            .map(|&direction| {
                 let mut ipm = FaerIpm::new(settings.clone()).expect("settings");
-                ipm.set_legacy(variant == 0);
-                if variant == 2 {
-                    ipm.set_direction(SearchDirection::Hkm);
-                }
+                ipm.set_direction(direction);
                 ipm.setup(&problem).expect("setup");
                 (ipm, SdpSolution::new(&problem), f64::INFINITY)
             })
@@ -102,7 +96,7 @@ fn main() {
                 println!(
                     "{} {} {} it {} pobj {:.12e} dobj {:.12e} pres {:.1e} dres {:.1e} {:.1} us",
                     f.file_name().map_or(String::new(), |s| s.to_string_lossy().into_owned()),
-                    label(ipm),
+                    label(ipm.direction()),
                     sol.status,
                     sol.iterations,
                     sol.primal_objective,
@@ -114,17 +108,11 @@ fn main() {
             }
         }
     }
-    for (&variant, tally) in variants.iter().zip(&tallies) {
-        println!("{}", tally.summary(["legacy", "new", "hkm"][usize::from(variant)]));
+    for (&direction, tally) in directions.iter().zip(&tallies) {
+        println!("{}", tally.summary(label(direction)));
     }
 }
 
-fn label(ipm: &FaerIpm) -> &'static str {
-    if ipm.legacy() {
-        "legacy"
-    } else if ipm.direction() == SearchDirection::Hkm {
-        "hkm"
-    } else {
-        "new"
-    }
+fn label(direction: SearchDirection) -> &'static str {
+    if direction == SearchDirection::Hkm { "hkm" } else { "nt" }
 }

@@ -203,9 +203,8 @@ pub struct SolverSettings {
     /// do for the homogeneous embedding (`docs/sdp.md` §3.7); a warm solve that ends neither
     /// `Solved` nor with an infeasibility certificate is repeated cold within the same
     /// `max_iterations` and `time_limit` (when nothing is left, the warm outcome stands), so the
-    /// outcome is judged by the same tests either way. `faer-ipm` in legacy mode and backends
-    /// that cannot warm start (Clarabel) solve cold; [`SdpSolution::start`] tells which start
-    /// was used.
+    /// outcome is judged by the same tests either way. Backends that cannot warm start
+    /// (Clarabel) solve cold; [`SdpSolution::start`] tells which start was used.
     pub warm_start: bool,
 }
 

@@ -1,6 +1,6 @@
-//! Regression tests of issue 10 ("Reliability") for the SDP backends: badly scaled problems get
-//! the same answer as well scaled ones, huge problems are refused before anything is allocated,
-//! and (with the `clarabel` feature) a panic inside Clarabel is contained at the backend boundary.
+//! Reliability regression tests for the SDP backends: badly scaled problems get the same answer
+//! as well scaled ones, huge problems are refused before anything is allocated, and (with the
+//! `clarabel` feature) a panic inside Clarabel is contained at the backend boundary.
 
 use lmi::{Block, Entry, FaerIpm, LmiError, SdpBackend, SdpProblem, SdpSolution, SolveStatus, SolverSettings};
 
@@ -143,7 +143,7 @@ fn many_variables(m: usize) -> SdpProblem {
     SdpProblem::new(vec![Block::Nonneg(1)], vec![1.0; m], entries).unwrap()
 }
 
-/// The SDPA file of the issue (0.8 MB, m = 200 000) made faer-ipm request 320 GB and abort. Now
+/// An SDPA file of 0.8 MB with m = 200 000 once made faer-ipm request 320 GB and abort. Now
 /// the memory is computed first and the setup refused with a typed error (a test process that
 /// tried to allocate it would abort).
 #[test]
@@ -166,7 +166,7 @@ fn faer_ipm_refuses_a_problem_that_needs_more_than_the_memory_limit() {
     assert!(matches!(ipm.solve(&p, &mut sol), Err(LmiError::StructureMismatch(_))));
 }
 
-/// The scenario of the issue end to end: an SDPA file of a few MB with m = 200 000 is read
+/// The same scenario end to end: an SDPA file of a few MB with m = 200 000 is read
 /// (the reader's memory is proportional to its input) and refused by the backend.
 #[test]
 fn an_sdpa_file_with_200_000_variables_is_refused_not_aborted() {

@@ -121,10 +121,10 @@ pub(crate) fn cholesky(a: &mut [f64], n: usize, stack: &mut MemStack) -> bool {
 ///
 /// Up to order 128 by two plain loops (a column update, then contiguous dot products: both
 /// vectorise), which at the Schur orders of the filter LMI (30–100) cost a fraction of faer's
-/// general triangular solves; `faer_only` forces faer's (the method before issue 15).
+/// general triangular solves; faer's above.
 #[inline(always)]
-pub(crate) fn cholesky_solve(l: &[f64], n: usize, v: &mut [f64], faer_only: bool) {
-    if n <= 128 && !faer_only {
+pub(crate) fn cholesky_solve(l: &[f64], n: usize, v: &mut [f64]) {
+    if n <= 128 {
         // L z = v: column by column.
         for j in 0..n {
             let col = &l[j * n..j * n + n];

@@ -75,8 +75,7 @@
 //! step first (usually enough near the end); otherwise a Householder tridiagonalisation and a
 //! bisection on Sturm counts for the smallest eigenvalue (relative accuracy `10⁻⁴`, rounded
 //! towards the shorter step). The predictor's step only sets `σ`, so it uses two Cholesky-test
-//! halvings instead (step known to within 1/4; three, within 1/8, before issue 15 and in
-//! [`FaerIpm::set_legacy`] mode).
+//! halvings instead (step known to within 1/4).
 //!
 //! **Starting point.** As in SDPT3: `x = 0`, `X = ξI`, `Y = ηI` with
 //! `ξ = max(10, √ν, ‖F₀‖, maxᵢ‖Fᵢ‖)`, `η = max(10, √ν, ν maxᵢ (1 + |cᵢ|)/(1 + ‖Fᵢ‖))` and
@@ -93,7 +92,7 @@
 //! iteration budget and of the time limit (with nothing left, the warm outcome stands), so that
 //! the outcome is either one the cold method's tests accept or the cold method's own. A solution
 //! is stored when a solve ends `Solved` or `AlmostSolved`, and used only by a solve of the same
-//! setup whose equilibration factors are those it was stored with. Legacy mode never warm-starts.
+//! setup whose equilibration factors are those it was stored with.
 //! On the carrier's filter steps the method takes about 4 iterations instead of 11–13.
 //!
 //! **Small dense kernels.** The whole iteration runs inside one `pulp` dispatch (faer's SIMD
@@ -108,14 +107,14 @@
 //! in-place Householder tridiagonalisation + implicit QL (`tred2`/`tql2`): faer's general
 //! eigensolver costs about 15 µs at order 16, this one about 5 µs with vectors.
 //!
-//! On the filter LMI for `(n, m) = (4, 3)` (one block of order 16, 29 variables, 12 iterations)
-//! a solve took about 320 µs on the development machine before issue 15, roughly 27 µs per
+//! On the filter LMI for `(n, m) = (4, 3)` as first stated (one block of order 16, 29 variables,
+//! 12 iterations), the earlier method (faer's triangular solves for the Schur system, three
+//! predictor halvings) took about 320 µs per solve on the development machine, roughly 27 µs per
 //! iteration: the NT scaling (two Cholesky factorisations, the eigendecomposition, six products)
 //! about a quarter, the step lengths about a quarter, the Schur matrix and its factorisation
-//! about a fifth, the rest the right-hand sides and directions. Issue 15 changed the Schur solves
-//! (plain loops up to order 128 instead of faer's triangular solves) and the predictor's halvings;
-//! the main gain came from the statement of the filter LMI (fewer iterations; see `docs/sdp.md`).
-//! [`FaerIpm::set_legacy`] selects the method before issue 15, for comparisons in one run.
+//! about a fifth, the rest the right-hand sides and directions. Plain-loop Schur solves and two
+//! halvings took a little off that; the main gain came from the whitened statement of the filter
+//! LMI (fewer iterations). The measurements of both methods are in `docs/sdp.md` §3.5.
 //!
 //! **HKM direction** ([`FaerIpm::set_direction`], [`SearchDirection::Hkm`]; `docs/sdp.md` §3.6).
 //! Instead of the NT scaling, the Helmberg–Kojima–Monteiro direction linearises `YX = σμI` and
@@ -220,7 +219,6 @@ pub struct FaerIpm {
     settings: SolverSettings,
     ws: Option<Workspace>,
     buf: Option<MemBuffer>,
-    legacy: bool,
     direction: SearchDirection,
     /// The scaling of the solve whose solution is stored for a warm start.
     warm_scale: Option<Equilibration>,
@@ -239,14 +237,7 @@ impl FaerIpm {
     /// A backend with validated `settings`; call [`SdpBackend::setup`] before solving.
     pub fn new(settings: SolverSettings) -> Result<Self, LmiError> {
         settings.validate()?;
-        Ok(Self {
-            settings,
-            ws: None,
-            buf: None,
-            legacy: false,
-            direction: SearchDirection::NesterovTodd,
-            warm_scale: None,
-        })
+        Ok(Self { settings, ws: None, buf: None, direction: SearchDirection::NesterovTodd, warm_scale: None })
     }
 
     /// The settings in use.
@@ -262,18 +253,7 @@ impl FaerIpm {
         Ok(())
     }
 
-    /// Selects the method as it was before the small-block work of issue 15 (kept so that
-    /// benchmarks can compare both in one run); off by default.
-    pub fn set_legacy(&mut self, legacy: bool) {
-        self.legacy = legacy;
-    }
-
-    /// Whether the pre-issue-15 method is selected ([`FaerIpm::set_legacy`]).
-    pub fn legacy(&self) -> bool {
-        self.legacy
-    }
-
-    /// Selects the search direction (NT by default). Ignored in legacy mode (always NT).
+    /// Selects the search direction (NT by default).
     pub fn set_direction(&mut self, direction: SearchDirection) {
         self.direction = direction;
     }
@@ -338,11 +318,10 @@ impl SdpBackend for FaerIpm {
         let settings = &self.settings;
         let scale = Equilibration::compute(problem, settings.equilibrate);
         ws.load_values(problem, &scale);
-        ws.legacy = self.legacy;
-        ws.hkm = !self.legacy && self.direction == SearchDirection::Hkm;
+        ws.hkm = self.direction == SearchDirection::Hkm;
         // The stored solution is in the previous solve's scaled units: usable only if this solve
         // is scaled alike (the factors are powers of two and usually all 1).
-        ws.warm_wanted = settings.warm_start && !self.legacy && self.warm_scale == Some(scale);
+        ws.warm_wanted = settings.warm_start && self.warm_scale == Some(scale);
         // The whole iteration is compiled for the best instruction set available (AVX2/FMA or
         // AVX-512 on x86-64), so that the hand-written kernels vectorise as well as faer's.
         faer::traits::pulp::Arch::new().dispatch(Run { ws, settings, start, solution, stack: MemStack::new(buf) });

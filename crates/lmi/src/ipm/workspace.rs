@@ -344,8 +344,6 @@ pub(crate) struct Workspace {
     pub loss: f64,
     /// Dense scatter buffer for one `Fⱼ` (order of the largest block, squared).
     pub fbuf: Vec<f64>,
-    /// The method before issue 15 ([`FaerIpm::set_legacy`](super::FaerIpm::set_legacy)).
-    pub legacy: bool,
     /// The HKM direction is selected ([`FaerIpm::set_direction`](super::FaerIpm::set_direction)).
     pub hkm: bool,
     /// The HKM direction is in use in this solve (cleared when the solve falls back to NT).
@@ -541,7 +539,6 @@ impl Workspace {
             qcoef: vec![0.0; qr_bs * m],
             qr_bs,
             loss: 0.0,
-            legacy: false,
             hkm: false,
             hkm_on: false,
         })
