@@ -639,8 +639,23 @@ fn on_discrete<E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + 'static>(
     Box::new(OnDiscrete { name: e.name, inner })
 }
 
+/// The model as linear, if it is.
+fn linear_of<'a>(m: &'a (dyn AnyModel + '_)) -> Option<&'a dyn LinearModel> {
+    m.linear()
+}
+
+/// The model with Jacobians, if it has them.
+fn differentiable_of<'a>(m: &'a (dyn AnyModel + '_)) -> Option<&'a dyn DifferentiableModel> {
+    m.differentiable()
+}
+
+/// The model as `f` and `h`: every model offers them.
+fn discrete_of<'a>(m: &'a (dyn AnyModel + '_)) -> Option<&'a dyn DiscreteModel> {
+    Some(m.discrete())
+}
+
 /// Implements `DynEstimator<dyn AnyModel>` for an adapter that takes one capability from the
-/// model (`$get`, returning an `Option`) and hands it to the estimator inside.
+/// model (`$get`) and hands it to the estimator inside.
 macro_rules! capability_adapter {
     ($adapter:ident, $model:ident, $capability:expr, $get:ident) => {
         struct $adapter<E: ?Sized> {
@@ -658,7 +673,7 @@ macro_rules! capability_adapter {
                 u: &DVector<f64>,
                 y: &DVector<f64>,
             ) -> Result<&dyn Estimate, EstimatorError> {
-                let m = model.$get().ok_or_else(|| missing(self.name, $capability, model))?;
+                let m = $get(model).ok_or_else(|| missing(self.name, $capability, model))?;
                 self.inner.step_dyn(m, u, y)
             }
             fn predict_dyn(
@@ -666,7 +681,7 @@ macro_rules! capability_adapter {
                 model: &(dyn AnyModel + 'm),
                 u: &DVector<f64>,
             ) -> Result<&dyn Estimate, EstimatorError> {
-                let m = model.$get().ok_or_else(|| missing(self.name, $capability, model))?;
+                let m = $get(model).ok_or_else(|| missing(self.name, $capability, model))?;
                 self.inner.predict_dyn(m, u)
             }
             fn update_dyn(
@@ -674,7 +689,7 @@ macro_rules! capability_adapter {
                 model: &(dyn AnyModel + 'm),
                 y: &DVector<f64>,
             ) -> Result<&dyn Estimate, EstimatorError> {
-                let m = model.$get().ok_or_else(|| missing(self.name, $capability, model))?;
+                let m = $get(model).ok_or_else(|| missing(self.name, $capability, model))?;
                 self.inner.update_dyn(m, y)
             }
             fn estimate_dyn(&self) -> &dyn Estimate {
@@ -687,41 +702,9 @@ macro_rules! capability_adapter {
     };
 }
 
-capability_adapter!(OnLinear, LinearModel, Capability::Linear, linear);
-capability_adapter!(OnDifferentiable, DifferentiableModel, Capability::Differentiable, differentiable);
-
-/// Every model offers `f` and `h`.
-struct OnDiscrete<E: ?Sized> {
-    #[allow(dead_code)]
-    name: &'static str,
-    inner: E,
-}
-
-impl<'m, E> DynEstimator<dyn AnyModel + 'm> for OnDiscrete<E>
-where
-    E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + ?Sized,
-{
-    fn step_dyn(
-        &mut self,
-        model: &(dyn AnyModel + 'm),
-        u: &DVector<f64>,
-        y: &DVector<f64>,
-    ) -> Result<&dyn Estimate, EstimatorError> {
-        self.inner.step_dyn(model.discrete(), u, y)
-    }
-    fn predict_dyn(&mut self, model: &(dyn AnyModel + 'm), u: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
-        self.inner.predict_dyn(model.discrete(), u)
-    }
-    fn update_dyn(&mut self, model: &(dyn AnyModel + 'm), y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
-        self.inner.update_dyn(model.discrete(), y)
-    }
-    fn estimate_dyn(&self) -> &dyn Estimate {
-        self.inner.estimate_dyn()
-    }
-    fn dims_dyn(&self) -> Dims {
-        self.inner.dims_dyn()
-    }
-}
+capability_adapter!(OnLinear, LinearModel, Capability::Linear, linear_of);
+capability_adapter!(OnDifferentiable, DifferentiableModel, Capability::Differentiable, differentiable_of);
+capability_adapter!(OnDiscrete, DiscreteModel, Capability::Discrete, discrete_of);
 
 #[cfg(test)]
 mod tests {

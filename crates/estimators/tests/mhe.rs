@@ -4,6 +4,8 @@
 //! against the exact saddle solver, the exact saddle against Clarabel on an uncondensed
 //! epigraph formulation, and bad settings and data.
 
+mod common;
+
 use estimators::Setup;
 use estimators::mhe::{
     ArrivalRecursion, ArrivalStatus, BlockingPreset, InnerSolver, MheCost, MheSettings, MovingHorizonEstimator,
@@ -29,44 +31,18 @@ fn system(n: usize, m: usize, seed: u64) -> (DMatrix<f64>, DMatrix<f64>, DMatrix
     (a, b, c)
 }
 
-/// A test case: the estimator's setup (prior, weights) beside its settings, which it derefs to.
-#[derive(Debug, Clone)]
-struct Case {
-    x0: DVector<f64>,
-    p0: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    settings: MheSettings,
-}
+type Case = common::Case<MheSettings>;
 
-impl std::ops::Deref for Case {
-    type Target = MheSettings;
-    fn deref(&self) -> &MheSettings {
-        &self.settings
-    }
-}
-
-impl std::ops::DerefMut for Case {
-    fn deref_mut(&mut self) -> &mut MheSettings {
-        &mut self.settings
-    }
-}
-
-impl Case {
+impl CaseExt for Case {
     fn with_preset(mut self, horizon: usize, preset: BlockingPreset) -> Result<Self, EstimatorError> {
         self.settings = self.settings.with_preset(horizon, preset)?;
         Ok(self)
     }
+}
 
-    fn setup(&self, inputs: usize) -> Setup {
-        Setup {
-            x0: self.x0.clone(),
-            p0: self.p0.clone(),
-            process_noise: self.q.clone(),
-            measurement_noise: self.r.clone(),
-            inputs,
-        }
-    }
+/// The blocking presets on a case.
+trait CaseExt: Sized {
+    fn with_preset(self, horizon: usize, preset: BlockingPreset) -> Result<Self, EstimatorError>;
 }
 
 fn new_mhe(case: Case, inputs: usize) -> Result<MovingHorizonEstimator, EstimatorError> {

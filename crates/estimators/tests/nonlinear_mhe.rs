@@ -4,6 +4,8 @@
 //! a linear model, the optimality conditions of the window problem by central differences of an
 //! independently written cost on a nonlinear model, bad input, and no allocation.
 
+mod common;
+
 use counting_allocator::{Counting, count};
 use estimators::Setup;
 
@@ -44,40 +46,7 @@ fn data(model: &dyn DiscreteModel, steps: usize, seed: u64) -> (Vec<DVector<f64>
     (us, ys)
 }
 
-/// A test case: the estimator's setup (prior, weights) beside its settings, which it derefs to.
-#[derive(Debug, Clone)]
-struct Case {
-    x0: DVector<f64>,
-    p0: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    settings: NonlinearMheSettings,
-}
-
-impl std::ops::Deref for Case {
-    type Target = NonlinearMheSettings;
-    fn deref(&self) -> &NonlinearMheSettings {
-        &self.settings
-    }
-}
-
-impl std::ops::DerefMut for Case {
-    fn deref_mut(&mut self) -> &mut NonlinearMheSettings {
-        &mut self.settings
-    }
-}
-
-impl Case {
-    fn setup(&self, inputs: usize) -> Setup {
-        Setup {
-            x0: self.x0.clone(),
-            p0: self.p0.clone(),
-            process_noise: self.q.clone(),
-            measurement_noise: self.r.clone(),
-            inputs,
-        }
-    }
-}
+type Case = common::Case<NonlinearMheSettings>;
 
 fn new_mhe(case: Case, inputs: usize) -> Result<NonlinearMhe, EstimatorError> {
     NonlinearMhe::new(case.setup(inputs), case.settings)

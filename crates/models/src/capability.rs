@@ -146,27 +146,35 @@ impl<M: LinearModel + ?Sized> AnyModel for LinearView<'_, M> {
     }
 }
 
-impl<M: DiscreteModel + ?Sized> DiscreteModel for DiscreteView<'_, M> {
-    fn dims(&self) -> crate::Dims {
-        self.0.dims()
-    }
-    fn f(
-        &self,
-        x: &nalgebra::DVector<f64>,
-        u: &nalgebra::DVector<f64>,
-        out: &mut nalgebra::DVector<f64>,
-    ) -> Result<(), crate::ModelError> {
-        self.0.f(x, u, out)
-    }
-    fn h(
-        &self,
-        x: &nalgebra::DVector<f64>,
-        u: &nalgebra::DVector<f64>,
-        out: &mut nalgebra::DVector<f64>,
-    ) -> Result<(), crate::ModelError> {
-        self.0.h(x, u, out)
-    }
+/// Forwards [`DiscreteModel`] from a view to the model it wraps.
+macro_rules! forward_discrete {
+    ($view:ident, $bound:ident) => {
+        impl<M: $bound + ?Sized> DiscreteModel for $view<'_, M> {
+            fn dims(&self) -> crate::Dims {
+                self.0.dims()
+            }
+            fn f(
+                &self,
+                x: &nalgebra::DVector<f64>,
+                u: &nalgebra::DVector<f64>,
+                out: &mut nalgebra::DVector<f64>,
+            ) -> Result<(), crate::ModelError> {
+                self.0.f(x, u, out)
+            }
+            fn h(
+                &self,
+                x: &nalgebra::DVector<f64>,
+                u: &nalgebra::DVector<f64>,
+                out: &mut nalgebra::DVector<f64>,
+            ) -> Result<(), crate::ModelError> {
+                self.0.h(x, u, out)
+            }
+        }
+    };
 }
+
+forward_discrete!(DiscreteView, DiscreteModel);
+forward_discrete!(DifferentiableView, DifferentiableModel);
 
 impl<M: DiscreteModel + ?Sized> AnyModel for DiscreteView<'_, M> {
     fn discrete(&self) -> &dyn DiscreteModel {
@@ -180,28 +188,6 @@ impl<M: DifferentiableModel + ?Sized> AnyModel for DifferentiableView<'_, M> {
     }
     fn differentiable(&self) -> Option<&dyn DifferentiableModel> {
         Some(self)
-    }
-}
-
-impl<M: DifferentiableModel + ?Sized> DiscreteModel for DifferentiableView<'_, M> {
-    fn dims(&self) -> crate::Dims {
-        self.0.dims()
-    }
-    fn f(
-        &self,
-        x: &nalgebra::DVector<f64>,
-        u: &nalgebra::DVector<f64>,
-        out: &mut nalgebra::DVector<f64>,
-    ) -> Result<(), crate::ModelError> {
-        self.0.f(x, u, out)
-    }
-    fn h(
-        &self,
-        x: &nalgebra::DVector<f64>,
-        u: &nalgebra::DVector<f64>,
-        out: &mut nalgebra::DVector<f64>,
-    ) -> Result<(), crate::ModelError> {
-        self.0.h(x, u, out)
     }
 }
 

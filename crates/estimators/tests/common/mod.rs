@@ -126,3 +126,40 @@ impl estimators::UpdateSolver for FixedSolver {
         self.closed_form
     }
 }
+
+/// A test case of an estimator with settings beyond its setup (the moving-horizon estimators): the
+/// setup's prior and weights beside the settings, which it derefs to.
+#[derive(Debug, Clone)]
+pub struct Case<S> {
+    pub x0: DVector<f64>,
+    pub p0: DMatrix<f64>,
+    pub q: DMatrix<f64>,
+    pub r: DMatrix<f64>,
+    pub settings: S,
+}
+
+impl<S> std::ops::Deref for Case<S> {
+    type Target = S;
+    fn deref(&self) -> &S {
+        &self.settings
+    }
+}
+
+impl<S> std::ops::DerefMut for Case<S> {
+    fn deref_mut(&mut self) -> &mut S {
+        &mut self.settings
+    }
+}
+
+impl<S> Case<S> {
+    /// The estimator's setup with `inputs` inputs.
+    pub fn setup(&self, inputs: usize) -> estimators::Setup {
+        estimators::Setup {
+            x0: self.x0.clone(),
+            p0: self.p0.clone(),
+            process_noise: self.q.clone(),
+            measurement_noise: self.r.clone(),
+            inputs,
+        }
+    }
+}
