@@ -497,11 +497,12 @@ pub fn runs_on(model: &dyn AnyModel) -> impl Iterator<Item = &'static EstimatorE
     ESTIMATORS.iter().filter(move |e| e.needs <= offered)
 }
 
-type Inner = Box<dyn for<'m> DynEstimator<dyn AnyModel + 'm>>;
+type Inner = Box<dyn for<'m> DynEstimator<dyn AnyModel + 'm> + Send>;
 
 /// An estimator built from the registry: any estimator behind [`DynEstimator`] over
 /// `dyn AnyModel`, with its registry entry. A step takes from the model the capability the
-/// estimator needs and returns [`EstimatorError::ModelLacksCapability`] when it is missing.
+/// estimator needs and returns [`EstimatorError::ModelLacksCapability`] when it is missing. It is
+/// `Send`: it may run on another thread (a worker, a Python call that releases the GIL).
 pub struct AnyEstimator {
     entry: &'static EstimatorEntry,
     inner: Inner,
@@ -621,18 +622,18 @@ fn missing(name: &'static str, needs: Capability, model: &dyn AnyModel) -> Estim
     EstimatorError::ModelLacksCapability { estimator: name, needs, offered: Capability::of(model) }
 }
 
-fn on_linear<E: for<'x> DynEstimator<dyn LinearModel + 'x> + 'static>(e: &'static EstimatorEntry, inner: E) -> Inner {
+fn on_linear<E: for<'x> DynEstimator<dyn LinearModel + 'x> + Send + 'static>(e: &'static EstimatorEntry, inner: E) -> Inner {
     Box::new(OnLinear { name: e.name, inner })
 }
 
-fn on_differentiable<E: for<'x> DynEstimator<dyn DifferentiableModel + 'x> + 'static>(
+fn on_differentiable<E: for<'x> DynEstimator<dyn DifferentiableModel + 'x> + Send + 'static>(
     e: &'static EstimatorEntry,
     inner: E,
 ) -> Inner {
     Box::new(OnDifferentiable { name: e.name, inner })
 }
 
-fn on_discrete<E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + 'static>(
+fn on_discrete<E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + Send + 'static>(
     e: &'static EstimatorEntry,
     inner: E,
 ) -> Inner {
@@ -720,6 +721,15 @@ mod tests {
             measurement_noise: DMatrix::identity(1, 1) * 0.1,
             inputs: 1,
         }
+    }
+
+    #[test]
+    fn registry_estimators_can_move_to_another_thread() {
+        fn send<T: Send>(_: &T) {}
+        let est = build(names::SMF, setup(), None).unwrap();
+        send(&est);
+        let handle = std::thread::spawn(move || est.estimate().center().len());
+        assert_eq!(handle.join().unwrap(), 2);
     }
 
     #[test]

@@ -337,7 +337,9 @@ impl SolverSettingsBuilder {
 /// ([`LmiError::MemoryLimit`], checked before allocating), and for a failure of the backend's
 /// own setup. Backends scale the problem before solving (see "Equilibration" in
 /// [`SolverSettings`]) and never let a panic of a third-party solver unwind into the caller.
-pub trait SdpBackend {
+/// Backends are `Send`, so that an estimator holding one can move to another thread (a worker, a
+/// Python call that releases the GIL).
+pub trait SdpBackend: Send {
     /// Short name used in tables and on the command line.
     fn name(&self) -> &'static str;
 
