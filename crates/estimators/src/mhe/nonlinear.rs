@@ -211,18 +211,6 @@ pub struct NonlinearMhe {
     q: DMatrix<f64>,
 }
 
-fn spd_inverse(a: &DMatrix<f64>, work: &mut DMatrix<f64>, out: &mut DMatrix<f64>) -> bool {
-    work.copy_from(a);
-    if !dense::cholesky_in_place(work) {
-        return false;
-    }
-    out.fill_with_identity();
-    dense::solve_right_lower_t(out, work);
-    dense::solve_right_lower(out, work);
-    dense::symmetrize(out);
-    true
-}
-
 impl NonlinearMhe {
     /// An estimator from its [`Setup`] (weights) and settings.
     ///
@@ -258,14 +246,14 @@ impl NonlinearMhe {
         let mut r_inv = DMatrix::zeros(m, m);
         let mut work = DMatrix::zeros(n, n);
         let mut work_m = DMatrix::zeros(m, m);
-        if !spd_inverse(&q, &mut work, &mut q_inv) {
+        if dense::spd_inverse(&q, &mut work, &mut q_inv).is_err() {
             return Err(EstimatorError::NotPositiveDefinite { what: "Q" });
         }
-        if !spd_inverse(&r, &mut work_m, &mut r_inv) {
+        if dense::spd_inverse(&r, &mut work_m, &mut r_inv).is_err() {
             return Err(EstimatorError::NotPositiveDefinite { what: "R" });
         }
         let mut prior_inv = DMatrix::zeros(n, n);
-        if !spd_inverse(&p0, &mut work, &mut prior_inv) {
+        if dense::spd_inverse(&p0, &mut work, &mut prior_inv).is_err() {
             return Err(EstimatorError::NotPositiveDefinite { what: "P0" });
         }
         let ukf = match settings.arrival {
@@ -507,7 +495,7 @@ impl NonlinearMhe {
                     self.tmp_nm.gemm_tr(1.0, &self.c[0], &self.r_inv, 0.0);
                     dense::mul_nn(1.0, &self.tmp_nm, &self.c[0], 1.0, &mut self.tmp_nn);
                     let (work, out) = (&mut self.d[0], &mut self.ekf_p);
-                    if !spd_inverse(&self.tmp_nn, work, out) {
+                    if dense::spd_inverse(&self.tmp_nn, work, out).is_err() {
                         return Err(EstimatorError::NumericalFailure(
                             "the arrival-cost update is not positive definite",
                         ));
@@ -530,7 +518,7 @@ impl NonlinearMhe {
             }
         }
         let (work, out) = (&mut self.d[0], &mut self.new_inv);
-        if !spd_inverse(&self.new_cov, work, out) {
+        if dense::spd_inverse(&self.new_cov, work, out).is_err() {
             return Err(EstimatorError::NumericalFailure("the arrival-cost weight is not positive definite"));
         }
         Ok(())
@@ -684,11 +672,7 @@ impl NonlinearMhe {
         self.len = len;
         self.est.center.copy_from(&self.x[len - 1]);
         if have_cov {
-            let l = &self.d[len - 1];
-            self.est.covariance.fill_with_identity();
-            dense::solve_right_lower_t(&mut self.est.covariance, l);
-            dense::solve_right_lower(&mut self.est.covariance, l);
-            dense::symmetrize(&mut self.est.covariance);
+            dense::cholesky_inverse(self.d[len - 1].as_slice(), self.n, self.est.covariance.as_mut_slice());
         }
         self.est.report = Some(NonlinearMheReport {
             status,
@@ -930,7 +914,7 @@ impl NonlinearMhe {
                 dense::mul_nt(-1.0, wj, wj, 1.0, dj);
             }
             dense::symmetrize(&mut self.d[j]);
-            if !dense::cholesky_in_place(&mut self.d[j]) {
+            if dense::cholesky_in_place(&mut self.d[j]).is_err() {
                 return false;
             }
         }
@@ -942,14 +926,14 @@ impl NonlinearMhe {
                 let (prev, cur) = self.step.split_at_mut(j);
                 cur[0].gemv(-1.0, &self.w[j], &prev[j - 1], 1.0);
             }
-            lower_solve(&self.d[j], &mut self.step[j]);
+            dense::solve_lower(self.d[j].as_slice(), self.n, self.step[j].as_mut_slice());
         }
         for j in (0..len).rev() {
             if j + 1 < len {
                 let (cur, next) = self.step.split_at_mut(j + 1);
                 cur[j].gemv_tr(-1.0, &self.w[j + 1], &next[0], 1.0);
             }
-            upper_solve(&self.d[j], &mut self.step[j]);
+            dense::solve_lower_t(self.d[j].as_slice(), self.n, self.step[j].as_mut_slice());
         }
         self.step[..len].iter().all(|s| s.iter().all(|v| v.is_finite()))
     }
@@ -971,30 +955,6 @@ fn quad(a: &DMatrix<f64>, x: &DVector<f64>) -> f64 {
         }
     }
     s
-}
-
-/// `v ← L⁻¹ v` for lower-triangular `L`.
-fn lower_solve(l: &DMatrix<f64>, v: &mut DVector<f64>) {
-    let n = v.len();
-    for i in 0..n {
-        let mut s = v[i];
-        for k in 0..i {
-            s -= l[(i, k)] * v[k];
-        }
-        v[i] = s / l[(i, i)];
-    }
-}
-
-/// `v ← L⁻ᵀ v` for lower-triangular `L`.
-fn upper_solve(l: &DMatrix<f64>, v: &mut DVector<f64>) {
-    let n = v.len();
-    for i in (0..n).rev() {
-        let mut s = v[i];
-        for k in i + 1..n {
-            s -= l[(k, i)] * v[k];
-        }
-        v[i] = s / l[(i, i)];
-    }
 }
 
 impl<M: DifferentiableModel + ?Sized> Estimator<M> for NonlinearMhe {
