@@ -1,5 +1,6 @@
 //! The crate's error type.
 
+use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter or
@@ -87,36 +88,21 @@ impl From<BdsInsError> for models::ModelError {
     }
 }
 
-/// `Ok` if `value` is finite and positive.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), BdsInsError> {
-    if !value.is_finite() {
-        Err(BdsInsError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(BdsInsError::NotPositive { name, value })
-    } else {
-        Ok(())
+impl From<ParamError> for BdsInsError {
+    /// A failed parameter check, as this crate's variant of the same message.
+    fn from(e: ParamError) -> Self {
+        match e {
+            ParamError::NonFinite { name, value } => BdsInsError::NonFinite { name, value },
+            ParamError::NotPositive { name, value } => BdsInsError::NotPositive { name, value },
+            ParamError::Negative { name, value } => BdsInsError::Negative { name, value },
+        }
     }
-}
-
-/// `Ok` if `value` is finite and non-negative.
-pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), BdsInsError> {
-    if !value.is_finite() {
-        Err(BdsInsError::NonFinite { name, value })
-    } else if value < 0.0 {
-        Err(BdsInsError::Negative { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<(), BdsInsError> {
-    if value.is_finite() { Ok(()) } else { Err(BdsInsError::NonFinite { name, value }) }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::{non_negative, positive};
 
     #[test]
     fn errors_become_model_errors_with_their_message() {

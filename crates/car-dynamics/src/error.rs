@@ -1,5 +1,6 @@
 //! The crate's error type.
 
+use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter or
@@ -23,6 +24,14 @@ pub enum CarError {
         /// The rejected value.
         value: f64,
     },
+    /// A parameter that must be non-negative is negative.
+    #[error("parameter {name} must be non-negative, got {value}")]
+    Negative {
+        /// Symbol and meaning of the parameter.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+    },
     /// A model tool of the `models` crate failed (discretisation, a non-finite matrix, a noise
     /// box).
     #[error(transparent)]
@@ -36,6 +45,17 @@ impl From<CarError> for models::ModelError {
         match e {
             CarError::Model(inner) => inner,
             other => models::ModelError::Evaluation(other.to_string()),
+        }
+    }
+}
+
+impl From<ParamError> for CarError {
+    /// A failed parameter check, as this crate's variant of the same message.
+    fn from(e: ParamError) -> Self {
+        match e {
+            ParamError::NonFinite { name, value } => CarError::NonFinite { name, value },
+            ParamError::NotPositive { name, value } => CarError::NotPositive { name, value },
+            ParamError::Negative { name, value } => CarError::Negative { name, value },
         }
     }
 }

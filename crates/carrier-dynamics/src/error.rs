@@ -1,5 +1,6 @@
 //! The crate's error type.
 
+use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter,
@@ -63,6 +64,17 @@ impl From<DynamicsError> for models::ModelError {
         match e {
             DynamicsError::Model(inner) => inner,
             other => models::ModelError::Evaluation(other.to_string()),
+        }
+    }
+}
+
+impl From<ParamError> for DynamicsError {
+    /// A failed parameter check, as this crate's variant of the same message.
+    fn from(e: ParamError) -> Self {
+        match e {
+            ParamError::NonFinite { name, value } => DynamicsError::NonFinite { name, value },
+            ParamError::NotPositive { name, value } => DynamicsError::NotPositive { name, value },
+            ParamError::Negative { name, value } => DynamicsError::Negative { name, value },
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The crate's error type.
 
+use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter,
@@ -98,31 +99,15 @@ impl From<TruckError> for models::ModelError {
     }
 }
 
-/// `Ok` if `value` is finite and strictly positive, else the error naming `name`.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), TruckError> {
-    if !value.is_finite() {
-        Err(TruckError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(TruckError::NotPositive { name, value })
-    } else {
-        Ok(())
+impl From<ParamError> for TruckError {
+    /// A failed parameter check, as this crate's variant of the same message.
+    fn from(e: ParamError) -> Self {
+        match e {
+            ParamError::NonFinite { name, value } => TruckError::NonFinite { name, value },
+            ParamError::NotPositive { name, value } => TruckError::NotPositive { name, value },
+            ParamError::Negative { name, value } => TruckError::Negative { name, value },
+        }
     }
-}
-
-/// `Ok` if `value` is finite and non-negative, else the error naming `name`.
-pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), TruckError> {
-    if !value.is_finite() {
-        Err(TruckError::NonFinite { name, value })
-    } else if value < 0.0 {
-        Err(TruckError::Negative { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite, else the error naming `name`.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<(), TruckError> {
-    if value.is_finite() { Ok(()) } else { Err(TruckError::NonFinite { name, value }) }
 }
 
 /// `Ok` if the state or input `value` is finite, else the error naming `name`.

@@ -1,5 +1,6 @@
 //! The crate's error type.
 
+use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter,
@@ -18,6 +19,14 @@ pub enum VesselError {
     /// A parameter that must be strictly positive is zero or negative.
     #[error("parameter {name} must be positive, got {value}")]
     NotPositive {
+        /// Symbol and meaning of the parameter.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+    },
+    /// A parameter that must be non-negative is negative.
+    #[error("parameter {name} must be non-negative, got {value}")]
+    Negative {
         /// Symbol and meaning of the parameter.
         name: &'static str,
         /// The rejected value.
@@ -46,18 +55,13 @@ impl From<VesselError> for models::ModelError {
     }
 }
 
-/// `Ok` if `value` is finite and strictly positive, else the error naming `name`.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), VesselError> {
-    if !value.is_finite() {
-        Err(VesselError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(VesselError::NotPositive { name, value })
-    } else {
-        Ok(())
+impl From<ParamError> for VesselError {
+    /// A failed parameter check, as this crate's variant of the same message.
+    fn from(e: ParamError) -> Self {
+        match e {
+            ParamError::NonFinite { name, value } => VesselError::NonFinite { name, value },
+            ParamError::NotPositive { name, value } => VesselError::NotPositive { name, value },
+            ParamError::Negative { name, value } => VesselError::Negative { name, value },
+        }
     }
-}
-
-/// `Ok` if `value` is finite, else the error naming `name`.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<(), VesselError> {
-    if value.is_finite() { Ok(()) } else { Err(VesselError::NonFinite { name, value }) }
 }
