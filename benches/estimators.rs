@@ -203,8 +203,7 @@ fn truck(crit: &mut Criterion) {
     let a = DMatrix::identity(3, 3) * 0.999;
     let bm = DMatrix::from_element(3, 7, 1e-4);
     let c = DMatrix::identity(3, 3);
-    let mut kf =
-        KalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 7 }).unwrap();
+    let mut kf = KalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 7 }).unwrap();
     let lin = StepModel::new(&a, &bm, &c);
     group.bench_function("kalman-same-size", |b| {
         b.iter(|| {

@@ -48,10 +48,11 @@ use crate::yang_li;
 
 /// How a set-membership filter solves (29), parsed from a name in one place
 /// ([`SmfSolver::by_name`]).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 #[non_exhaustive]
 pub enum SmfSolver {
     /// The exact two-multiplier method (the default; microseconds per step).
+    #[default]
     TwoMultiplier,
     /// An SDP backend of `lmi` on LMI (28).
     Sdp {
@@ -116,12 +117,6 @@ pub struct SetMembershipSettings {
     pub solver: SmfSolver,
     /// What a step does with data that contradict the noise bounds (default: an error).
     pub inconsistency: InconsistencyPolicy,
-}
-
-impl Default for SmfSolver {
-    fn default() -> Self {
-        SmfSolver::TwoMultiplier
-    }
 }
 
 /// The known range of the input, `lower ≤ u ≤ upper` componentwise.
@@ -235,9 +230,7 @@ impl SettingsKind {
             SettingsKind::NonlinearMovingHorizon => {
                 Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(NonlinearMheSettings::paper())))
             }
-            SettingsKind::FuzzyAdaptive => {
-                Some(EstimatorSettings::FuzzyAdaptive(Box::new(FuzzyAdaptiveSettings::default())))
-            }
+            SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::default())),
         }
     }
 

@@ -344,7 +344,7 @@ fn badly_scaled_positive_definite_noise_is_accepted() {
     assert!(
         KalmanFilter::new(Setup {
             x0: DVector::zeros(2),
-            p0: p0,
+            p0,
             process_noise: singular,
             measurement_noise: r,
             inputs: 1

@@ -36,8 +36,7 @@ fn equals_the_kalman_filter_on_linear_models() {
         })
         .unwrap();
         let mut ekf =
-            ExtendedKalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: p })
-                .unwrap();
+            ExtendedKalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: p }).unwrap();
         let model = StepModel::new(&a, &b, &c);
         for _ in 0..30 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
@@ -56,14 +55,8 @@ fn truck_filter(model: &TruckEkfModel, x0: DVector<f64>) -> ExtendedKalmanFilter
     let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4 * t, 1e-4 * t, 1e-6 * t]));
     let r = DMatrix::from_diagonal(&DVector::from_vec(vec![0.05f64.powi(2), 0.05f64.powi(2), 0.002f64.powi(2)]));
     let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![0.01, 0.01, 1e-4]));
-    ExtendedKalmanFilter::new(Setup {
-        x0: x0,
-        p0: p0,
-        process_noise: q,
-        measurement_noise: r,
-        inputs: model.dims().inputs,
-    })
-    .unwrap()
+    ExtendedKalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: model.dims().inputs })
+        .unwrap()
 }
 
 /// Runs the EKF over a 6 s slalom; returns the RMSE of β [deg] over 1–6 s and the lateral-speed

@@ -38,7 +38,7 @@ proptest! {
         let mut flagged = smf.clone();
         flagged.set_inconsistency_policy(InconsistencyPolicy::FlagAndContinue);
         let mut kf = KalmanFilter::new(Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 1 }).unwrap();
-        let mut ekf = ExtendedKalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 1 }).unwrap();
+        let mut ekf = ExtendedKalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 1 }).unwrap();
         for _ in 0..steps {
             let before = smf.estimate().clone();
             match smf.step(&model, &u, &y) {

@@ -97,7 +97,7 @@ fn kalman_and_extended_kalman_predictions() {
     assert_eq!(boxed.estimate_dyn().center(), &before);
     assert!(boxed.predict_dyn(&model, &u).is_ok());
     let mut smf =
-        SetMembershipFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 1 }).unwrap();
+        SetMembershipFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 1 }).unwrap();
     let snapshot = smf.estimate().clone();
     assert!(smf.predict(&model, &DVector::zeros(2)).is_err());
     assert_eq!(smf.estimate(), &snapshot);

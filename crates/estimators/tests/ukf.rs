@@ -43,11 +43,9 @@ fn equals_the_kalman_filter_on_linear_models() {
             inputs: p,
         })
         .unwrap();
-        let mut ukf = UnscentedKalmanFilter::new(
-            Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: p },
-            params,
-        )
-        .unwrap();
+        let mut ukf =
+            UnscentedKalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: p }, params)
+                .unwrap();
         let model = StepModel::new(&a, &b, &c);
         for k in 0..30 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
@@ -125,7 +123,7 @@ fn close_to_the_ekf_on_a_mildly_nonlinear_model() {
     })
     .unwrap();
     let mut ukf = UnscentedKalmanFilter::new(
-        Setup { x0: x0.clone(), p0: p0, process_noise: q, measurement_noise: r, inputs: 1 },
+        Setup { x0: x0.clone(), p0, process_noise: q, measurement_noise: r, inputs: 1 },
         UkfParams::paper(),
     )
     .unwrap();
@@ -176,7 +174,7 @@ fn tracks_the_vessel_like_the_ekf_without_the_guard() {
     })
     .unwrap();
     let mut ukf = UnscentedKalmanFilter::new(
-        Setup { x0: x0.clone(), p0: p0, process_noise: q, measurement_noise: r, inputs: 3 },
+        Setup { x0: x0.clone(), p0, process_noise: q, measurement_noise: r, inputs: 3 },
         UkfParams::paper(),
     )
     .unwrap();
@@ -321,7 +319,7 @@ fn a_step_does_not_allocate() {
     let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
     let (x0, p0, q, r) = vessel_setup();
     let mut ukf = UnscentedKalmanFilter::new(
-        Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: 3 },
+        Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 3 },
         UkfParams::paper(),
     )
     .unwrap();

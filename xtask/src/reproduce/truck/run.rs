@@ -173,7 +173,7 @@ pub fn kalman_step_timing(truth: &TruthTrajectory, model: &TruckEkfModel, seed: 
     model.f_jacobian(&x0, &u0, &mut a).map_err(|e| e.to_string())?;
     model.h_jacobian(&x0, &u0, &mut c).map_err(|e| e.to_string())?;
     let (q, r, p0) = noise_matrices(model.ts());
-    let mut kf = KalmanFilter::new(Setup { x0: x0, p0: p0, process_noise: q, measurement_noise: r, inputs: d.inputs })
+    let mut kf = KalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: d.inputs })
         .map_err(|e| e.to_string())?;
     let lin = StepModel::new(&a, &b, &c);
     let (mut meas, _) = streams(seed);
