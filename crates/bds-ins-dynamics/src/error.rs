@@ -1,6 +1,5 @@
 //! The crate's error type.
 
-use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter or
@@ -88,16 +87,7 @@ impl From<BdsInsError> for models::ModelError {
     }
 }
 
-impl From<ParamError> for BdsInsError {
-    /// A failed parameter check, as this crate's variant of the same message.
-    fn from(e: ParamError) -> Self {
-        match e {
-            ParamError::NonFinite { name, value } => BdsInsError::NonFinite { name, value },
-            ParamError::NotPositive { name, value } => BdsInsError::NotPositive { name, value },
-            ParamError::Negative { name, value } => BdsInsError::Negative { name, value },
-        }
-    }
-}
+models::from_param_error!(BdsInsError);
 
 #[cfg(test)]
 mod tests {

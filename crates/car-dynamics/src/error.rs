@@ -1,6 +1,5 @@
 //! The crate's error type.
 
-use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter or
@@ -49,16 +48,7 @@ impl From<CarError> for models::ModelError {
     }
 }
 
-impl From<ParamError> for CarError {
-    /// A failed parameter check, as this crate's variant of the same message.
-    fn from(e: ParamError) -> Self {
-        match e {
-            ParamError::NonFinite { name, value } => CarError::NonFinite { name, value },
-            ParamError::NotPositive { name, value } => CarError::NotPositive { name, value },
-            ParamError::Negative { name, value } => CarError::Negative { name, value },
-        }
-    }
-}
+models::from_param_error!(CarError);
 
 #[cfg(test)]
 mod tests {

@@ -1,6 +1,5 @@
 //! The crate's error type.
 
-use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter,
@@ -68,15 +67,6 @@ impl From<DynamicsError> for models::ModelError {
     }
 }
 
-impl From<ParamError> for DynamicsError {
-    /// A failed parameter check, as this crate's variant of the same message.
-    fn from(e: ParamError) -> Self {
-        match e {
-            ParamError::NonFinite { name, value } => DynamicsError::NonFinite { name, value },
-            ParamError::NotPositive { name, value } => DynamicsError::NotPositive { name, value },
-            ParamError::Negative { name, value } => DynamicsError::Negative { name, value },
-        }
-    }
-}
+models::from_param_error!(DynamicsError);
 
 pub(crate) use models::error::check_finite;

@@ -1,6 +1,5 @@
 //! The crate's error type.
 
-use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter,
@@ -99,16 +98,7 @@ impl From<TruckError> for models::ModelError {
     }
 }
 
-impl From<ParamError> for TruckError {
-    /// A failed parameter check, as this crate's variant of the same message.
-    fn from(e: ParamError) -> Self {
-        match e {
-            ParamError::NonFinite { name, value } => TruckError::NonFinite { name, value },
-            ParamError::NotPositive { name, value } => TruckError::NotPositive { name, value },
-            ParamError::Negative { name, value } => TruckError::Negative { name, value },
-        }
-    }
-}
+models::from_param_error!(TruckError);
 
 /// `Ok` if the state or input `value` is finite, else the error naming `name`.
 pub(crate) fn finite_input(name: &'static str, value: f64) -> Result<(), TruckError> {

@@ -1,6 +1,5 @@
 //! The crate's error type.
 
-use models::validate::ParamError;
 use thiserror::Error;
 
 /// Everything that can go wrong in this crate. Every variant names the offending parameter,
@@ -55,13 +54,4 @@ impl From<VesselError> for models::ModelError {
     }
 }
 
-impl From<ParamError> for VesselError {
-    /// A failed parameter check, as this crate's variant of the same message.
-    fn from(e: ParamError) -> Self {
-        match e {
-            ParamError::NonFinite { name, value } => VesselError::NonFinite { name, value },
-            ParamError::NotPositive { name, value } => VesselError::NotPositive { name, value },
-            ParamError::Negative { name, value } => VesselError::Negative { name, value },
-        }
-    }
-}
+models::from_param_error!(VesselError);
