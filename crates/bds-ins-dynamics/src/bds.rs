@@ -11,7 +11,9 @@
 
 use models::Xoshiro256StarStar;
 
-use crate::error::{BdsInsError, non_negative, positive};
+use models::validate::{non_negative, positive};
+
+use crate::error::BdsInsError;
 
 /// RTK status of the receiver, with the paper's codes (P): 1 single, 2 differential, 3 fixed,
 /// 4 float.

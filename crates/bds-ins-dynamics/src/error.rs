@@ -87,36 +87,12 @@ impl From<BdsInsError> for models::ModelError {
     }
 }
 
-/// `Ok` if `value` is finite and positive.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), BdsInsError> {
-    if !value.is_finite() {
-        Err(BdsInsError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(BdsInsError::NotPositive { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite and non-negative.
-pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), BdsInsError> {
-    if !value.is_finite() {
-        Err(BdsInsError::NonFinite { name, value })
-    } else if value < 0.0 {
-        Err(BdsInsError::Negative { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<(), BdsInsError> {
-    if value.is_finite() { Ok(()) } else { Err(BdsInsError::NonFinite { name, value }) }
-}
+models::from_param_error!(BdsInsError);
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::{non_negative, positive};
 
     #[test]
     fn errors_become_model_errors_with_their_message() {

@@ -1,7 +1,9 @@
 //! Parameters of the INS error model (10) and of its process noise, validated
 //! (`docs/bds-ins-fuzzy-kf.md` §1 and §3).
 
-use crate::error::{BdsInsError, finite, non_negative, positive};
+use models::validate::{finite, non_negative, positive};
+
+use crate::error::BdsInsError;
 
 /// Earth rotation rate `Ω` \[rad/s\] (WGS-84).
 pub const EARTH_RATE: f64 = 7.292115e-5;
@@ -194,7 +196,8 @@ impl InsNoise {
         non_negative("σa (accelerometer white noise)", self.accel_white)?;
         non_negative("σg (gyro white noise)", self.gyro_white)?;
         non_negative("accelerometer bias random walk", self.accel_bias_walk)?;
-        non_negative("gyro bias random walk", self.gyro_bias_walk)
+        non_negative("gyro bias random walk", self.gyro_bias_walk)?;
+        Ok(())
     }
 }
 

@@ -23,6 +23,14 @@ pub enum CarError {
         /// The rejected value.
         value: f64,
     },
+    /// A parameter that must be non-negative is negative.
+    #[error("parameter {name} must be non-negative, got {value}")]
+    Negative {
+        /// Symbol and meaning of the parameter.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+    },
     /// A model tool of the `models` crate failed (discretisation, a non-finite matrix, a noise
     /// box).
     #[error(transparent)]
@@ -39,6 +47,8 @@ impl From<CarError> for models::ModelError {
         }
     }
 }
+
+models::from_param_error!(CarError);
 
 #[cfg(test)]
 mod tests {

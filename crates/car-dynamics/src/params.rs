@@ -1,6 +1,8 @@
 //! Physical parameters of the single-track car (`docs/robust-mhe.md` §1 and §3) and their
 //! validation.
 
+use models::validate::positive;
+
 use crate::error::CarError;
 
 /// Parameters of the linear single-track ("bicycle") car of eqs (1)–(5) (R, Rajamani, *Vehicle
@@ -30,16 +32,6 @@ pub struct CarParams {
 
 /// The paper's constant speed `v_x = 25 m/s` (P).
 pub const DIGEST_SPEED: f64 = 25.0;
-
-fn positive(name: &'static str, value: f64) -> Result<(), CarError> {
-    if !value.is_finite() {
-        Err(CarError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(CarError::NotPositive { name, value })
-    } else {
-        Ok(())
-    }
-}
 
 impl CarParams {
     /// The digest's default set (A, note (1) of the parameter table): a CarSim 2019.1

@@ -67,4 +67,6 @@ impl From<DynamicsError> for models::ModelError {
     }
 }
 
+models::from_param_error!(DynamicsError);
+
 pub(crate) use models::error::check_finite;

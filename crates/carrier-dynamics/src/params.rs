@@ -1,5 +1,7 @@
 //! Physical parameters of the straddle carrier (paper §1, Table 1) and their validation.
 
+use models::validate::{non_negative, positive};
+
 use crate::error::DynamicsError;
 
 /// How the roll inertia is given: about the CG (`I_x`) or about the roll axis
@@ -63,26 +65,6 @@ const RIGHT_NAMES: [&str; 4] = [
     "K_r3 (cornering stiffness, right wheel of row 3)",
     "K_r4 (cornering stiffness, right wheel of row 4)",
 ];
-
-fn positive(name: &'static str, value: f64) -> Result<(), DynamicsError> {
-    if !value.is_finite() {
-        Err(DynamicsError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(DynamicsError::NotPositive { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-fn non_negative(name: &'static str, value: f64) -> Result<(), DynamicsError> {
-    if !value.is_finite() {
-        Err(DynamicsError::NonFinite { name, value })
-    } else if value < 0.0 {
-        Err(DynamicsError::Negative { name, value })
-    } else {
-        Ok(())
-    }
-}
 
 impl CarrierParams {
     /// The paper's Table 1 (one container, `v = 6 m/s`, `g = 9.81 m/s²`).

@@ -1,22 +1,37 @@
-//! Small dense kernels shared by the workspace: one home for the Cholesky factorisation,
-//! symmetric-positive-definite checks, symmetrisation and their tolerances, and the
-//! allocation-free products of the filters' hot paths.
+//! Small dense kernels shared by the workspace: one home for the Cholesky factorisation and the
+//! triangular solves, symmetric-positive-definite checks, symmetrisation and their tolerances,
+//! and the allocation-free products of the filters' hot paths.
 //!
-//! * Hot-path kernels (`mul_nn`, `mul_nt`, `gemv`, `cholesky_in_place`, the triangular solves,
-//!   `symmetrize`, `i_minus_lc`, …) work on column-major [`DMatrix`] storage and write into a
-//!   preallocated output whose dimensions the caller guarantees (checked by `debug_assert!`).
-//!   Sizes are those of the filters (a few states), so plain loops beat blocked BLAS here.
+//! * Hot-path kernels (`mul_nn`, `mul_nt`, `gemv`, `symmetrize`, `i_minus_lc`, …) work on
+//!   column-major [`DMatrix`] storage and write into a preallocated output whose dimensions the
+//!   caller guarantees (checked by `debug_assert!`). Sizes are those of the filters (a few
+//!   states), so plain loops beat blocked BLAS here.
+//! * [`cholesky`]: in-place factorisations of matrices and column-major slices, left and right
+//!   triangular solves, solves and inverses from a factor; none of them allocates except
+//!   [`cholesky_checked`].
 //! * Validation ([`spd`]): symmetry and positive definiteness with the workspace's tolerances,
 //!   reporting the offending entry or pivot.
 //!
-//! The interior-point SDP backend (`lmi`) keeps its own faer/SIMD kernels: they run inside one
-//! SIMD dispatch on slices of its workspace and are part of that solver's design.
+//! **The pivot rule.** Positive definite to working precision means that every Cholesky pivot
+//! `G_jj²` is finite and above `4 ε n` times its own diagonal entry ([`PD_RELATIVE_TOLERANCE`]
+//! `= 4 ε`): every factorisation here applies it, and a caller that needs another threshold passes
+//! it to a `*_with` variant and says why at the call site.
+//!
+//! The interior-point SDP backend (`lmi`) keeps its own faer/SIMD kernels because its whole
+//! iteration runs inside one SIMD dispatch, into which those kernels must be inlined to be
+//! compiled for the machine's instruction set; called from here they would run at the baseline
+//! target's.
 
+pub mod cholesky;
 pub mod spd;
 
 use nalgebra::{DMatrix, DVector};
 
-pub use spd::{PD_RELATIVE_TOLERANCE, PivotFailure, SYMMETRY_TOLERANCE, cholesky_checked, max_asymmetry};
+pub use cholesky::{
+    cholesky_checked, cholesky_in_place, cholesky_in_place_with, cholesky_inverse, cholesky_slice, cholesky_slice_with,
+    cholesky_solve, solve_lower, solve_lower_t, solve_right_lower, solve_right_lower_t, spd_inverse,
+};
+pub use spd::{PD_RELATIVE_TOLERANCE, PivotFailure, SYMMETRY_TOLERANCE, max_asymmetry};
 
 /// `out = alpha · a · b + beta · out`.
 pub fn mul_nn(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &mut DMatrix<f64>) {
@@ -117,98 +132,6 @@ pub fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
     }
 }
 
-/// In-place lower Cholesky factor `S = G Gᵀ` of a symmetric matrix (only the lower triangle is
-/// read; the strict upper triangle is zeroed). Returns `false` if a pivot is not positive and
-/// finite.
-pub fn cholesky_in_place(s: &mut DMatrix<f64>) -> bool {
-    let m = s.nrows();
-    debug_assert_eq!(s.ncols(), m);
-    let g = s.as_mut_slice();
-    if !cholesky_slice(g, m, 0.0) {
-        return false;
-    }
-    for j in 0..m {
-        for i in 0..j {
-            g[j * m + i] = 0.0;
-        }
-    }
-    true
-}
-
-/// In-place lower Cholesky factor of the `m × m` column-major matrix in `g` (lower triangle read
-/// and written, strict upper triangle untouched). A pivot is accepted when it is finite and
-/// exceeds `rel_tol` times the original diagonal entry (`rel_tol = 0`: positive); returns `false`
-/// at the first pivot that is not.
-pub fn cholesky_slice(g: &mut [f64], m: usize, rel_tol: f64) -> bool {
-    debug_assert!(g.len() >= m * m);
-    for j in 0..m {
-        let diag = g[j * m + j];
-        let mut d = diag;
-        for k in 0..j {
-            d -= g[k * m + j] * g[k * m + j];
-        }
-        if !(d > rel_tol * diag.abs() && d > 0.0 && d.is_finite()) {
-            return false;
-        }
-        let d = d.sqrt();
-        g[j * m + j] = d;
-        for i in j + 1..m {
-            let mut v = g[j * m + i];
-            for k in 0..j {
-                v -= g[k * m + i] * g[k * m + j];
-            }
-            g[j * m + i] = v / d;
-        }
-    }
-    true
-}
-
-/// `x ← x · G⁻ᵀ` for a lower-triangular `G` (solves `Y Gᵀ = X` column by column).
-pub fn solve_right_lower_t(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
-    let (r, m) = x.shape();
-    debug_assert_eq!(g.shape(), (m, m));
-    let g = g.as_slice();
-    let x = x.as_mut_slice();
-    for j in 0..m {
-        for k in 0..j {
-            let s = g[k * m + j];
-            if s != 0.0 {
-                let (done, rest) = x.split_at_mut(j * r);
-                let yk = &done[k * r..(k + 1) * r];
-                let xj = &mut rest[..r];
-                for i in 0..r {
-                    xj[i] -= s * yk[i];
-                }
-            }
-        }
-        let d = 1.0 / g[j * m + j];
-        x[j * r..(j + 1) * r].iter_mut().for_each(|v| *v *= d);
-    }
-}
-
-/// `x ← x · G⁻¹` for a lower-triangular `G` (solves `Y G = X`, last column first).
-pub fn solve_right_lower(x: &mut DMatrix<f64>, g: &DMatrix<f64>) {
-    let (r, m) = x.shape();
-    debug_assert_eq!(g.shape(), (m, m));
-    let g = g.as_slice();
-    let x = x.as_mut_slice();
-    for j in (0..m).rev() {
-        for k in j + 1..m {
-            let s = g[j * m + k];
-            if s != 0.0 {
-                let (head, tail) = x.split_at_mut(k * r);
-                let yk = &tail[..r];
-                let xj = &mut head[j * r..(j + 1) * r];
-                for i in 0..r {
-                    xj[i] -= s * yk[i];
-                }
-            }
-        }
-        let d = 1.0 / g[j * m + j];
-        x[j * r..(j + 1) * r].iter_mut().for_each(|v| *v *= d);
-    }
-}
-
 /// `a ← (a + aᵀ)/2`.
 pub fn symmetrize(a: &mut DMatrix<f64>) {
     let n = a.nrows();
@@ -260,7 +183,7 @@ mod tests {
         let h = m(3, 3, 3);
         let s = &h * h.transpose() + DMatrix::identity(3, 3);
         let mut g = s.clone();
-        assert!(cholesky_in_place(&mut g));
+        assert!(cholesky_in_place(&mut g).is_ok());
         assert!((&g * g.transpose() - &s).amax() < 1e-13);
         let rhs = m(5, 3, 4);
         let mut y = rhs.clone();
@@ -270,6 +193,6 @@ mod tests {
         solve_right_lower(&mut y, &g);
         assert!((&y * &g - &rhs).amax() < 1e-12);
         let mut bad = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-        assert!(!cholesky_in_place(&mut bad));
+        assert!(cholesky_in_place(&mut bad).is_err());
     }
 }

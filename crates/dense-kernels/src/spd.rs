@@ -5,7 +5,8 @@
 //!   the factor) is finite and `s_j >` [`PD_RELATIVE_TOLERANCE`]` · n · M_jj`: each pivot keeps
 //!   more than the rounding error of its own diagonal entry, i.e. the matrix is positive definite
 //!   to working precision. The test is invariant under diagonal scaling `D M D`, so a matrix such
-//!   as `diag(1e-12, 1e4)` is accepted (a floor relative to `max_i M_ii` would reject it).
+//!   as `diag(1e-12, 1e4)` is accepted (a floor relative to `max_i M_ii` would reject it). Every
+//!   factorisation of [`crate::cholesky`] applies this rule.
 
 use nalgebra::DMatrix;
 
@@ -13,7 +14,8 @@ use nalgebra::DMatrix;
 pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
 
 /// Relative positive-definiteness tolerance: every Cholesky pivot `s_j` must exceed
-/// `PD_RELATIVE_TOLERANCE · n · M_jj`.
+/// `PD_RELATIVE_TOLERANCE · n · M_jj` (the default of every factorisation in
+/// [`crate::cholesky`]).
 pub const PD_RELATIVE_TOLERANCE: f64 = 4.0 * f64::EPSILON;
 
 /// A rejected Cholesky pivot: its index, value and the threshold it had to exceed.
@@ -23,51 +25,8 @@ pub struct PivotFailure {
     pub pivot: usize,
     /// The pivot `s_j` (NaN or ∞ if the factorisation overflowed).
     pub value: f64,
-    /// The threshold `rel_tol · n · M_jj` it had to exceed.
+    /// The threshold `rel_tol · n · M_jj` it had to exceed (the pivot had to be positive too).
     pub threshold: f64,
-}
-
-/// Largest diagonal entry (0 for an empty matrix).
-fn max_diag(a: &DMatrix<f64>) -> f64 {
-    (0..a.nrows().min(a.ncols())).map(|i| a[(i, i)]).fold(0.0, f64::max)
-}
-
-/// Lower Cholesky factor `L` with `a = L Lᵀ`, reading the lower triangle of the square `a`
-/// (allocates the factor).
-///
-/// A pivot `s_j` is accepted when it is finite and `s_j > max(0, rel_tol · n · a_jj)` (scale
-/// invariant: see the module documentation); every entry of `L` must be finite. A non-square `a`
-/// fails at pivot 0.
-pub fn cholesky_checked(a: &DMatrix<f64>, rel_tol: f64) -> Result<DMatrix<f64>, PivotFailure> {
-    let n = a.nrows();
-    if a.ncols() != n {
-        return Err(PivotFailure { pivot: 0, value: f64::NAN, threshold: rel_tol * n as f64 * max_diag(a) });
-    }
-    let mut l = DMatrix::<f64>::zeros(n, n);
-    for j in 0..n {
-        let threshold = rel_tol * n as f64 * a[(j, j)];
-        let mut s = a[(j, j)];
-        for k in 0..j {
-            s -= l[(j, k)] * l[(j, k)];
-        }
-        if !s.is_finite() || s <= threshold || s <= 0.0 {
-            return Err(PivotFailure { pivot: j, value: s, threshold });
-        }
-        let ljj = s.sqrt();
-        l[(j, j)] = ljj;
-        for i in (j + 1)..n {
-            let mut t = a[(i, j)];
-            for k in 0..j {
-                t -= l[(i, k)] * l[(j, k)];
-            }
-            let v = t / ljj;
-            if !v.is_finite() {
-                return Err(PivotFailure { pivot: j, value: s, threshold });
-            }
-            l[(i, j)] = v;
-        }
-    }
-    Ok(l)
 }
 
 /// The worst asymmetry of a square matrix beyond `tol · max_kl |m_kl|`: `Some((row, col,
@@ -91,6 +50,7 @@ pub fn max_asymmetry(m: &DMatrix<f64>, tol: f64) -> Option<(usize, usize, f64, f
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cholesky_checked;
 
     #[test]
     fn factor_reproduces_the_matrix_and_failures_name_the_pivot() {

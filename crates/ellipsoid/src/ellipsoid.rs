@@ -6,9 +6,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::CONTAINMENT_TOLERANCE;
 use crate::error::{EllipsoidError, Result};
-use crate::linalg::{
-    check_len, check_matrix_finite, check_vector_finite, cholesky, forward_sub, symmetrize, validate_spd,
-};
+use crate::linalg::{check_len, check_matrix_finite, check_vector_finite, forward_sub, symmetrize, validate_spd};
 
 /// The ellipsoid `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}` with `P` symmetric positive
 /// definite.
@@ -78,7 +76,7 @@ impl Ellipsoid {
     ) -> Result<Self> {
         check_vector_finite(&center, center_what)?;
         let shape = symmetrize(shape);
-        match cholesky(&shape) {
+        match dense_kernels::cholesky_checked(&shape, crate::PD_RELATIVE_TOLERANCE) {
             Ok(chol) => Ok(Self { center, shape, chol }),
             Err(f) => Err(on_fail(f.pivot, f.value)),
         }

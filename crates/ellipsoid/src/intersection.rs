@@ -46,10 +46,10 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 use crate::error::{EllipsoidError, Result};
 use crate::linalg::{
-    back_sub_transpose, check_len, check_matrix_finite, check_vector_finite, cholesky, cholesky_with, forward_sub,
-    forward_sub_mat, symmetrize, validate_spd,
+    back_sub_transpose, check_len, check_matrix_finite, check_vector_finite, forward_sub, forward_sub_mat, symmetrize,
+    validate_spd,
 };
-use crate::{Ellipsoid, RANK_RELATIVE_TOLERANCE};
+use crate::{Ellipsoid, PD_RELATIVE_TOLERANCE, RANK_RELATIVE_TOLERANCE};
 
 /// Number of grid intervals of the coarse scan in
 /// [`Ellipsoid::intersect_measurement_min_trace`].
@@ -211,8 +211,11 @@ impl<'a> Whitened<'a> {
     fn factor(&self, lambda: f64) -> Result<DMatrix<f64>> {
         let n = self.gram.nrows();
         let xu = DMatrix::<f64>::identity(n, n) * (1.0 - lambda) + &self.gram * lambda;
-        let f = if lambda >= 1.0 { cholesky_with(&xu, RANK_RELATIVE_TOLERANCE) } else { cholesky(&xu) };
-        f.map_err(|f| EllipsoidError::UnboundedIntersection {
+        // At λ = 1, X_u = Wᵀ W is singular exactly when C is rank-deficient; the workspace's 4 ε
+        // would accept a numerically rank-deficient Gram matrix whose rounding errors then
+        // dominate the bound, so a rank decision there needs the coarser RANK_RELATIVE_TOLERANCE.
+        let rel_tol = if lambda >= 1.0 { RANK_RELATIVE_TOLERANCE } else { PD_RELATIVE_TOLERANCE };
+        dense_kernels::cholesky_checked(&xu, rel_tol).map_err(|f| EllipsoidError::UnboundedIntersection {
             lambda,
             rows: self.rows,
             cols: self.cols,

@@ -31,7 +31,8 @@
 //!   `s_j > 4 ε · n · P_jj` (`ε` the machine epsilon): positive definite to working precision,
 //!   whatever the scaling of the coordinates.
 //! * [`RANK_RELATIVE_TOLERANCE`]: at `λ = 1` the intersection bound needs `Cᵀ R⁻¹ C`
-//!   non-singular; it is treated as singular below a relative pivot `1e-12 · n · max diag`.
+//!   non-singular; it is treated as singular when a Cholesky pivot falls below `1e-12 · n` times
+//!   its own diagonal entry (the workspace's pivot rule with a coarser tolerance).
 //! * [`CONTAINMENT_TOLERANCE`]: point and ellipsoid containment accept a normalised distance
 //!   up to `1 + 1e-9`.
 //!
@@ -90,7 +91,7 @@ pub use dense_kernels::SYMMETRY_TOLERANCE;
 pub use dense_kernels::PD_RELATIVE_TOLERANCE;
 
 /// Relative rank tolerance for `Cᵀ R⁻¹ C` (in whitened form) at `λ = 1` in the intersection
-/// bound: pivots must exceed `RANK_RELATIVE_TOLERANCE · n · max diag`.
+/// bound: pivots must exceed `RANK_RELATIVE_TOLERANCE · n` times their own diagonal entry.
 pub const RANK_RELATIVE_TOLERANCE: f64 = 1e-12;
 
 /// Containment tolerance on the normalised distance: `x ∈ 𝓔` when

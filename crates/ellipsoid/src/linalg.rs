@@ -1,73 +1,38 @@
-//! Small dense kernels (Cholesky, triangular solves) and input validation.
-//!
-//! The kernels are written out so that failures carry the failing pivot and so that no
-//! library call can panic on the (already validated) inputs.
+//! Input validation, and allocating conveniences over the kernels of `dense-kernels` (the
+//! Cholesky factorisation with its pivot rule, triangular solves, symmetrisation), whose failures
+//! carry the failing pivot and which cannot panic on the (already validated) inputs.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{EllipsoidError, Result};
 use crate::{PD_RELATIVE_TOLERANCE, SYMMETRY_TOLERANCE};
 
-pub(crate) use dense_kernels::PivotFailure;
-
-/// Lower Cholesky factor `L` with `a = L Lᵀ` at relative pivot tolerance `rel_tol`
-/// ([`dense_kernels::cholesky_checked`]).
-pub(crate) fn cholesky_with(a: &DMatrix<f64>, rel_tol: f64) -> std::result::Result<DMatrix<f64>, PivotFailure> {
-    dense_kernels::cholesky_checked(a, rel_tol)
-}
-
-/// [`cholesky_with`] at the crate's positive-definiteness tolerance.
-pub(crate) fn cholesky(a: &DMatrix<f64>) -> std::result::Result<DMatrix<f64>, PivotFailure> {
-    cholesky_with(a, PD_RELATIVE_TOLERANCE)
-}
-
-/// Solves `L x = b` for lower-triangular `L` with non-zero diagonal.
+/// Solves `L x = b` for the lower-triangular `L` (non-zero diagonal).
 pub(crate) fn forward_sub(l: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
-    let n = l.nrows();
     let mut x = b.clone();
-    for i in 0..n {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= l[(i, k)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
-    }
+    dense_kernels::solve_lower(l.as_slice(), l.nrows(), x.as_mut_slice());
     x
 }
 
 /// Solves `L X = B` column by column.
 pub(crate) fn forward_sub_mat(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
-    let n = l.nrows();
     let mut x = b.clone();
-    for c in 0..b.ncols() {
-        for i in 0..n {
-            let mut s = x[(i, c)];
-            for k in 0..i {
-                s -= l[(i, k)] * x[(k, c)];
-            }
-            x[(i, c)] = s / l[(i, i)];
-        }
-    }
+    dense_kernels::solve_lower(l.as_slice(), l.nrows(), x.as_mut_slice());
     x
 }
 
-/// Solves `Lᵀ x = b` for lower-triangular `L` with non-zero diagonal.
+/// Solves `Lᵀ x = b` for the lower-triangular `L` (non-zero diagonal).
 pub(crate) fn back_sub_transpose(l: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
-    let n = l.nrows();
     let mut x = b.clone();
-    for i in (0..n).rev() {
-        let mut s = x[i];
-        for k in (i + 1)..n {
-            s -= l[(k, i)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
-    }
+    dense_kernels::solve_lower_t(l.as_slice(), l.nrows(), x.as_mut_slice());
     x
 }
 
 /// `(a + aᵀ) / 2`.
 pub(crate) fn symmetrize(a: &DMatrix<f64>) -> DMatrix<f64> {
-    (a + a.transpose()) * 0.5
+    let mut s = a.clone();
+    dense_kernels::symmetrize(&mut s);
+    s
 }
 
 /// Rejects NaN and infinities in a vector.
@@ -126,11 +91,8 @@ pub(crate) fn validate_spd(m: &DMatrix<f64>, n: usize, what: &'static str) -> Re
     check_matrix_finite(m, what)?;
     check_symmetric(m, what)?;
     let sym = symmetrize(m);
-    let l = cholesky(&sym).map_err(|f| EllipsoidError::NotPositiveDefinite {
-        what,
-        pivot: f.pivot,
-        value: f.value,
-        threshold: f.threshold,
+    let l = dense_kernels::cholesky_checked(&sym, PD_RELATIVE_TOLERANCE).map_err(|f| {
+        EllipsoidError::NotPositiveDefinite { what, pivot: f.pivot, value: f.value, threshold: f.threshold }
     })?;
     Ok((sym, l))
 }
@@ -147,7 +109,7 @@ mod tests {
     #[test]
     fn cholesky_and_solves_round_trip() {
         let a = DMatrix::from_row_slice(3, 3, &[4.0, 2.0, 0.4, 2.0, 5.0, 1.0, 0.4, 1.0, 3.0]);
-        let l = cholesky(&a).expect("SPD");
+        let l = dense_kernels::cholesky_checked(&a, PD_RELATIVE_TOLERANCE).expect("SPD");
         assert!((&l * l.transpose() - &a).amax() < 1e-14);
         let b = DVector::from_vec(vec![1.0, -2.0, 0.5]);
         let y = forward_sub(&l, &b);
@@ -160,10 +122,14 @@ mod tests {
     }
 
     #[test]
-    fn cholesky_reports_failing_pivot() {
+    fn validation_reports_failing_pivot() {
         let a = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-        let f = cholesky(&a).expect_err("indefinite");
-        assert_eq!(f.pivot, 1);
-        assert!((f.value + 3.0).abs() < 1e-15);
+        match validate_spd(&a, 2, "A") {
+            Err(EllipsoidError::NotPositiveDefinite { pivot, value, .. }) => {
+                assert_eq!(pivot, 1);
+                assert!((value + 3.0).abs() < 1e-15);
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -136,7 +136,7 @@ impl GaussianUpdate {
         dense::mul_nt(1.0, p_pred, h, 0.0, &mut self.pht);
         self.s.copy_from(r);
         dense::mul_nn(1.0, h, &self.pht, 1.0, &mut self.s);
-        if !dense::cholesky_in_place(&mut self.s) {
+        if dense::cholesky_in_place(&mut self.s).is_err() {
             return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
         }
         self.k.copy_from(&self.pht);

@@ -167,15 +167,10 @@ pub struct UnscentedKalmanFilter {
 }
 
 /// Copies the symmetric `src` into `dst` and factorises it there; `true` if it is positive
-/// definite to working precision (every pivot `G_ii²` above `4 ε n` times its diagonal entry).
+/// definite to working precision (the pivot rule of `dense_kernels`).
 fn factor_pd(src: &DMatrix<f64>, dst: &mut DMatrix<f64>) -> bool {
     dst.copy_from(src);
-    if !dense::cholesky_in_place(dst) {
-        return false;
-    }
-    let n = dst.nrows();
-    let tol = dense::PD_RELATIVE_TOLERANCE * n as f64;
-    (0..n).all(|i| dst[(i, i)] * dst[(i, i)] > tol * src[(i, i)])
+    dense::cholesky_in_place(dst).is_ok()
 }
 
 /// `out += w · a bᵀ` for vectors `a`, `b`.

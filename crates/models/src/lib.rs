@@ -13,6 +13,8 @@
 //!   in-ellipsoid or ellipsoid-boundary noise, drawn from a documented PRNG
 //!   ([`Xoshiro256StarStar`], also a `rand_core` generator) so that a seed reproduces a run
 //!   whatever the versions of other crates.
+//! * [`validate`]: the vehicle crates' checks of scalar parameters (finite, positive,
+//!   non-negative) with their [`validate::ParamError`].
 //!
 //! Conventions: a step maps `x_k` to `x_{k+1} = f(x_k, u_k) + w_k`; the measurement taken after
 //! it is `y_{k+1} = h(x_{k+1}, u_k) + v_{k+1}`; an estimator's step `k` consumes `u_k` and
@@ -49,6 +51,7 @@ pub mod model;
 pub mod noise;
 pub mod rng;
 pub mod simulate;
+pub mod validate;
 
 pub use capability::{AnyModel, Capability, DifferentiableView, DiscreteView, LinearView};
 pub use continuous::{

@@ -98,32 +98,7 @@ impl From<TruckError> for models::ModelError {
     }
 }
 
-/// `Ok` if `value` is finite and strictly positive, else the error naming `name`.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), TruckError> {
-    if !value.is_finite() {
-        Err(TruckError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(TruckError::NotPositive { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite and non-negative, else the error naming `name`.
-pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), TruckError> {
-    if !value.is_finite() {
-        Err(TruckError::NonFinite { name, value })
-    } else if value < 0.0 {
-        Err(TruckError::Negative { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite, else the error naming `name`.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<(), TruckError> {
-    if value.is_finite() { Ok(()) } else { Err(TruckError::NonFinite { name, value }) }
-}
+models::from_param_error!(TruckError);
 
 /// `Ok` if the state or input `value` is finite, else the error naming `name`.
 pub(crate) fn finite_input(name: &'static str, value: f64) -> Result<(), TruckError> {

@@ -1,7 +1,9 @@
 //! All parameters of the truck (body, tyres, and the truth model's extras) in one validated
 //! struct (digest §4, §5).
 
-use crate::error::{TruckError, non_negative, positive};
+use models::validate::{non_negative, positive};
+
+use crate::error::TruckError;
 use crate::tyre::Pac89Tyre;
 
 /// Parameters of the three-axle port container truck (6×4: axle 1 steered, axles 2–3 driven

@@ -34,7 +34,9 @@ use models::error::check_dims;
 use models::{ContinuousModel, Dims, DiscreteModel, Discretized, Integrator, ModelError};
 use nalgebra::{DVector, Vector3};
 
-use crate::error::{TruckError, finite_input, positive};
+use models::validate::{non_negative, positive};
+
+use crate::error::{TruckError, finite_input};
 use crate::kinematics::{Geometry, WHEEL_NAMES, WHEELS, WheelKinematics, wheel_kinematics};
 use crate::params::TruckParams;
 use crate::planar::{TruckInput, sideslip};
@@ -410,7 +412,7 @@ impl TruthConfig {
     /// # Errors
     /// The first violation, naming the setting.
     pub fn validate(&self) -> Result<(), TruckError> {
-        crate::error::non_negative("duration", self.duration)?;
+        non_negative("duration", self.duration)?;
         positive("output period", self.output_period)?;
         positive("RK4 sub-steps per output period", self.substeps as f64)?;
         positive("initial speed", self.initial_speed)?;

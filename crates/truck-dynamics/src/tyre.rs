@@ -34,7 +34,9 @@
 //! the slip stiffness `BCD` (so `B = BCD/(C·λ_μ·D)`), as PAC2002's `λ_μ` does (its `K_y`, `K_x`
 //! do not depend on `λ_μ`). The truth model's "μ × 0.8" mismatch case sets it to 0.8.
 
-use crate::error::{TruckError, finite, finite_input, positive};
+use models::validate::{finite, positive};
+
+use crate::error::{TruckError, finite_input};
 
 /// Number of lateral coefficients `a0..a13`.
 pub const LATERAL_COEFFICIENTS: usize = 14;

@@ -23,6 +23,14 @@ pub enum VesselError {
         /// The rejected value.
         value: f64,
     },
+    /// A parameter that must be non-negative is negative.
+    #[error("parameter {name} must be non-negative, got {value}")]
+    Negative {
+        /// Symbol and meaning of the parameter.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+    },
     /// The SI mass matrix `M` (rigid body plus added mass) is not invertible, or not positive
     /// definite: the model `M ν' = τ − D ν` cannot be solved for `ν'` or stores negative energy.
     #[error("mass matrix M is not positive definite (smallest leading minor {minor:e}); check m11, m22, m33, m23, m32")]
@@ -46,18 +54,4 @@ impl From<VesselError> for models::ModelError {
     }
 }
 
-/// `Ok` if `value` is finite and strictly positive, else the error naming `name`.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), VesselError> {
-    if !value.is_finite() {
-        Err(VesselError::NonFinite { name, value })
-    } else if value <= 0.0 {
-        Err(VesselError::NotPositive { name, value })
-    } else {
-        Ok(())
-    }
-}
-
-/// `Ok` if `value` is finite, else the error naming `name`.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<(), VesselError> {
-    if value.is_finite() { Ok(()) } else { Err(VesselError::NonFinite { name, value }) }
-}
+models::from_param_error!(VesselError);

@@ -4,7 +4,9 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::error::{VesselError, finite, positive};
+use models::validate::{finite, positive};
+
+use crate::error::VesselError;
 
 /// Non-dimensional (bis system) inertia and damping coefficients of the supply vessel.
 ///

@@ -19,7 +19,8 @@ pub enum BoxQpStatus {
     Optimal,
     /// The iteration limit was reached; the iterate is feasible but may not be optimal.
     IterationLimit,
-    /// A free block `H_FF` was not numerically positive definite.
+    /// A free block `H_FF` was not positive definite to working precision (the pivot rule of
+    /// `dense_kernels`).
     NotConvex,
 }
 
@@ -219,7 +220,8 @@ impl BoxQp {
         }
     }
 
-    /// Cholesky factor of `H_FF` into `chol` (column-major `nf × nf`, lower); false if not PD.
+    /// Cholesky factor of `H_FF` into `chol` (column-major `nf × nf`, lower); false if `H_FF` is
+    /// not positive definite to working precision (the workspace's pivot rule).
     fn factor_free(&mut self, h: &[f64], n: usize) -> bool {
         let nf = self.free.len();
         for (cb, &j) in self.free.iter().enumerate() {
@@ -227,44 +229,12 @@ impl BoxQp {
                 self.chol[cb * nf + ca] = h[j * n + i];
             }
         }
-        for j in 0..nf {
-            let mut d = self.chol[j * nf + j];
-            for k in 0..j {
-                d -= self.chol[k * nf + j] * self.chol[k * nf + j];
-            }
-            let diag = self.chol[j * nf + j];
-            if d.is_nan() || d <= 1e-14 * diag.abs().max(f64::MIN_POSITIVE) {
-                return false;
-            }
-            let d = d.sqrt();
-            self.chol[j * nf + j] = d;
-            for i in j + 1..nf {
-                let mut s = self.chol[j * nf + i];
-                for k in 0..j {
-                    s -= self.chol[k * nf + i] * self.chol[k * nf + j];
-                }
-                self.chol[j * nf + i] = s / d;
-            }
-        }
-        true
+        dense_kernels::cholesky_slice(&mut self.chol, nf).is_ok()
     }
 
     /// `rhs ← (L Lᵀ)⁻¹ rhs` with the factor in `chol`.
     fn solve_free(&mut self, nf: usize) {
-        for i in 0..nf {
-            let mut s = self.rhs[i];
-            for k in 0..i {
-                s -= self.chol[k * nf + i] * self.rhs[k];
-            }
-            self.rhs[i] = s / self.chol[i * nf + i];
-        }
-        for i in (0..nf).rev() {
-            let mut s = self.rhs[i];
-            for k in i + 1..nf {
-                s -= self.chol[i * nf + k] * self.rhs[k];
-            }
-            self.rhs[i] = s / self.chol[i * nf + i];
-        }
+        dense_kernels::cholesky_solve(&self.chol, nf, &mut self.rhs[..nf]);
     }
 }
 

@@ -9,7 +9,6 @@ use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
 use crate::mhe::settings::{ArrivalRecursion, BlockWeighting, MheSettings, PriorMean, WindowSolver};
-use crate::mhe::small::{chol_inverse, cholesky};
 use crate::mhe::solve::{
     NoiseData, SolveCounters, SolverScratch, WindowStatus, coordinate_rotation, exact_saddle, saddle_value,
 };
@@ -175,13 +174,13 @@ impl MovingHorizonEstimator {
         let to_vec = |a: &DMatrix<f64>| a.as_slice().to_vec();
         let mut q_inv = vec![0.0; n * n];
         let mut work = to_vec(&q);
-        if !cholesky(&mut work, n) {
+        if dense_kernels::cholesky_slice(&mut work, n).is_err() {
             return Err(EstimatorError::InvalidConfiguration {
                 estimator: "mhe",
                 message: "Q is not positive definite".into(),
             });
         }
-        chol_inverse(&work, n, &mut q_inv);
+        dense_kernels::cholesky_inverse(&work, n, &mut q_inv);
         let r_inv: Vec<f64> = (0..m).map(|i| 1.0 / r[(i, i)]).collect();
         let mut p_ring = vec![0.0; cap * n * n];
         p_ring[..n * n].copy_from_slice(p0.as_slice());
@@ -414,10 +413,10 @@ impl MovingHorizonEstimator {
     fn information(&mut self, slot: usize, r_factor: f64, theta: f64) -> bool {
         let (n, m) = (self.n, self.m);
         self.mat_a.copy_from_slice(&self.p_ring[slot * n * n..(slot + 1) * n * n]);
-        if !cholesky(&mut self.mat_a, n) {
+        if dense_kernels::cholesky_slice(&mut self.mat_a, n).is_err() {
             return false;
         }
-        chol_inverse(&self.mat_a, n, &mut self.mat_d);
+        dense_kernels::cholesky_inverse(&self.mat_a, n, &mut self.mat_d);
         if self.has_y[slot] {
             let c = &self.c_ring[slot * m * n..(slot + 1) * m * n];
             for i in 0..m {
@@ -432,10 +431,10 @@ impl MovingHorizonEstimator {
         for i in 0..n {
             self.mat_d[i * n + i] -= theta;
         }
-        if !cholesky(&mut self.mat_d, n) {
+        if dense_kernels::cholesky_slice(&mut self.mat_d, n).is_err() {
             return false;
         }
-        chol_inverse(&self.mat_d, n, &mut self.mat_b);
+        dense_kernels::cholesky_inverse(&self.mat_d, n, &mut self.mat_b);
         true
     }
 
@@ -474,10 +473,10 @@ impl MovingHorizonEstimator {
             let sl = s % cap;
             self.mat_a.copy_from_slice(&self.p_ring[sl * n * n..(sl + 1) * n * n]);
         }
-        if !cholesky(&mut self.mat_a, n) {
+        if dense_kernels::cholesky_slice(&mut self.mat_a, n).is_err() {
             return Err(EstimatorError::NumericalFailure("the arrival-cost weight lost positive definiteness"));
         }
-        chol_inverse(&self.mat_a, n, &mut self.prior_inv);
+        dense_kernels::cholesky_inverse(&self.mat_a, n, &mut self.prior_inv);
         // Blocks: lengths and weights.
         let blocks = &self.settings.blocks;
         let weighting = self.settings.block_weighting;

@@ -25,7 +25,6 @@ mod clarabel_inner;
 mod estimator;
 mod nonlinear;
 pub mod settings;
-mod small;
 mod solve;
 mod window;
 

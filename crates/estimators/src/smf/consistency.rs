@@ -116,31 +116,12 @@ fn quad(m: &DMatrix<f64>, d: &DVector<f64>, t: &mut DVector<f64>) -> f64 {
 fn direction(w: &mut ConsistencyWork, r: &DMatrix<f64>, tau: [f64; 3]) -> bool {
     dense_kernels::lin2(w.s.as_mut_slice(), 1.0 / tau[0], w.m1.as_slice(), 1.0 / tau[1], w.m2.as_slice());
     dense_kernels::add_scaled(w.s.as_mut_slice(), 1.0 / tau[2], r.as_slice());
-    if !dense_kernels::cholesky_in_place(&mut w.s) {
+    if dense_kernels::cholesky_in_place(&mut w.s).is_err() {
         return false;
     }
-    solve_chol(&w.s, &w.e, &mut w.d);
+    w.d.copy_from(&w.e);
+    dense_kernels::cholesky_solve(w.s.as_slice(), w.s.nrows(), w.d.as_mut_slice());
     true
-}
-
-/// `x = (G Gᵀ)⁻¹ b` for the lower factor `G`.
-fn solve_chol(g: &DMatrix<f64>, b: &DVector<f64>, x: &mut DVector<f64>) {
-    let m = b.len();
-    x.copy_from(b);
-    for i in 0..m {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= g[(i, k)] * x[k];
-        }
-        x[i] = s / g[(i, i)];
-    }
-    for i in (0..m).rev() {
-        let mut s = x[i];
-        for k in i + 1..m {
-            s -= g[(k, i)] * x[k];
-        }
-        x[i] = s / g[(i, i)];
-    }
 }
 
 /// Checks the measurement `y` against the prediction `w.z = A x̂ + B u` (set by the caller), the

@@ -76,7 +76,7 @@ impl GainWork {
         dense_kernels::lin2(self.nmat.as_mut_slice(), 1.0 / t1, self.cx1c.as_slice(), 1.0 / t2, self.cqc.as_slice());
         // S = τ₃ N + R = G Gᵀ.
         dense_kernels::lin2(self.g.as_mut_slice(), t3, self.nmat.as_slice(), 1.0, r.as_slice());
-        if !dense_kernels::cholesky_in_place(&mut self.g) {
+        if dense_kernels::cholesky_in_place(&mut self.g).is_err() {
             return false;
         }
         // W = M Cᵀ G⁻ᵀ G⁻¹, L = τ₃ W, K = I − L C.

@@ -143,62 +143,16 @@ impl Workspace {
     }
 }
 
-/// Symmetry within `1e-10` relative, then a Cholesky factor `L` (lower, upper part zeroed) of
-/// `src` written into `l`. No allocation.
+/// Symmetry within [`dense_kernels::SYMMETRY_TOLERANCE`], then the lower Cholesky factor of the
+/// symmetric part of `src` written into `l` (upper part zeroed) at the workspace's pivot rule.
+/// No allocation.
 fn factor_spd(src: &DMatrix<f64>, l: &mut DMatrix<f64>, name: &'static str) -> Result<(), LmiError> {
-    let n = src.nrows();
-    let scale = src.amax().max(f64::MIN_POSITIVE);
-    for j in 0..n {
-        for i in 0..j {
-            if (src[(i, j)] - src[(j, i)]).abs() > 1e-10 * scale {
-                return Err(LmiError::NotPositiveDefinite(name));
-            }
-        }
+    if dense_kernels::max_asymmetry(src, dense_kernels::SYMMETRY_TOLERANCE).is_some() {
+        return Err(LmiError::NotPositiveDefinite(name));
     }
-    for j in 0..n {
-        let mut d = 0.5 * (src[(j, j)] + src[(j, j)]);
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(LmiError::NotPositiveDefinite(name));
-        }
-        let d = d.sqrt();
-        l[(j, j)] = d;
-        for i in j + 1..n {
-            let mut v = 0.5 * (src[(i, j)] + src[(j, i)]);
-            for k in 0..j {
-                v -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = v / d;
-        }
-        for i in 0..j {
-            l[(i, j)] = 0.0;
-        }
-    }
-    Ok(())
-}
-
-/// `inv = (L Lᵀ)⁻¹` from the lower factor `L`, column by column. No allocation.
-fn spd_inverse(l: &DMatrix<f64>, inv: &mut DMatrix<f64>) {
-    let n = l.nrows();
-    for col in 0..n {
-        // Solve L z = e_col, then Lᵀ x = z, in place in column `col` of `inv`.
-        for i in 0..n {
-            let mut v = if i == col { 1.0 } else { 0.0 };
-            for k in 0..i {
-                v -= l[(i, k)] * inv[(k, col)];
-            }
-            inv[(i, col)] = v / l[(i, i)];
-        }
-        for i in (0..n).rev() {
-            let mut v = inv[(i, col)];
-            for k in i + 1..n {
-                v -= l[(k, i)] * inv[(k, col)];
-            }
-            inv[(i, col)] = v / l[(i, i)];
-        }
-    }
+    l.copy_from(src);
+    dense_kernels::symmetrize(l);
+    dense_kernels::cholesky_in_place(l).map_err(|_| LmiError::NotPositiveDefinite(name))
 }
 
 fn check_dims(d: &FilterSdpData<'_>) -> Result<(usize, usize), LmiError> {
@@ -286,8 +240,8 @@ impl FilterSdp {
         factor_spd(data.q, &mut ws.q_fac, "Q")?;
         factor_spd(data.r, &mut ws.r_fac, "R")?;
         if self.form == Formulation::AsStated {
-            spd_inverse(&ws.q_fac, &mut ws.q_inv);
-            spd_inverse(&ws.r_fac, &mut ws.r_inv);
+            dense_kernels::cholesky_inverse(ws.q_fac.as_slice(), self.n, ws.q_inv.as_mut_slice());
+            dense_kernels::cholesky_inverse(ws.r_fac.as_slice(), self.m, ws.r_inv.as_mut_slice());
         }
         ws.ae.gemm(1.0, data.a, &ws.e, 0.0);
         ws.cae.gemm(1.0, data.c, &ws.ae, 0.0);
