@@ -622,7 +622,10 @@ fn missing(name: &'static str, needs: Capability, model: &dyn AnyModel) -> Estim
     EstimatorError::ModelLacksCapability { estimator: name, needs, offered: Capability::of(model) }
 }
 
-fn on_linear<E: for<'x> DynEstimator<dyn LinearModel + 'x> + Send + 'static>(e: &'static EstimatorEntry, inner: E) -> Inner {
+fn on_linear<E: for<'x> DynEstimator<dyn LinearModel + 'x> + Send + 'static>(
+    e: &'static EstimatorEntry,
+    inner: E,
+) -> Inner {
     Box::new(OnLinear { name: e.name, inner })
 }
 

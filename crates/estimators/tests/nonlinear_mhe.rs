@@ -352,3 +352,21 @@ fn boxes_on_the_measurement_residuals_hold_at_the_solution_and_infeasibility_is_
     bad.w_box = Some((DVector::repeat(2, 1.0), DVector::repeat(2, -1.0)));
     assert!(matches!(new_mhe(bad, 1), Err(EstimatorError::InvalidConfiguration { .. })));
 }
+
+/// A measurement of `x_0` before the first step: the one-sample window is the Kalman update of
+/// the prior `(x̄₀, P₀)` with it (the prior term must be there, not zero).
+#[test]
+fn the_initial_measurement_is_weighed_against_the_prior() {
+    use models::LinearModel;
+    let model = linear();
+    let mut s = settings(3, 2, 5, NonlinearArrival::Ekf);
+    s.x0 = DVector::from_vec(vec![0.5, -0.2, 0.1]);
+    let (c, p0, r) = (model.c().clone(), s.p0.clone(), s.r.clone());
+    let x0 = s.x0.clone();
+    let mut mhe = new_mhe(s, 1).unwrap();
+    let y0 = DVector::from_vec(vec![0.3, 0.1]);
+    let e = mhe.measure_initial(&model, &DVector::zeros(1), &y0).unwrap();
+    let gain = &p0 * c.transpose() * (&c * &p0 * c.transpose() + &r).try_inverse().unwrap();
+    let want = &x0 + gain * (&y0 - &c * &x0);
+    assert!((&e.center - &want).amax() < 1e-9, "{} vs {want}", e.center);
+}

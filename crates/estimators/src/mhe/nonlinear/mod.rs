@@ -231,6 +231,8 @@ impl NonlinearMhe {
         self.rings.uh[0].copy_from(u);
         self.rings.has_y[0] = true;
         self.window.x[0].copy_from(&self.x0);
+        // The first window's prior is the setup's (x̄₀, P₀).
+        self.next.copy_from(&self.prior);
         match self.solve(model, 0, 1, start) {
             Ok(()) => Ok(&self.est),
             Err(e) => {
