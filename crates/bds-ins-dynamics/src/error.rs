@@ -7,30 +7,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
 pub enum BdsInsError {
-    /// A scalar parameter is NaN or infinite.
-    #[error("parameter {name} must be finite, got {value}")]
-    NonFinite {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be strictly positive is zero or negative.
-    #[error("parameter {name} must be positive, got {value}")]
-    NotPositive {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be non-negative is negative.
-    #[error("parameter {name} must be non-negative, got {value}")]
-    Negative {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
+    /// A scalar parameter is NaN or infinite, not positive or negative (the message names it).
+    #[error(transparent)]
+    Parameter(#[from] models::validate::ParamError),
     /// A parameter lies outside the range the model is valid for.
     #[error("parameter {name} = {value} is outside [{lo}, {hi}]")]
     OutOfRange {
@@ -87,16 +66,15 @@ impl From<BdsInsError> for models::ModelError {
     }
 }
 
-models::from_param_error!(BdsInsError);
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::ParamError;
     use models::validate::{non_negative, positive};
 
     #[test]
     fn errors_become_model_errors_with_their_message() {
-        let e = BdsInsError::NotPositive { name: "g (gravity)", value: -1.0 };
+        let e = BdsInsError::Parameter(ParamError::NotPositive { name: "g (gravity)", value: -1.0 });
         assert_eq!(
             models::ModelError::from(e),
             models::ModelError::Evaluation("parameter g (gravity) must be positive, got -1".to_owned())

@@ -204,6 +204,7 @@ impl InsNoise {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::ParamError;
 
     #[test]
     fn presets_are_valid_and_bad_values_are_named() {
@@ -216,7 +217,7 @@ mod tests {
         let e = InsParams { earth: Earth::Rotating { latitude: 1.56 }, ..InsParams::digest() }.validate().unwrap_err();
         assert!(matches!(e, BdsInsError::OutOfRange { .. }), "{e}");
         let e = InsParams { earth: Earth::Rotating { latitude: f64::NAN }, ..InsParams::digest() }.validate();
-        assert!(matches!(e, Err(BdsInsError::NonFinite { .. })));
+        assert!(matches!(e, Err(BdsInsError::Parameter(ParamError::NonFinite { .. }))));
         let e = InsParams { bias_frame: BiasFrame::Body { azimuth: f64::INFINITY }, ..InsParams::digest() }.validate();
         assert!(e.is_err());
         // The flat option ignores the Earth constants.

@@ -3,6 +3,7 @@
 //! digest's model is only positive semidefinite (constant biases), so samples are drawn with a
 //! symmetric square root from the eigendecomposition rather than a Cholesky factor.
 
+use models::validate::ParamError;
 use nalgebra::{DMatrix, DVector};
 
 use models::Xoshiro256StarStar;
@@ -88,7 +89,7 @@ pub fn simulate_error_states(
         return Err(BdsInsError::DimensionMismatch { what: "x0", expected: STATES, found: x0.len() });
     }
     if let Some(v) = x0.iter().find(|v| !v.is_finite()) {
-        return Err(BdsInsError::NonFinite { name: "x0 (initial error state)", value: *v });
+        return Err(ParamError::NonFinite { name: "x0 (initial error state)", value: *v }.into());
     }
     let mut sampler = GaussianSampler::new("Q_k", &model.q)?;
     let mut w = DVector::zeros(STATES);

@@ -7,30 +7,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
 pub enum CarError {
-    /// A scalar parameter is NaN or infinite.
-    #[error("parameter {name} must be finite, got {value}")]
-    NonFinite {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be strictly positive is zero or negative.
-    #[error("parameter {name} must be positive, got {value}")]
-    NotPositive {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be non-negative is negative.
-    #[error("parameter {name} must be non-negative, got {value}")]
-    Negative {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
+    /// A scalar parameter is NaN or infinite, not positive or negative (the message names it).
+    #[error(transparent)]
+    Parameter(#[from] models::validate::ParamError),
     /// A model tool of the `models` crate failed (discretisation, a non-finite matrix, a noise
     /// box).
     #[error(transparent)]
@@ -48,15 +27,14 @@ impl From<CarError> for models::ModelError {
     }
 }
 
-models::from_param_error!(CarError);
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::ParamError;
 
     #[test]
     fn car_errors_become_model_errors_with_their_message() {
-        let e = CarError::NotPositive { name: "m (mass)", value: -1.0 };
+        let e = CarError::Parameter(ParamError::NotPositive { name: "m (mass)", value: -1.0 });
         assert_eq!(
             models::ModelError::from(e),
             models::ModelError::Evaluation("parameter m (mass) must be positive, got -1".to_owned())

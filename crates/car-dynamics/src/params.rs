@@ -99,7 +99,7 @@ impl CarParams {
     /// shows it.
     ///
     /// # Errors
-    /// [`CarError::NonFinite`] or [`CarError::NotPositive`] naming the parameter.
+    /// [`CarError::Parameter`] naming the parameter.
     pub fn validate(&self) -> Result<(), CarError> {
         positive("m (mass)", self.mass)?;
         positive("I_z (yaw inertia)", self.yaw_inertia)?;
@@ -115,6 +115,7 @@ impl CarParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::ParamError;
 
     fn message(p: CarParams) -> String {
         match p.validate() {
@@ -169,6 +170,6 @@ mod tests {
             assert!(m.contains(expected), "message {m:?} lacks {expected:?}");
         }
         let e = CarParams { mass: -1.0, ..base() }.validate().unwrap_err();
-        assert_eq!(e, CarError::NotPositive { name: "m (mass)", value: -1.0 });
+        assert_eq!(e, CarError::Parameter(ParamError::NotPositive { name: "m (mass)", value: -1.0 }));
     }
 }

@@ -7,30 +7,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
 pub enum DynamicsError {
-    /// A scalar parameter is NaN or infinite.
-    #[error("parameter {name} must be finite, got {value}")]
-    NonFinite {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be strictly positive is zero or negative.
-    #[error("parameter {name} must be positive, got {value}")]
-    NotPositive {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be non-negative is negative.
-    #[error("parameter {name} must be non-negative, got {value}")]
-    Negative {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
+    /// A scalar parameter is NaN or infinite, not positive or negative (the message names it).
+    #[error(transparent)]
+    Parameter(#[from] models::validate::ParamError),
     /// The roll inertia about the CG, `I_x = I_xeq − m h²`, is not positive: no rigid body has
     /// such inertias (parallel-axis theorem). This is the literal reading of Table 1.
     #[error(
@@ -66,7 +45,5 @@ impl From<DynamicsError> for models::ModelError {
         }
     }
 }
-
-models::from_param_error!(DynamicsError);
 
 pub(crate) use models::error::check_finite;

@@ -36,7 +36,8 @@ use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, KalmanFilter};
-use crate::traits::{Estimator, Setup, StepDetails};
+use crate::traits::forward_estimator;
+use crate::traits::{Setup, StepDetails};
 use crate::validate::check_vec;
 
 /// The RTK codes the paper uses (P): 1 single, 2 differential, 3 fixed, 4 float.
@@ -464,24 +465,7 @@ fn adaptive_error(e: AdaptiveError, m: usize) -> EstimatorError {
     }
 }
 
-impl<S: NoiseScaling, M: LinearModel + ?Sized> Estimator<M> for AdaptiveKalmanFilter<S> {
-    type Estimate = GaussianEstimate;
-    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        AdaptiveKalmanFilter::step(self, model, u, y)
-    }
-    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        AdaptiveKalmanFilter::predict(self, model, u)
-    }
-    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        AdaptiveKalmanFilter::update(self, model, y)
-    }
-    fn estimate(&self) -> &GaussianEstimate {
-        self.kf.estimate()
-    }
-    fn dims(&self) -> Dims {
-        AdaptiveKalmanFilter::dims(self)
-    }
-}
+forward_estimator!(impl<S: NoiseScaling> for AdaptiveKalmanFilter<S>, LinearModel, GaussianEstimate);
 
 #[cfg(test)]
 mod tests {

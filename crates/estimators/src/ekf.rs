@@ -21,7 +21,8 @@ use models::{DifferentiableModel, Dims};
 
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, GaussianUpdate, commit_prediction};
-use crate::traits::{Estimator, Setup, StepDetails};
+use crate::traits::forward_estimator;
+use crate::traits::{Setup, StepDetails};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
 
 /// An extended Kalman filter; `Q`, `R` are covariances.
@@ -70,6 +71,12 @@ impl ExtendedKalmanFilter {
             u_last: DVector::zeros(inputs),
             upd: GaussianUpdate::new(n, m),
         })
+    }
+
+    /// Number of states, inputs, outputs.
+    #[must_use]
+    pub fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
     }
 
     /// The current estimate.
@@ -195,21 +202,4 @@ impl ExtendedKalmanFilter {
     }
 }
 
-impl<M: DifferentiableModel + ?Sized> Estimator<M> for ExtendedKalmanFilter {
-    type Estimate = GaussianEstimate;
-    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        ExtendedKalmanFilter::step(self, model, u, y)
-    }
-    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        ExtendedKalmanFilter::predict(self, model, u)
-    }
-    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        ExtendedKalmanFilter::update(self, model, y)
-    }
-    fn estimate(&self) -> &GaussianEstimate {
-        &self.est
-    }
-    fn dims(&self) -> Dims {
-        Dims::new(self.n, self.p, self.m)
-    }
-}
+forward_estimator!(impl<> for ExtendedKalmanFilter, DifferentiableModel, GaussianEstimate);

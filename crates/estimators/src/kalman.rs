@@ -15,7 +15,8 @@ use dense_kernels as dense;
 use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
-use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::forward_estimator;
+use crate::traits::{Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
@@ -376,21 +377,4 @@ impl Estimate for GaussianEstimate {
     }
 }
 
-impl<M: LinearModel + ?Sized> Estimator<M> for KalmanFilter {
-    type Estimate = GaussianEstimate;
-    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        KalmanFilter::step(self, model, u, y)
-    }
-    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        KalmanFilter::predict(self, model, u)
-    }
-    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        KalmanFilter::update(self, model, y)
-    }
-    fn estimate(&self) -> &GaussianEstimate {
-        &self.est
-    }
-    fn dims(&self) -> Dims {
-        Dims::new(self.n, self.p, self.m)
-    }
-}
+forward_estimator!(impl<> for KalmanFilter, LinearModel, GaussianEstimate);

@@ -327,6 +327,17 @@ pub mod names {
     pub const MHE_UKF: &str = "mhe-ukf";
 }
 
+/// The set-membership filter built by `$build` (an expression of the solver `$t`) with the
+/// solver of `$choice` and the inconsistency policy `$policy`, behind the linear adapter.
+macro_rules! set_membership {
+    ($e:expr, $choice:expr, $policy:expr, |$t:ident| $build:expr) => {
+        Ok(match solver($choice)? {
+            Solver::Two($t) => on_linear($e, with_policy($build?, $policy)),
+            Solver::Sdp($t) => on_linear($e, with_policy($build?, $policy)),
+        })
+    };
+}
+
 /// Every registered estimator, in display order.
 pub static ESTIMATORS: &[EstimatorEntry] = &[
     EstimatorEntry {
@@ -338,11 +349,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
-            let p = s.inconsistency;
-            Ok(match solver(s.solver)? {
-                Solver::Two(t) => on_linear(e, with_policy(SetMembershipFilter::with_solver(setup, t)?, p)),
-                Solver::Sdp(t) => on_linear(e, with_policy(SetMembershipFilter::with_solver(setup, t)?, p)),
-            })
+            set_membership!(e, s.solver, s.inconsistency, |t| SetMembershipFilter::with_solver(setup, t))
         },
     },
     EstimatorEntry {
@@ -363,11 +370,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembershipInputBox(s, b) = s else { return Err(wrong_settings(e)) };
-            let (p, lo, hi) = (s.inconsistency, &b.lower, &b.upper);
-            Ok(match solver(s.solver)? {
-                Solver::Two(t) => on_linear(e, with_policy(yang_li::without_input(setup, lo, hi, t)?, p)),
-                Solver::Sdp(t) => on_linear(e, with_policy(yang_li::without_input(setup, lo, hi, t)?, p)),
-            })
+            set_membership!(e, s.solver, s.inconsistency, |t| yang_li::without_input(setup, &b.lower, &b.upper, t))
         },
     },
     EstimatorEntry {
@@ -379,11 +382,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
-            let p = s.inconsistency;
-            Ok(match solver(s.solver)? {
-                Solver::Two(t) => on_linear(e, with_policy(yang_li::with_input(setup, t)?, p)),
-                Solver::Sdp(t) => on_linear(e, with_policy(yang_li::with_input(setup, t)?, p)),
-            })
+            set_membership!(e, s.solver, s.inconsistency, |t| yang_li::with_input(setup, t))
         },
     },
     EstimatorEntry {

@@ -156,3 +156,35 @@ impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
         self.dims()
     }
 }
+
+/// Implements [`Estimator`] for a filter whose inherent `step`, `predict`, `update`, `estimate`
+/// and `dims` have the trait's signatures, for every model of the capability `$bound`:
+/// `forward_estimator!(impl<S: UpdateSolver> for Filter<S>, LinearModel, Estimate)`.
+macro_rules! forward_estimator {
+    (impl<$($g:ident: $gb:path),*> for $ty:ty, $bound:path, $est:ty) => {
+        impl<$($g: $gb,)* M: $bound + ?Sized> $crate::traits::Estimator<M> for $ty {
+            type Estimate = $est;
+            fn step(
+                &mut self,
+                model: &M,
+                u: &nalgebra::DVector<f64>,
+                y: &nalgebra::DVector<f64>,
+            ) -> Result<&$est, $crate::error::EstimatorError> {
+                <$ty>::step(self, model, u, y)
+            }
+            fn predict(&mut self, model: &M, u: &nalgebra::DVector<f64>) -> Result<&$est, $crate::error::EstimatorError> {
+                <$ty>::predict(self, model, u)
+            }
+            fn update(&mut self, model: &M, y: &nalgebra::DVector<f64>) -> Result<&$est, $crate::error::EstimatorError> {
+                <$ty>::update(self, model, y)
+            }
+            fn estimate(&self) -> &$est {
+                <$ty>::estimate(self)
+            }
+            fn dims(&self) -> models::Dims {
+                <$ty>::dims(self)
+            }
+        }
+    };
+}
+pub(crate) use forward_estimator;

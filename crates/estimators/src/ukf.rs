@@ -51,7 +51,8 @@ use models::{Dims, DiscreteModel};
 
 use crate::error::EstimatorError;
 use crate::kalman::GaussianEstimate;
-use crate::traits::{Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::forward_estimator;
+use crate::traits::{Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
 
 /// The scaling parameters of the sigma points.
@@ -237,8 +238,15 @@ impl UnscentedKalmanFilter {
     }
 
     /// The current estimate.
+    #[must_use]
     pub fn estimate(&self) -> &GaussianEstimate {
         &self.est
+    }
+
+    /// Number of states, inputs, outputs.
+    #[must_use]
+    pub fn dims(&self) -> Dims {
+        Dims::new(self.n, self.p, self.m)
     }
 
     /// The sigma-point parameters.
@@ -574,24 +582,7 @@ impl UnscentedKalmanFilter {
     }
 }
 
-impl<M: DiscreteModel + ?Sized> Estimator<M> for UnscentedKalmanFilter {
-    type Estimate = GaussianEstimate;
-    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        UnscentedKalmanFilter::step(self, model, u, y)
-    }
-    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        UnscentedKalmanFilter::predict(self, model, u)
-    }
-    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&GaussianEstimate, EstimatorError> {
-        UnscentedKalmanFilter::update(self, model, y)
-    }
-    fn estimate(&self) -> &GaussianEstimate {
-        &self.est
-    }
-    fn dims(&self) -> Dims {
-        Dims::new(self.n, self.p, self.m)
-    }
-}
+forward_estimator!(impl<> for UnscentedKalmanFilter, DiscreteModel, GaussianEstimate);
 
 #[cfg(test)]
 mod tests {

@@ -1,8 +1,8 @@
 //! Validation of scalar parameters, shared by the vehicle crates.
 //!
-//! Each check returns a [`ParamError`] naming the parameter; a vehicle crate turns it into its
-//! own error variant of the same message ([`from_param_error!`](crate::from_param_error)), so `?`
-//! works in its validation code:
+//! Each check returns a [`ParamError`] naming the parameter; a vehicle crate's error wraps it in
+//! one variant (`Parameter(#[from] ParamError)`, the same message), so `?` works in its validation
+//! code:
 //!
 //! ```
 //! use models::validate::{ParamError, positive};
@@ -18,6 +18,7 @@ use thiserror::Error;
 /// A scalar parameter that failed a check. Every variant names the parameter (symbol and
 /// meaning) and carries the rejected value.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
+#[non_exhaustive]
 pub enum ParamError {
     /// The parameter is NaN or infinite.
     #[error("parameter {name} must be finite, got {value}")]
@@ -45,24 +46,6 @@ pub enum ParamError {
     },
 }
 
-/// Implements `From<ParamError>` for a crate's error enum `$error` whose `NonFinite`,
-/// `NotPositive` and `Negative` variants have the fields of [`ParamError`]'s (same messages).
-#[macro_export]
-macro_rules! from_param_error {
-    ($error:ident) => {
-        impl From<$crate::validate::ParamError> for $error {
-            fn from(e: $crate::validate::ParamError) -> Self {
-                use $crate::validate::ParamError;
-                match e {
-                    ParamError::NonFinite { name, value } => $error::NonFinite { name, value },
-                    ParamError::NotPositive { name, value } => $error::NotPositive { name, value },
-                    ParamError::Negative { name, value } => $error::Negative { name, value },
-                }
-            }
-        }
-    };
-}
-
 /// `Ok` if `value` is finite, else [`ParamError::NonFinite`] naming `name`.
 pub fn finite(name: &'static str, value: f64) -> Result<(), ParamError> {
     if value.is_finite() { Ok(()) } else { Err(ParamError::NonFinite { name, value }) }
@@ -83,22 +66,6 @@ pub fn non_negative(name: &'static str, value: f64) -> Result<(), ParamError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[derive(Debug, PartialEq)]
-    enum Wrapped {
-        NonFinite { name: &'static str, value: f64 },
-        NotPositive { name: &'static str, value: f64 },
-        Negative { name: &'static str, value: f64 },
-    }
-    crate::from_param_error!(Wrapped);
-
-    #[test]
-    fn a_crate_error_takes_the_variant_of_the_same_name() {
-        let wrap = |r: Result<(), ParamError>| r.map_err(Wrapped::from).unwrap_err();
-        assert_eq!(wrap(finite("a", f64::INFINITY)), Wrapped::NonFinite { name: "a", value: f64::INFINITY });
-        assert_eq!(wrap(positive("b", 0.0)), Wrapped::NotPositive { name: "b", value: 0.0 });
-        assert_eq!(wrap(non_negative("c", -2.0)), Wrapped::Negative { name: "c", value: -2.0 });
-    }
 
     #[test]
     fn checks_name_the_parameter_and_the_value() {

@@ -7,30 +7,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
 pub enum TruckError {
-    /// A parameter is NaN or infinite.
-    #[error("parameter {name} must be finite, got {value}")]
-    NonFinite {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be strictly positive is zero or negative.
-    #[error("parameter {name} must be positive, got {value}")]
-    NotPositive {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be non-negative is negative.
-    #[error("parameter {name} must be non-negative, got {value}")]
-    Negative {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
+    /// A scalar parameter is NaN or infinite, not positive or negative (the message names it).
+    #[error(transparent)]
+    Parameter(#[from] models::validate::ParamError),
     /// Parameters that are valid one by one but not together (e.g. axle 3 ahead of axle 2).
     #[error("parameter {name}: {reason}")]
     Inconsistent {
@@ -97,8 +76,6 @@ impl From<TruckError> for models::ModelError {
         }
     }
 }
-
-models::from_param_error!(TruckError);
 
 /// `Ok` if the state or input `value` is finite, else the error naming `name`.
 pub(crate) fn finite_input(name: &'static str, value: f64) -> Result<(), TruckError> {

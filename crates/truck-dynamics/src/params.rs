@@ -133,7 +133,7 @@ impl TruckParams {
     /// ([`Pac89Tyre::validate`]); and usable tyre curves at the static load of every position.
     ///
     /// # Errors
-    /// [`TruckError::NonFinite`], [`TruckError::NotPositive`], [`TruckError::Negative`],
+    /// [`TruckError::Parameter`],
     /// [`TruckError::Inconsistent`] or [`TruckError::TyreOutOfRange`].
     pub fn validate(&self) -> Result<(), TruckError> {
         positive("m (mass)", self.mass)?;

@@ -103,7 +103,7 @@ impl Pac89Coefficients {
     /// usable curve at a given load is checked at evaluation ([`TruckError::TyreOutOfRange`]).
     ///
     /// # Errors
-    /// [`TruckError::NonFinite`] or [`TruckError::NotPositive`] naming the coefficient.
+    /// [`TruckError::Parameter`] naming the coefficient.
     pub fn validate(&self) -> Result<(), TruckError> {
         for (name, &v) in A_NAMES.iter().zip(&self.a) {
             finite(name, v)?;
@@ -280,7 +280,7 @@ impl Pac89Tyre {
     /// digest decision 3): `n·F_y(F_z/n, α)`, slope and peak likewise times `n` **\[A\]**.
     ///
     /// # Errors
-    /// As [`Pac89Tyre::lateral`], and [`TruckError::NotPositive`] for `n = 0`.
+    /// As [`Pac89Tyre::lateral`], and [`TruckError::Parameter`] for `n = 0`.
     pub fn lateral_lumped(&self, tyres: u32, fz: f64, alpha: f64) -> Result<TyreForce, TruckError> {
         let n = tyre_count(tyres)?;
         Ok(self.lateral(fz / n, alpha)?.scaled(n))
@@ -289,7 +289,7 @@ impl Pac89Tyre {
     /// `n·F_x(F_z/n, s)` for `n` tyres at one wheel position (see [`Pac89Tyre::lateral_lumped`]).
     ///
     /// # Errors
-    /// As [`Pac89Tyre::longitudinal`], and [`TruckError::NotPositive`] for `n = 0`.
+    /// As [`Pac89Tyre::longitudinal`], and [`TruckError::Parameter`] for `n = 0`.
     pub fn longitudinal_lumped(&self, tyres: u32, fz: f64, slip: f64) -> Result<TyreForce, TruckError> {
         let n = tyre_count(tyres)?;
         Ok(self.longitudinal(fz / n, slip)?.scaled(n))

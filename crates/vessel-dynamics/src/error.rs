@@ -7,30 +7,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
 pub enum VesselError {
-    /// A parameter is NaN or infinite.
-    #[error("parameter {name} must be finite, got {value}")]
-    NonFinite {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be strictly positive is zero or negative.
-    #[error("parameter {name} must be positive, got {value}")]
-    NotPositive {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
-    /// A parameter that must be non-negative is negative.
-    #[error("parameter {name} must be non-negative, got {value}")]
-    Negative {
-        /// Symbol and meaning of the parameter.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-    },
+    /// A scalar parameter is NaN or infinite, not positive or negative (the message names it).
+    #[error(transparent)]
+    Parameter(#[from] models::validate::ParamError),
     /// The SI mass matrix `M` (rigid body plus added mass) is not invertible, or not positive
     /// definite: the model `M ν' = τ − D ν` cannot be solved for `ν'` or stores negative energy.
     #[error("mass matrix M is not positive definite (smallest leading minor {minor:e}); check m11, m22, m33, m23, m32")]
@@ -53,5 +32,3 @@ impl From<VesselError> for models::ModelError {
         }
     }
 }
-
-models::from_param_error!(VesselError);

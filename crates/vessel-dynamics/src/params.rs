@@ -90,7 +90,7 @@ pub struct SiMatrices {
 /// `D = m·√(g/L)·[[d11, 0, 0], [0, d22, L·d23], [0, L·d32, L²·d33]]`.
 ///
 /// # Errors
-/// [`VesselError::NonFinite`] / [`VesselError::NotPositive`] naming a coefficient, the mass, the
+/// [`VesselError::Parameter`] naming a coefficient, the mass, the
 /// length or `g` (`m11`, `m22`, `m33`, `m`, `L`, `g` must be positive, the rest finite);
 /// [`VesselError::MassNotPositiveDefinite`] when the symmetric part of `M` is not positive
 /// definite.
@@ -141,7 +141,7 @@ impl ThrustLimits {
     /// Validated limits.
     ///
     /// # Errors
-    /// [`VesselError::NonFinite`] / [`VesselError::NotPositive`] naming the limit.
+    /// [`VesselError::Parameter`] naming the limit.
     pub fn new(max: [f64; 3]) -> Result<Self, VesselError> {
         let limits = Self { max };
         limits.validate()?;
@@ -203,7 +203,7 @@ impl ForceNoise {
     /// The covariance `diag(σ²)` as a [`models::Noise`] for the simulator.
     ///
     /// # Errors
-    /// [`VesselError::NonFinite`] / [`VesselError::NotPositive`] naming a standard deviation
+    /// [`VesselError::Parameter`] naming a standard deviation
     /// (use [`models::Noise::none`] for no noise).
     pub fn to_noise(&self) -> Result<models::Noise, VesselError> {
         for (i, name) in ["sigma_X (surge force noise)", "sigma_Y (sway force noise)", "sigma_N (yaw moment noise)"]
@@ -254,6 +254,7 @@ impl VesselParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use models::validate::ParamError;
 
     fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs()
@@ -301,9 +302,9 @@ mod tests {
     #[test]
     fn bad_parameters_are_typed_errors() {
         let p = VesselParams { mass: -1.0, ..VesselParams::paper() };
-        assert!(matches!(p.validate(), Err(VesselError::NotPositive { name: "m (mass)", .. })));
+        assert!(matches!(p.validate(), Err(VesselError::Parameter(ParamError::NotPositive { name: "m (mass)", .. }))));
         let p = VesselParams { length: f64::NAN, ..VesselParams::paper() };
-        assert!(matches!(p.validate(), Err(VesselError::NonFinite { .. })));
+        assert!(matches!(p.validate(), Err(VesselError::Parameter(ParamError::NonFinite { .. }))));
         let bis = BisCoefficients { d23: f64::INFINITY, ..BisCoefficients::paper() };
         let e = bis_to_si(&bis, 1.0, 1.0, 1.0).unwrap_err();
         assert_eq!(e.to_string(), "parameter d23 (bis sway-yaw damping) must be finite, got inf");

@@ -14,9 +14,8 @@ use super::input::{InputModel, check_in_box, effective_noise};
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 use crate::error::EstimatorError;
-use crate::traits::{
-    DataCheck, Estimate, EstimateKind, Estimator, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus,
-};
+use crate::traits::forward_estimator;
+use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// What one step did.
@@ -627,21 +626,4 @@ impl Estimate for SetEstimate {
     }
 }
 
-impl<S: UpdateSolver, M: LinearModel + ?Sized> Estimator<M> for SetMembershipFilter<S> {
-    type Estimate = SetEstimate;
-    fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
-        SetMembershipFilter::step(self, model, u, y)
-    }
-    fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
-        SetMembershipFilter::predict(self, model, u)
-    }
-    fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&SetEstimate, EstimatorError> {
-        SetMembershipFilter::update(self, model, y)
-    }
-    fn estimate(&self) -> &SetEstimate {
-        &self.est
-    }
-    fn dims(&self) -> Dims {
-        Dims::new(self.n, self.p, self.m)
-    }
-}
+forward_estimator!(impl<S: UpdateSolver> for SetMembershipFilter<S>, LinearModel, SetEstimate);
