@@ -439,6 +439,15 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         Dims::new(d.states, d.inputs, d.outputs + 2)
     }
 
+    /// The innovation gate of the underlying Kalman step, judged with the scaled `t_k R` (module
+    /// [`checks`](crate::checks)); by default a measurement outside it is an error naming the step.
+    ///
+    /// # Errors
+    /// A gate probability outside `(0, 1)`; the filter is unchanged.
+    pub fn set_data_checks(&mut self, checks: crate::checks::DataChecks) -> Result<(), EstimatorError> {
+        self.kf.set_data_checks(checks)
+    }
+
     /// Replaces the process-noise covariance in place (a model rebuilt per step, e.g. a turning
     /// route with body-frame biases); validated, no allocation, unchanged on error.
     ///

@@ -19,6 +19,7 @@ use nalgebra::{DMatrix, DVector};
 use dense_kernels as dense;
 use models::{DifferentiableModel, Dims};
 
+use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, GaussianUpdate, commit_prediction};
 use crate::traits::forward_estimator;
@@ -44,6 +45,9 @@ pub struct ExtendedKalmanFilter {
     /// The input of the last prediction, for `h` in a following update.
     u_last: DVector<f64>,
     upd: GaussianUpdate,
+    gate: InnovationGate,
+    /// Steps (predictions, with or without their update) so far.
+    steps: u64,
 }
 
 impl ExtendedKalmanFilter {
@@ -70,7 +74,19 @@ impl ExtendedKalmanFilter {
             innov: DVector::zeros(m),
             u_last: DVector::zeros(inputs),
             upd: GaussianUpdate::new(n, m),
+            gate: InnovationGate::new(DataChecks::default(), m)?,
+            steps: 0,
         })
+    }
+
+    /// The innovation gate (module [`checks`](crate::checks)); by default a measurement outside
+    /// it is an error naming the step.
+    ///
+    /// # Errors
+    /// A gate probability outside `(0, 1)`; the filter is unchanged.
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.gate = InnovationGate::new(checks, self.m)?;
+        Ok(())
     }
 
     /// Number of states, inputs, outputs.
@@ -116,6 +132,7 @@ impl ExtendedKalmanFilter {
         self.predict_into_buffers(model, u)?;
         commit_prediction(&mut self.est, &mut self.x_pred, &mut self.p_pred)?;
         self.u_last.copy_from(u);
+        self.steps += 1;
         Ok(&self.est)
     }
 
@@ -133,16 +150,18 @@ impl ExtendedKalmanFilter {
         check_vec("y", y, self.m)?;
         self.x_pred.copy_from(&self.est.center);
         self.p_pred.copy_from(&self.est.covariance);
-        self.measurement_update(model, None, y)
+        self.measurement_update(model, None, y, self.steps.max(1))
     }
 
     /// (9)–(11) from the prediction buffers `x_pred`, `p_pred`, with `u` for `h` (`None`: the
-    /// input of the last prediction); published on success.
+    /// input of the last prediction), judged by the innovation gate at `step`; published on
+    /// success.
     fn measurement_update<M: DifferentiableModel + ?Sized>(
         &mut self,
         model: &M,
         u: Option<&DVector<f64>>,
         y: &DVector<f64>,
+        step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         let u = u.unwrap_or(&self.u_last);
         model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
@@ -152,8 +171,8 @@ impl ExtendedKalmanFilter {
         // Gain (9), update (10), covariance (11) in Joseph form.
         self.innov.copy_from(y);
         self.innov -= &self.y_pred;
-        self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov)?;
-        self.upd.commit(&mut self.est);
+        let nis = self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov, self.gate.is_on())?;
+        self.upd.commit_gated(&self.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
         Ok(&self.est)
     }
 
@@ -196,8 +215,9 @@ impl ExtendedKalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(model, u)?;
-        self.measurement_update(model, Some(u), y)?;
+        self.measurement_update(model, Some(u), y, self.steps + 1)?;
         self.u_last.copy_from(u);
+        self.steps += 1;
         Ok(&self.est)
     }
 }

@@ -107,6 +107,23 @@ pub enum EstimatorError {
         /// How far outside, relative to the set's extent in the separating direction.
         excess: f64,
     },
+    /// A Gaussian filter's measurement fails its innovation gate: the normalised innovation
+    /// squared exceeds the χ² quantile at the gate's probability (a statistical test under the
+    /// filter's own noise model, not a proof). The filter is unchanged.
+    #[error(
+        "measurement at step {step} is an outlier: normalised innovation squared {nis:.4e} above the gate {threshold:.4} \
+         (passed with probability {probability} under the filter's noise model)"
+    )]
+    Outlier {
+        /// The step (1 for the first step of the filter).
+        step: u64,
+        /// `νᵀ S⁻¹ ν`.
+        nis: f64,
+        /// The χ² quantile.
+        threshold: f64,
+        /// The gate's probability.
+        probability: f64,
+    },
     /// A scalar setting of an estimator is out of range (for example the UKF's `α`).
     #[error("invalid setting {what} = {value}: must be {requirement}")]
     InvalidSetting {

@@ -14,9 +14,10 @@ use nalgebra::{DMatrix, DVector};
 use dense_kernels as dense;
 use models::{Dims, LinearModel};
 
+use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
 use crate::traits::forward_estimator;
-use crate::traits::{Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::{DataCheck, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
@@ -67,6 +68,9 @@ pub struct KalmanFilter {
     ap: DMatrix<f64>,
     innov: DVector<f64>,
     upd: GaussianUpdate,
+    gate: InnovationGate,
+    /// Steps (predictions, with or without their update) so far.
+    steps: u64,
 }
 
 /// The measurement update shared by the Kalman and the extended Kalman filter, with its buffers:
@@ -89,6 +93,8 @@ pub(crate) struct GaussianUpdate {
     kr: DMatrix<f64>,
     x_new: DVector<f64>,
     p_new: DMatrix<f64>,
+    /// `G⁻¹ ν` for the normalised innovation squared.
+    z: DVector<f64>,
 }
 
 /// Publishes a prediction `(x⁻, P⁻)` as the estimate (swapping buffers) after checking that it is
@@ -121,11 +127,13 @@ impl GaussianUpdate {
             kr: DMatrix::zeros(n, m),
             x_new: DVector::zeros(n),
             p_new: DMatrix::zeros(n, n),
+            z: DVector::zeros(m),
         }
     }
 
-    /// Computes `x⁺`, `P⁺` from `x⁻`, `P⁻`, `H`, `R` and `ν` into the buffers; nothing else
-    /// changes, so a failure leaves the filter as it was.
+    /// Computes `x⁺`, `P⁺` from `x⁻`, `P⁻`, `H`, `R` and `ν` into the buffers and returns the
+    /// normalised innovation squared `νᵀ S⁻¹ ν` (NaN unless `want_nis`); nothing else changes, so
+    /// a failure leaves the filter as it was.
     pub(crate) fn compute(
         &mut self,
         x_pred: &DVector<f64>,
@@ -133,13 +141,15 @@ impl GaussianUpdate {
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
         innov: &DVector<f64>,
-    ) -> Result<(), EstimatorError> {
+        want_nis: bool,
+    ) -> Result<f64, EstimatorError> {
         dense::mul_nt(1.0, p_pred, h, 0.0, &mut self.pht);
         self.s.copy_from(r);
         dense::mul_nn(1.0, h, &self.pht, 1.0, &mut self.s);
         if dense::cholesky_in_place(&mut self.s).is_err() {
             return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
         }
+        let nis = if want_nis { nis(&self.s, innov, &mut self.z) } else { f64::NAN };
         self.k.copy_from(&self.pht);
         dense::solve_right_lower_t(&mut self.k, &self.s);
         dense::solve_right_lower(&mut self.k, &self.s);
@@ -154,7 +164,7 @@ impl GaussianUpdate {
         if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
         }
-        Ok(())
+        Ok(nis)
     }
 
     /// Publishes the computed `x⁺`, `P⁺` into `est` (swaps buffers), status converged.
@@ -164,6 +174,44 @@ impl GaussianUpdate {
         est.refresh_std_dev();
         est.status = StepStatus::unchecked(SolveOutcome::Converged);
     }
+
+    /// Publishes by the gate's verdict on `nis` at `step`: the computed update, or (the gate drops
+    /// the measurement) the prediction `(x⁻, P⁻)` from the buffers; the status says what the gate
+    /// found. On error nothing changes.
+    pub(crate) fn commit_gated(
+        &mut self,
+        gate: &InnovationGate,
+        nis: f64,
+        step: u64,
+        est: &mut GaussianEstimate,
+        x_pred: &mut DVector<f64>,
+        p_pred: &mut DMatrix<f64>,
+    ) -> Result<(), EstimatorError> {
+        let verdict = gate.judge(nis, step)?;
+        if verdict == GateVerdict::Drop {
+            commit_prediction(est, x_pred, p_pred)?;
+        } else {
+            self.commit(est);
+        }
+        est.status.data = data_check(verdict);
+        Ok(())
+    }
+}
+
+/// The data check a gate verdict stands for.
+pub(crate) fn data_check(verdict: GateVerdict) -> DataCheck {
+    match verdict {
+        GateVerdict::Unchecked => DataCheck::NotChecked,
+        GateVerdict::Pass => DataCheck::Consistent,
+        GateVerdict::FlagAndUse | GateVerdict::Drop => DataCheck::Inconsistent,
+    }
+}
+
+/// `νᵀ S⁻¹ ν` from the lower Cholesky factor `G` of `S` (`‖G⁻¹ ν‖²`), using `z` (length `m`).
+pub(crate) fn nis(g: &DMatrix<f64>, innov: &DVector<f64>, z: &mut DVector<f64>) -> f64 {
+    z.copy_from(innov);
+    dense::solve_lower(g.as_slice(), g.nrows(), z.as_mut_slice());
+    z.iter().map(|v| v * v).sum()
 }
 
 impl KalmanFilter {
@@ -186,7 +234,25 @@ impl KalmanFilter {
             ap: DMatrix::zeros(n, n),
             innov: DVector::zeros(m),
             upd: GaussianUpdate::new(n, m),
+            gate: InnovationGate::new(DataChecks::default(), m)?,
+            steps: 0,
         })
+    }
+
+    /// The innovation gate (module [`checks`](crate::checks)); by default a measurement outside
+    /// it is an error naming the step.
+    ///
+    /// # Errors
+    /// A gate probability outside `(0, 1)`; the filter is unchanged.
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.gate = InnovationGate::new(checks, self.m)?;
+        Ok(())
+    }
+
+    /// The innovation gate.
+    #[must_use]
+    pub fn gate(&self) -> &InnovationGate {
+        &self.gate
     }
 
     /// Number of states, inputs, outputs.
@@ -235,6 +301,7 @@ impl KalmanFilter {
         check_vec("u", u, self.p)?;
         self.predict_into_buffers(model.a(), model.b(), u);
         commit_prediction(&mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        self.steps += 1;
         Ok(&self.est)
     }
 
@@ -250,10 +317,24 @@ impl KalmanFilter {
     ) -> Result<&GaussianEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
         check_vec("y", y, self.m)?;
+        self.x_pred.copy_from(&self.est.center);
+        self.p_pred.copy_from(&self.est.covariance);
         self.innov.copy_from(y);
-        dense::gemv(-1.0, model.c(), &self.est.center, 1.0, &mut self.innov);
-        self.upd.compute(&self.est.center, &self.est.covariance, model.c(), &self.r, &self.innov)?;
-        self.upd.commit(&mut self.est);
+        dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        self.gated_update(model.c(), None, self.steps.max(1))
+    }
+
+    /// The update of the buffered prediction and innovation with `C` and `r` (`None`: the filter's
+    /// `R`), judged by the gate at `step` and published. On error nothing changes.
+    fn gated_update(
+        &mut self,
+        c: &DMatrix<f64>,
+        r: Option<&DMatrix<f64>>,
+        step: u64,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let r = r.unwrap_or(&self.r);
+        let nis = self.upd.compute(&self.x_pred, &self.p_pred, c, r, &self.innov, self.gate.is_on())?;
+        self.upd.commit_gated(&self.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
         Ok(&self.est)
     }
 
@@ -293,8 +374,8 @@ impl KalmanFilter {
         c: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.upd.compute(&self.x_pred, &self.p_pred, c, r, &self.innov)?;
-        self.upd.commit(&mut self.est);
+        self.gated_update(c, Some(r), self.steps + 1)?;
+        self.steps += 1;
         Ok(&self.est)
     }
 
@@ -347,11 +428,11 @@ impl KalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(a, b, u);
-        // Gain, mean and Joseph-form covariance.
+        // Gain, mean and Joseph-form covariance, judged by the innovation gate.
         self.innov.copy_from(y);
         dense::gemv(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
-        self.upd.compute(&self.x_pred, &self.p_pred, c, &self.r, &self.innov)?;
-        self.upd.commit(&mut self.est);
+        self.gated_update(c, None, self.steps + 1)?;
+        self.steps += 1;
         Ok(&self.est)
     }
 }

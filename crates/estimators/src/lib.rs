@@ -70,6 +70,7 @@
 //! step) and adaptive steps perform no heap allocation (tested with a counting allocator).
 
 pub mod adaptive;
+pub mod checks;
 pub mod ekf;
 pub mod error;
 pub mod kalman;
@@ -86,6 +87,7 @@ pub use adaptive::{
     AdaptiveError, AdaptiveKalmanFilter, AdaptiveStep, ConstantScaling, FuzzyKalmanFilter, FuzzyScaling, NoiseScaling,
     ReceiverStatus, ScalingContext,
 };
+pub use checks::{DataChecks, InnovationGate};
 pub use ekf::ExtendedKalmanFilter;
 pub use error::EstimatorError;
 pub use kalman::{GaussianEstimate, KalmanFilter};

@@ -37,6 +37,7 @@ use lmi::SolverSettings;
 use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel};
 
 use crate::adaptive::{AdaptiveKalmanFilter, FuzzyScaling};
+use crate::checks::DataChecks;
 use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
@@ -560,6 +561,14 @@ impl AnyEstimator {
     pub fn dims(&self) -> Dims {
         self.inner.dims_dyn()
     }
+
+    /// The data checks (see [`Estimator::set_data_checks`](crate::Estimator::set_data_checks)).
+    ///
+    /// # Errors
+    /// As [`Estimator::set_data_checks`](crate::Estimator::set_data_checks).
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.inner.set_data_checks_dyn(checks)
+    }
 }
 
 impl<'m> DynEstimator<dyn AnyModel + 'm> for AnyEstimator {
@@ -582,6 +591,9 @@ impl<'m> DynEstimator<dyn AnyModel + 'm> for AnyEstimator {
     }
     fn dims_dyn(&self) -> Dims {
         self.inner.dims_dyn()
+    }
+    fn set_data_checks_dyn(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.inner.set_data_checks_dyn(checks)
     }
 }
 
@@ -700,6 +712,9 @@ macro_rules! capability_adapter {
             }
             fn dims_dyn(&self) -> Dims {
                 self.inner.dims_dyn()
+            }
+            fn set_data_checks_dyn(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+                self.inner.set_data_checks_dyn(checks)
             }
         }
     };

@@ -10,6 +10,7 @@ use nalgebra::{DMatrix, DVector};
 
 use models::Dims;
 
+use crate::checks::DataChecks;
 use crate::error::EstimatorError;
 pub use crate::status::{DataCheck, EstimateKind, Guarantee, SolveOutcome, StepDetails, StepStatus};
 
@@ -103,6 +104,14 @@ pub trait Estimator<M: ?Sized> {
     /// The lengths of the state, of the input `u` and of the measurement `y` the estimator
     /// consumes.
     fn dims(&self) -> Dims;
+    /// How the estimator checks its data against its noise description and what a step whose
+    /// data fail does ([`DataChecks`]; module [`checks`](crate::checks)). Every estimator starts
+    /// with [`DataChecks::default`]: an error naming the step.
+    ///
+    /// # Errors
+    /// An invalid setting (a gate probability outside `(0, 1)`), or
+    /// [`EstimatorError::Unsupported`] for a check the estimator cannot make; unchanged on error.
+    fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError>;
 }
 
 /// The object-safe face of [`Estimator`], for registries and user interfaces that choose an
@@ -128,6 +137,11 @@ pub trait DynEstimator<M: ?Sized> {
     fn estimate_dyn(&self) -> &dyn Estimate;
     /// The lengths of the state, the input and the measurement.
     fn dims_dyn(&self) -> Dims;
+    /// The data checks (see [`Estimator::set_data_checks`]).
+    ///
+    /// # Errors
+    /// As [`Estimator::set_data_checks`].
+    fn set_data_checks_dyn(&mut self, checks: DataChecks) -> Result<(), EstimatorError>;
 }
 
 impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
@@ -154,6 +168,9 @@ impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
     }
     fn dims_dyn(&self) -> Dims {
         self.dims()
+    }
+    fn set_data_checks_dyn(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.set_data_checks(checks)
     }
 }
 
@@ -183,6 +200,9 @@ macro_rules! forward_estimator {
             }
             fn dims(&self) -> models::Dims {
                 <$ty>::dims(self)
+            }
+            fn set_data_checks(&mut self, checks: $crate::checks::DataChecks) -> Result<(), $crate::error::EstimatorError> {
+                <$ty>::set_data_checks(self, checks)
             }
         }
     };

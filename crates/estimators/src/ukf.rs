@@ -49,8 +49,9 @@ use nalgebra::{DMatrix, DVector};
 use dense_kernels as dense;
 use models::{Dims, DiscreteModel};
 
+use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
-use crate::kalman::GaussianEstimate;
+use crate::kalman::{GaussianEstimate, data_check, nis};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
@@ -165,6 +166,9 @@ pub struct UnscentedKalmanFilter {
     innov: DVector<f64>,
     /// The input of the last prediction, for `h` in a following update.
     u_last: DVector<f64>,
+    gate: InnovationGate,
+    /// Steps (predictions, with or without their update) so far.
+    steps: u64,
 }
 
 /// Copies the symmetric `src` into `dst` and factorises it there; `true` if it is positive
@@ -234,7 +238,19 @@ impl UnscentedKalmanFilter {
             dz: DVector::zeros(m),
             innov: DVector::zeros(m),
             u_last: DVector::zeros(inputs),
+            gate: InnovationGate::new(DataChecks::default(), m)?,
+            steps: 0,
         })
+    }
+
+    /// The innovation gate (module [`checks`](crate::checks)) on `Pzz`; by default a measurement
+    /// outside it is an error naming the step.
+    ///
+    /// # Errors
+    /// A gate probability outside `(0, 1)`; the filter is unchanged.
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.gate = InnovationGate::new(checks, self.m)?;
+        Ok(())
     }
 
     /// The current estimate.
@@ -370,6 +386,7 @@ impl UnscentedKalmanFilter {
         self.report.guarded_update = false;
         self.report.guard_total += u64::from(guarded);
         self.u_last.copy_from(u);
+        self.steps += 1;
         self.publish_report(SolveOutcome::Predicted);
         Ok(&self.est)
     }
@@ -396,7 +413,7 @@ impl UnscentedKalmanFilter {
         self.check_dims(model.dims())?;
         check_vec("y", y, self.m)?;
         self.load_prediction_from_estimate()?;
-        self.update_from_prediction(model, None, y, false)
+        self.update_from_prediction(model, None, y, false, self.steps.max(1))
     }
 
     /// Copies the current estimate into the prediction buffers and factorises it.
@@ -426,8 +443,9 @@ impl UnscentedKalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         let guarded_prediction = self.predict_into_buffers(model, u)?;
-        self.update_from_prediction(model, Some(u), y, guarded_prediction)?;
+        self.update_from_prediction(model, Some(u), y, guarded_prediction, self.steps + 1)?;
         self.u_last.copy_from(u);
+        self.steps += 1;
         Ok(&self.est)
     }
 
@@ -477,7 +495,7 @@ impl UnscentedKalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.load_prediction_from_estimate()?;
-        self.update_from_prediction(model, Some(u), y, false)
+        self.update_from_prediction(model, Some(u), y, false, self.steps.max(1))
     }
 
     /// The measurement update (29)–(32) from `x_pred`, `p_pred` (factor in `p_pred_chol`).
@@ -488,6 +506,7 @@ impl UnscentedKalmanFilter {
         u: Option<&DVector<f64>>,
         y: &DVector<f64>,
         guarded_prediction: bool,
+        step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         let (n, m, s) = (self.n, self.m, 2 * self.n + 1);
         let u = u.unwrap_or(&self.u_last);
@@ -537,12 +556,28 @@ impl UnscentedKalmanFilter {
         if !ok {
             return Err(EstimatorError::NumericalFailure("the innovation covariance is not positive definite"));
         }
+        self.innov.copy_from(y);
+        self.innov -= &self.z_pred;
+        // The innovation gate on Pzz, before anything changes.
+        let nis = if self.gate.is_on() { nis(&self.pzz_chol, &self.innov, &mut self.dz) } else { f64::NAN };
+        let verdict = self.gate.judge(nis, step)?;
+        if verdict == GateVerdict::Drop {
+            // The measurement is dropped: publish the prediction.
+            std::mem::swap(&mut self.est.center, &mut self.x_pred);
+            std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
+            self.est.refresh_std_dev();
+            self.report.guarded_prediction = guarded_prediction;
+            self.report.guarded_innovation = guarded_innovation;
+            self.report.guarded_update = false;
+            self.report.guard_total += u64::from(guarded_prediction) + u64::from(guarded_innovation);
+            self.publish_report(SolveOutcome::Predicted);
+            self.est.status.data = data_check(verdict);
+            return Ok(&self.est);
+        }
         // K = Pxz Pzz⁻¹ (32), by two triangular solves with the factor of Pzz.
         self.k.copy_from(&self.pxz);
         dense::solve_right_lower_t(&mut self.k, &self.pzz_chol);
         dense::solve_right_lower(&mut self.k, &self.pzz_chol);
-        self.innov.copy_from(y);
-        self.innov -= &self.z_pred;
         self.x_new.copy_from(&self.x_pred);
         dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
         // P⁺ = P⁻ − K Pzz Kᵀ = P⁻ − K Pxzᵀ.
@@ -578,6 +613,7 @@ impl UnscentedKalmanFilter {
         self.report.guard_total +=
             u64::from(guarded_prediction) + u64::from(guarded_innovation) + u64::from(guarded_update);
         self.publish_report(SolveOutcome::Converged);
+        self.est.status.data = data_check(verdict);
         Ok(&self.est)
     }
 }

@@ -72,6 +72,9 @@ pub struct BdsInsOptions {
     pub rtk_coding: RtkCoding,
     /// What a step that does not end cleanly does.
     pub status: StatusPolicy,
+    /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
+    /// data contradict the noise description).
+    pub checks: Option<estimators::DataChecks>,
 }
 
 /// What a run did.
@@ -191,7 +194,8 @@ pub fn bds_ins(options: &BdsInsOptions) -> Result<BdsInsSummary, Error> {
     let settings = read_config(options.config.as_deref())?;
     let scaling = scaling(options, settings.sigma0)?;
     let mut data = DataReader::open(&options.input, 3, 5)?;
-    let summary = run(&settings, scaling, options.rtk_coding, options.status, &mut data, &mut out, &options.output)?;
+    let policy = (options.status, options.checks);
+    let summary = run(&settings, scaling, options.rtk_coding, policy, &mut data, &mut out, &options.output)?;
     out.commit()?;
     Ok(summary)
 }
@@ -245,7 +249,7 @@ fn run<R: Read, W: Write>(
     s: &Settings,
     scaling: Scaling,
     coding: RtkCoding,
-    status: StatusPolicy,
+    (status, checks): (StatusPolicy, Option<estimators::DataChecks>),
     data: &mut DataReader<R>,
     out: &mut W,
     out_path: &Path,
@@ -260,6 +264,9 @@ fn run<R: Read, W: Write>(
         inputs: 0,
     };
     let mut filter = AdaptiveKalmanFilter::new(setup, scaling).map_err(|e| Error::Usage(format!("filter: {e}")))?;
+    if let Some(checks) = checks {
+        filter.set_data_checks(checks).map_err(Error::Estimator)?;
+    }
     let mut row = DataRow::zeros(3, 5);
     let u = DVector::zeros(0);
     // The measurement the filter consumes: the INS-minus-BDS difference (13) and the receiver
@@ -341,6 +348,15 @@ mod tests {
     }
 
     fn run_text(text: &str, fuzzy: bool, coding: RtkCoding) -> Result<(String, BdsInsSummary), Error> {
+        run_checked(text, fuzzy, coding, None)
+    }
+
+    fn run_checked(
+        text: &str,
+        fuzzy: bool,
+        coding: RtkCoding,
+        checks: Option<estimators::DataChecks>,
+    ) -> Result<(String, BdsInsSummary), Error> {
         let settings = read_config(None)?;
         let options = BdsInsOptions {
             input: "d.csv".into(),
@@ -350,11 +366,13 @@ mod tests {
             fuzzy,
             rtk_coding: coding,
             status: StatusPolicy::Warn,
+            checks: None,
         };
         let scaling = scaling(&options, settings.sigma0)?;
         let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5)?;
         let mut out = Vec::new();
-        let summary = run(&settings, scaling, coding, StatusPolicy::Warn, &mut data, &mut out, Path::new("o.csv"))?;
+        let policy = (StatusPolicy::Warn, checks);
+        let summary = run(&settings, scaling, coding, policy, &mut data, &mut out, Path::new("o.csv"))?;
         Ok((String::from_utf8(out).unwrap(), summary))
     }
 
@@ -388,8 +406,13 @@ mod tests {
         assert!(ins_rms > 10.0 * rms, "the INS alone {ins_rms} m");
         // Float after 600 s: the FIS scales R up (t ≈ 5) where the fixed phase had t ≈ 1.
         assert!(scaled_after / 270.0 > 2.0 * scaled_before / 450.0, "{scaled_before} {scaled_after}");
-        // The plain KF on the same file: t = 1 throughout.
-        let (plain, _) = run_text(&text, false, RtkCoding::Paper).unwrap();
+        // The plain KF on the same file: its innovation gate finds the float fixes after 600 s (noise
+        // five times the nominal) outliers; without the check, t = 1 throughout.
+        let e = run_text(&text, false, RtkCoding::Paper).unwrap_err().to_string();
+        assert!(e.contains("is an outlier: normalised innovation squared"), "{e}");
+        let line: u64 = e.split(':').nth(1).unwrap().parse().unwrap();
+        assert!(line > 600, "the first outlier after the noise grows: {e}");
+        let (plain, _) = run_checked(&text, false, RtkCoding::Paper, Some(estimators::DataChecks::OFF)).unwrap();
         assert!(
             plain.lines().skip(1).filter(|l| !l.ends_with(",,predicted")).all(|l| l.split(',').nth(10) == Some("1e0"))
         );
@@ -452,6 +475,7 @@ mod tests {
             fuzzy: true,
             rtk_coding: RtkCoding::Paper,
             status: StatusPolicy::Warn,
+            checks: None,
         };
         assert!(scaling(&options(&fis), 0.2).is_ok());
         std::fs::write(&fis, "default_output = 1\n").unwrap();

@@ -57,15 +57,58 @@ pub struct TruckArgs {
     /// Refuse any step that does not end cleanly (see `port-est filter --help`)
     #[arg(long)]
     pub strict: bool,
+    /// How the estimator checks its data.
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 fn status_policy(strict: bool) -> crate::StatusPolicy {
     if strict { crate::StatusPolicy::Error } else { crate::StatusPolicy::Warn }
 }
 
+/// How the estimator checks its data (every subcommand).
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// What a step whose data contradict the noise description does: `error` (the default) stops
+    /// at its row; `flag` uses the data and marks the row inconsistent; `restart` does not trust
+    /// them (a set-membership filter inflates its prediction to meet them, a Gaussian filter drops
+    /// the measurement) and marks the row; `off` checks nothing
+    #[arg(long, value_name = "POLICY", value_parser = ["error", "flag", "restart", "off"])]
+    pub on_inconsistent: Option<String>,
+    /// The Gaussian filters' innovation gate: the probability that a measurement of a correct model
+    /// passes it [default: 1 - 1e-12, about 7 sigma]
+    #[arg(long, value_name = "P")]
+    pub gate_probability: Option<f64>,
+}
+
+impl CheckArgs {
+    /// The data checks asked for (`None`: the estimator's defaults).
+    #[must_use]
+    pub fn checks(&self) -> Option<estimators::DataChecks> {
+        use estimators::InconsistencyPolicy as P;
+        if self.on_inconsistent.is_none() && self.gate_probability.is_none() {
+            return None;
+        }
+        let policy = match self.on_inconsistent.as_deref() {
+            Some("flag") => P::FlagAndContinue,
+            Some("restart") => P::Restart,
+            Some("off") => P::Off,
+            _ => P::Error,
+        };
+        let gate_probability = self.gate_probability.unwrap_or(estimators::DataChecks::DEFAULT_GATE_PROBABILITY);
+        Some(estimators::DataChecks { policy, gate_probability })
+    }
+}
+
 impl From<TruckArgs> for crate::truck::TruckOptions {
     fn from(a: TruckArgs) -> Self {
-        Self { input: a.input, output: a.output, config: a.config, status: status_policy(a.strict) }
+        Self {
+            input: a.input,
+            output: a.output,
+            config: a.config,
+            status: status_policy(a.strict),
+            checks: a.checks.checks(),
+        }
     }
 }
 
@@ -115,6 +158,9 @@ pub struct BdsInsArgs {
     /// Refuse any step that does not end cleanly (see `port-est filter --help`)
     #[arg(long)]
     pub strict: bool,
+    /// How the estimator checks its data.
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
@@ -127,6 +173,7 @@ impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
             fuzzy: a.scaling == "fuzzy",
             rtk_coding: if a.gga { crate::bds_ins::RtkCoding::Gga } else { crate::bds_ins::RtkCoding::Paper },
             status: status_policy(a.strict),
+            checks: a.checks.checks(),
         }
     }
 }
@@ -190,6 +237,9 @@ pub struct FilterArgs {
     /// its status and warning
     #[arg(long)]
     pub strict: bool,
+    /// How the estimator checks its data.
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 /// The registry's estimators that run on the linear model of a model file, with their summaries
@@ -216,6 +266,7 @@ impl From<FilterArgs> for crate::FilterOptions {
             solver: a.solver,
             gaps,
             status: status_policy(a.strict),
+            checks: a.checks.checks(),
         }
     }
 }

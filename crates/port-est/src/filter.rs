@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use estimators::registry::{
     self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
 };
-use estimators::{AnyEstimator, EstimatorError, Setup};
+use estimators::{AnyEstimator, DataChecks, EstimatorError, Setup};
 use models::StepModel;
 use nalgebra::DVector;
 
@@ -23,7 +23,7 @@ use crate::output::OutputFile;
 use crate::run::{EstimateColumns, StatusPolicy, StatusTally, enforce, step_error};
 
 /// What `port-est filter` is asked to do.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FilterOptions {
     /// `MODEL.toml`.
     pub model: PathBuf,
@@ -40,6 +40,9 @@ pub struct FilterOptions {
     pub gaps: GapPolicy,
     /// What a step that does not end cleanly does: a warning (default) or an error (`--strict`).
     pub status: StatusPolicy,
+    /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
+    /// data contradict the noise description).
+    pub checks: Option<estimators::DataChecks>,
 }
 
 /// The largest number of states for which `port-est filter` runs a set-membership filter with an
@@ -118,7 +121,8 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let model = read_model(&options.model)?;
     let mut data = DataReader::open(&options.input, model.inputs(), entry.measurement_len(model.outputs()))?;
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
-    let summary = run_filter(&model, &mut data, entry, solver, options.status, &mut out, &options.output)?;
+    let summary =
+        run_filter(&model, &mut data, entry, solver, options.status, options.checks, &mut out, &options.output)?;
     out.commit()?;
     Ok(summary)
 }
@@ -198,10 +202,14 @@ pub fn run_filter<R: Read, W: Write>(
     entry: &'static EstimatorEntry,
     solver: Option<SmfSolver>,
     status: StatusPolicy,
+    checks: Option<DataChecks>,
     out: &mut W,
     out_path: &Path,
 ) -> Result<FilterSummary, Error> {
     let mut est = build(model, entry, solver)?;
+    if let Some(checks) = checks {
+        est.set_data_checks(checks).map_err(|e| Error::Usage(format!("--on-inconsistent, --gate-probability: {e}")))?;
+    }
     let wio = |e| Error::io(out_path, e);
     let columns = EstimateColumns::of(est.estimate());
     writeln!(out, "k{}", columns.header()).map_err(wio)?;
@@ -285,7 +293,7 @@ mod tests {
         let m = entry.measurement_len(model.outputs());
         let mut data = DataReader::from_text(Path::new("d.csv"), data, model.inputs(), m)?;
         let mut out = Vec::new();
-        let s = run_filter(&model, &mut data, entry, solver, status, &mut out, Path::new("o.csv"))?;
+        let s = run_filter(&model, &mut data, entry, solver, status, None, &mut out, Path::new("o.csv"))?;
         Ok((String::from_utf8(out).unwrap(), s))
     }
 
@@ -347,8 +355,36 @@ mod tests {
         data = data.replace("\n5,1.0,0.05\n", "\n5,1.0,1000\n");
         let e = run(MODEL, &data, "smf", None).unwrap_err().to_string();
         assert!(e.starts_with("d.csv:7:1: step k = 5: data inconsistent with the noise bounds at step 6"), "{e}");
-        // The Kalman filter has no bounds to contradict.
-        assert!(run(MODEL, &data, "kf", None).is_ok());
+        // The Kalman filter's innovation gate finds the same row an outlier; without the check it
+        // runs through.
+        let e = run(MODEL, &data, "kf", None).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:7:1: step k = 5: measurement at step 6 is an outlier"), "{e}");
+        let model = parse_model(Path::new("m.toml"), MODEL).unwrap();
+        let mut rows = DataReader::from_text(Path::new("d.csv"), &data, 1, 1).unwrap();
+        let (entry, _) = select("kf", None).unwrap();
+        let off = Some(DataChecks::OFF);
+        let mut out = Vec::new();
+        run_filter(&model, &mut rows, entry, None, StatusPolicy::Warn, off, &mut out, Path::new("o.csv")).unwrap();
+        // Flagged: the row is used, written and marked (and the filter, pulled by the outlier, finds
+        // the next rows inconsistent too); restarted: the row's measurement is dropped, the
+        // prediction written and marked, and the filter goes on.
+        for (policy, last_row) in [
+            (estimators::InconsistencyPolicy::FlagAndContinue, "converged+inconsistent"),
+            (estimators::InconsistencyPolicy::Restart, "predicted+inconsistent"),
+        ] {
+            let mut rows = DataReader::from_text(Path::new("d.csv"), &data, 1, 1).unwrap();
+            let mut out = Vec::new();
+            let checks = Some(DataChecks::with_policy(policy));
+            let s =
+                run_filter(&model, &mut rows, entry, None, StatusPolicy::Warn, checks, &mut out, Path::new("o.csv"))
+                    .unwrap();
+            let text = String::from_utf8(out).unwrap();
+            assert!(text.lines().nth(6).unwrap().ends_with(last_row), "{policy:?}: {text}");
+            assert!(s.tally.inconsistent >= 1, "{policy:?}");
+            if policy == estimators::InconsistencyPolicy::Restart {
+                assert_eq!(s.tally.inconsistent, 1, "only the outlier is dropped");
+            }
+        }
     }
 
     #[test]
@@ -378,7 +414,8 @@ mod tests {
             let (entry, solver) = select(est, None).unwrap();
             let mut out = Vec::new();
             let s =
-                run_filter(&model, &mut data, entry, solver, StatusPolicy::Warn, &mut out, Path::new("o.csv")).unwrap();
+                run_filter(&model, &mut data, entry, solver, StatusPolicy::Warn, None, &mut out, Path::new("o.csv"))
+                    .unwrap();
             assert_eq!((s.tally.steps, s.tally.predicted), (6, 2), "{est}");
             let text = String::from_utf8(out).unwrap();
             let rows: Vec<Vec<f64>> =

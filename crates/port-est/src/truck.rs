@@ -44,6 +44,9 @@ pub struct TruckOptions {
     pub config: Option<PathBuf>,
     /// What a step that does not end cleanly does.
     pub status: StatusPolicy,
+    /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
+    /// data contradict the noise description).
+    pub checks: Option<estimators::DataChecks>,
 }
 
 /// The settings file, as written.
@@ -112,8 +115,14 @@ pub fn truck(options: &TruckOptions) -> Result<StatusTally, Error> {
     let mut out = OutputFile::create(&options.output, &inputs)?;
     let settings = read_config(options.config.as_deref())?;
     let mut data = DataReader::open(&options.input, 7, 3)?;
-    let tally =
-        run_truck(&settings_model(&settings)?, &settings, options.status, &mut data, &mut out, &options.output)?;
+    let tally = run_truck(
+        &settings_model(&settings)?,
+        &settings,
+        (options.status, options.checks),
+        &mut data,
+        &mut out,
+        &options.output,
+    )?;
     out.commit()?;
     Ok(tally)
 }
@@ -125,7 +134,7 @@ fn settings_model(s: &Settings) -> Result<TruckEkfModel, Error> {
 fn run_truck<R: Read, W: Write>(
     model: &TruckEkfModel,
     s: &Settings,
-    status: StatusPolicy,
+    (status, checks): (StatusPolicy, Option<estimators::DataChecks>),
     data: &mut DataReader<R>,
     out: &mut W,
     out_path: &Path,
@@ -145,7 +154,11 @@ fn run_truck<R: Read, W: Write>(
                 measurement_noise: s.r.clone(),
                 inputs: model.dims().inputs,
             };
-            est = Some(registry::build(names::EKF, setup, None).map_err(Error::Estimator)?);
+            let mut ekf = registry::build(names::EKF, setup, None).map_err(Error::Estimator)?;
+            if let Some(checks) = checks {
+                ekf.set_data_checks(checks).map_err(Error::Estimator)?;
+            }
+            est = Some(ekf);
         }
         let Some(f) = est.as_mut() else { break };
         let e = f.step(model, &row.u, &row.y).map_err(|source| Error::Step {
@@ -211,7 +224,8 @@ mod tests {
         let model = settings_model(&settings).unwrap();
         let mut data = DataReader::from_text(Path::new("truck.csv"), &text, 7, 3).unwrap();
         let mut out = Vec::new();
-        let tally = run_truck(&model, &settings, StatusPolicy::Warn, &mut data, &mut out, Path::new("o.csv")).unwrap();
+        let tally =
+            run_truck(&model, &settings, (StatusPolicy::Warn, None), &mut data, &mut out, Path::new("o.csv")).unwrap();
         assert_eq!((tally.steps as usize, tally.unclean()), (betas.len(), 0));
         let out = String::from_utf8(out).unwrap();
         let lines: Vec<&str> = out.lines().collect();
@@ -233,9 +247,10 @@ mod tests {
         // V_x = 0 in the first measurement: the model divides by it.
         let text = "k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n0,0,0,0,0,0,0,0,0,0,0\n";
         let mut data = DataReader::from_text(Path::new("t.csv"), text, 7, 3).unwrap();
-        let e = run_truck(&model, &settings, StatusPolicy::Warn, &mut data, &mut Vec::new(), Path::new("o.csv"))
-            .unwrap_err()
-            .to_string();
+        let e =
+            run_truck(&model, &settings, (StatusPolicy::Warn, None), &mut data, &mut Vec::new(), Path::new("o.csv"))
+                .unwrap_err()
+                .to_string();
         assert!(e.starts_with("t.csv:2:1: step k = 0: model: "), "{e}");
         // A wrong header names the expected column.
         let e = DataReader::from_text(Path::new("t.csv"), "k,delta\n", 7, 3).unwrap_err().to_string();

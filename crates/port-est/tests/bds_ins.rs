@@ -25,6 +25,7 @@ fn options(input: PathBuf, output: PathBuf) -> BdsInsOptions {
         fuzzy: true,
         rtk_coding: RtkCoding::Paper,
         status: port_est::StatusPolicy::Warn,
+        checks: None,
     }
 }
 

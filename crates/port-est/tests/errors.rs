@@ -33,6 +33,7 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
         solver: None,
         gaps: port_est::GapPolicy::Error,
         status: port_est::StatusPolicy::Warn,
+        checks: None,
     };
     (dir, options)
 }

@@ -45,6 +45,7 @@ fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
         solver: None,
         gaps: GapPolicy::Error,
         status: port_est::StatusPolicy::Warn,
+        checks: None,
     })
     .map(|s| s.tally.steps)
     .map_err(|e| e.to_string());

@@ -71,6 +71,9 @@ impl Estimator<DiscreteVessel> for Predictor {
     fn dims(&self) -> Dims {
         Dims::new(self.est.x.len(), 3, 3)
     }
+    fn set_data_checks(&mut self, _checks: estimators::DataChecks) -> Result<(), EstimatorError> {
+        Ok(())
+    }
 }
 
 fn config(steps: usize) -> LoopConfig {

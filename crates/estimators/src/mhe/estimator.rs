@@ -668,4 +668,16 @@ impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
     fn dims(&self) -> Dims {
         Dims::new(self.n, self.p, self.m)
     }
+
+    fn set_data_checks(&mut self, checks: crate::checks::DataChecks) -> Result<(), EstimatorError> {
+        if checks.policy == crate::checks::InconsistencyPolicy::Off {
+            return Ok(());
+        }
+        Err(EstimatorError::Unsupported {
+            estimator: "the moving-horizon estimator",
+            operation: "data checks",
+            reason: "its windows are not yet checked against the noise boxes: its steps say `NotChecked`; only the \
+                     policy `Off` is accepted",
+        })
+    }
 }

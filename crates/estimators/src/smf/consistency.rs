@@ -40,6 +40,8 @@ const MAX_ITERATIONS: usize = 30;
 pub enum Consistency {
     /// No separating direction was found (for the initial set: not checked yet).
     Consistent,
+    /// Not checked ([`InconsistencyPolicy::Off`]).
+    NotChecked,
     /// The measurement is provably incompatible with the predicted set and the noise bounds.
     Inconsistent {
         /// How far outside: `g(d) / Σ √(dᵀ Mᵢ d)` for the best direction found (0 on the
@@ -52,30 +54,11 @@ impl Consistency {
     /// Whether the data were consistent.
     #[must_use]
     pub fn is_consistent(self) -> bool {
-        matches!(self, Consistency::Consistent)
+        !matches!(self, Consistency::Inconsistent { .. })
     }
 }
 
-/// What the filter does when a step's data are provably inconsistent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[non_exhaustive]
-pub enum InconsistencyPolicy {
-    /// Refuse the step with [`EstimatorError::InconsistentData`](crate::EstimatorError::InconsistentData)
-    /// naming the step and how far outside the data are; the filter is unchanged (the default).
-    #[default]
-    Error,
-    /// Publish the step's set as computed, mark it [`Consistency::Inconsistent`], and mark this and
-    /// every later step as no longer guaranteed ([`StepReport::guaranteed`](crate::StepReport::guaranteed)
-    /// is `false` from then on).
-    FlagAndContinue,
-    /// Restart from the measurement: inflate the prediction (`A P_k Aᵀ`, `Q` and `P_k` alike, by
-    /// `(1 + excess)²` and then powers of four) until the measurement strip meets it, and update
-    /// from that inflated prediction, so the set moves to where the data are. The step is marked
-    /// [`Consistency::Inconsistent`] and this and every later set as no longer guaranteed (the
-    /// inflation is a choice, not a bound); the certification rounding bounds are computed for the
-    /// inflated prediction as if it were the true one.
-    Restart,
-}
+pub use crate::checks::InconsistencyPolicy;
 
 /// Buffers of the check (`m` outputs, `n` states).
 #[derive(Debug, Clone)]

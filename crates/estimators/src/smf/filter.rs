@@ -13,6 +13,7 @@ use super::gain::GainWork;
 use super::input::{InputModel, check_in_box, effective_noise};
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
+use crate::checks::DataChecks;
 use crate::error::EstimatorError;
 use crate::traits::forward_estimator;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
@@ -269,9 +270,16 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     }
 
     /// What a step does when its data are provably inconsistent with the noise bounds (default:
-    /// [`InconsistencyPolicy::Error`]).
+    /// [`InconsistencyPolicy::Error`]; [`InconsistencyPolicy::Off`] skips the check).
     pub fn set_inconsistency_policy(&mut self, policy: InconsistencyPolicy) {
         self.policy = policy;
+    }
+
+    /// The data checks ([`DataChecks::policy`]; the set-membership filter's check is a proof, so
+    /// the gate probability is not used).
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.policy = checks.policy;
+        Ok(())
     }
 
     /// Steps taken so far (the next step is number `steps() + 1`).
@@ -447,7 +455,9 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         // Consistency of y with the predicted set and the noise bounds, before anything changes.
         dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
         dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
-        let consistency = {
+        let consistency = if *policy == InconsistencyPolicy::Off {
+            Consistency::NotChecked
+        } else {
             let q_used = if bounded { &ws.q_eff } else { &*q };
             consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm)
         };
@@ -610,9 +620,11 @@ impl Estimate for SetEstimate {
     }
     fn status(&self) -> StepStatus {
         let r = &self.report;
-        let data = match r.outcome {
-            SolveOutcome::Initial | SolveOutcome::Predicted => DataCheck::NotChecked,
-            _ if r.consistency.is_consistent() => DataCheck::Consistent,
+        let data = match (r.outcome, r.consistency) {
+            (SolveOutcome::Initial | SolveOutcome::Predicted, _) | (_, Consistency::NotChecked) => {
+                DataCheck::NotChecked
+            }
+            (_, Consistency::Consistent) => DataCheck::Consistent,
             _ => DataCheck::Inconsistent,
         };
         StepStatus {

@@ -2,8 +2,8 @@
 //! filters on identical data (`docs/bds-ins-fuzzy-kf.md` §3 "Experiments"), and per-epoch
 //! accumulators over the Monte Carlo seeds.
 
-use estimators::Setup;
 use estimators::registry::names;
+use estimators::{DataChecks, Setup};
 use std::time::Instant;
 
 use bds_ins_dynamics::{
@@ -210,6 +210,8 @@ pub fn run_filter(
         scaling,
     )
     .map_err(|e| format!("{}: {e}", v.id))?;
+    // The paper's filters have no innovation gate.
+    f.set_data_checks(DataChecks::OFF).map_err(|e| format!("{}: {e}", v.id))?;
     let n = data.epochs.len();
     let mut trace = Trace {
         ex: Vec::with_capacity(n + 1),

@@ -75,7 +75,12 @@ impl Arrival {
     ) -> Result<Self, EstimatorError> {
         let (n, m) = (setup.x0.len(), setup.measurement_noise.nrows());
         let ukf = match kind {
-            NonlinearArrival::Ukf(params) => Some(UnscentedKalmanFilter::new(setup.clone(), params)?),
+            NonlinearArrival::Ukf(params) => {
+                // The arrival update re-weighs the window's oldest sample; it is not a data check.
+                let mut ukf = UnscentedKalmanFilter::new(setup.clone(), params)?;
+                ukf.set_data_checks(crate::checks::DataChecks::OFF)?;
+                Some(ukf)
+            }
             _ => None,
         };
         Ok(Self {

@@ -468,6 +468,18 @@ impl<M: DifferentiableModel + ?Sized> Estimator<M> for NonlinearMhe {
     fn dims(&self) -> Dims {
         Dims::new(self.n, self.p, self.m)
     }
+
+    fn set_data_checks(&mut self, checks: crate::checks::DataChecks) -> Result<(), EstimatorError> {
+        if checks.policy == crate::checks::InconsistencyPolicy::Off {
+            return Ok(());
+        }
+        Err(EstimatorError::Unsupported {
+            estimator: "the nonlinear moving-horizon estimator",
+            operation: "data checks",
+            reason: "its windows are not yet checked against the noise boxes: its steps say `NotChecked`; only the \
+                     policy `Off` is accepted",
+        })
+    }
 }
 
 /// The Gaussian view of the estimate (mean and approximate covariance).
