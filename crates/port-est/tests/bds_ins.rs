@@ -25,6 +25,8 @@ fn options(input: PathBuf, output: PathBuf) -> BdsInsOptions {
         fuzzy: true,
         rtk_coding: RtkCoding::Paper,
         status: port_est::StatusPolicy::Warn,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
     }
 }
 

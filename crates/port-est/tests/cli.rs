@@ -17,7 +17,11 @@ fn help_of_the_binary_and_of_filter() {
     let out = port_est(&["--help"]);
     assert!(out.status.success());
     let help = text(&out.stdout);
-    assert!(help.contains("Usage: port-est <COMMAND>") && help.contains("filter") && help.contains("estimators"));
+    // `[OPTIONS]`: the global `--max-file-size`.
+    assert!(
+        help.contains("Usage: port-est [OPTIONS] <COMMAND>") && help.contains("filter") && help.contains("estimators")
+    );
+    assert!(help.contains("--max-file-size <SIZE>"), "{help}");
 
     let out = port_est(&["filter", "--help"]);
     assert!(out.status.success());

@@ -33,6 +33,8 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
         solver: None,
         gaps: port_est::GapPolicy::Error,
         status: port_est::StatusPolicy::Warn,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
     };
     (dir, options)
 }

@@ -45,6 +45,8 @@ fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
         solver: None,
         gaps: GapPolicy::Error,
         status: port_est::StatusPolicy::Warn,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
     })
     .map(|s| s.tally.steps)
     .map_err(|e| e.to_string());
