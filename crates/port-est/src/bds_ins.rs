@@ -161,32 +161,56 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
         gyro_white: non_negative("gyro_white", &file.gyro_white, digest.gyro_white)?,
         ..digest
     };
-    // Φ and Q come from the period, the Earth model and the noise intensities together.
+    // Φ and Q come from the period, the Earth model and the noise intensities together: a
+    // failure is put on the first given setting whose default makes it go away.
     let process_keys = [
         ("accel_white", span(&file.accel_white)),
         ("gyro_white", span(&file.gyro_white)),
         ("ts", span(&file.ts)),
         ("latitude_deg", span(&file.latitude_deg)),
     ];
-    let model = InsErrorModel::new(InsParams { earth, ..InsParams::digest() }, noise).map_err(|e| {
-        match (&e, &file.latitude_deg) {
-            (BdsInsError::OutOfRange { name, lo, hi, .. }, Some(v)) if name.contains("latitude") => {
-                let (lo, hi) = (lo.to_degrees(), hi.to_degrees());
-                source.error("latitude_deg", v, format!("must lie in [{lo:.0}, {hi:.0}] degrees, got {}", v.get_ref()))
-            }
-            _ => source.derived_error(&process_keys, format!("the INS error model they set: {e}")),
-        }
-    })?;
-    let model = model
-        .discretize(ts)
-        .map_err(|e| source.derived_error(&process_keys, format!("the INS error model they set: {e}")))?;
-    let finite = |m: &DMatrix<f64>| m.iter().all(|v| v.is_finite());
-    if !finite(&model.phi) || !finite(&model.q) {
-        let which = if finite(&model.phi) { "process noise Q" } else { "transition matrix Φ = e^(F ts)" };
-        let message =
-            format!("the {which} derived from `accel_white`, `gyro_white`, `ts` and `latitude_deg` is not finite");
-        return Err(source.derived_error(&process_keys, message));
+    let params = InsParams { earth, ..InsParams::digest() };
+    if let (Err(BdsInsError::OutOfRange { lo, hi, .. }), Some(v)) = (params.validate(), &file.latitude_deg) {
+        let (lo, hi) = (lo.to_degrees(), hi.to_degrees());
+        return Err(source.error(
+            "latitude_deg",
+            v,
+            format!("must lie in [{lo:.0}, {hi:.0}] degrees, got {}", v.get_ref()),
+        ));
     }
+    let model = match process_model(params, noise, ts) {
+        Ok(model) => model,
+        Err(e) => {
+            let defaults = InsParams::digest();
+            let culprits = [
+                (
+                    "accel_white",
+                    span(&file.accel_white),
+                    process_model(params, InsNoise { accel_white: digest.accel_white, ..noise }, ts),
+                ),
+                (
+                    "gyro_white",
+                    span(&file.gyro_white),
+                    process_model(params, InsNoise { gyro_white: digest.gyro_white, ..noise }, ts),
+                ),
+                ("ts", span(&file.ts), process_model(params, noise, scenario::PAPER_PERIOD)),
+                (
+                    "latitude_deg",
+                    span(&file.latitude_deg),
+                    process_model(InsParams { earth: defaults.earth, ..params }, noise, ts),
+                ),
+            ];
+            let given: Vec<(&str, Option<std::ops::Range<usize>>)> = culprits
+                .iter()
+                .filter(|(_, span, fixed)| span.is_some() && fixed.is_ok())
+                .chain(culprits.iter().filter(|(_, span, _)| span.is_some()))
+                .map(|(k, span, _)| (*k, span.clone()))
+                .collect();
+            let message =
+                format!("the INS error model derived from `accel_white`, `gyro_white`, `ts` and `latitude_deg`: {e}");
+            return Err(source.derived_error(&given, message));
+        }
+    };
     let p0_sigma = match &file.p0_sigma {
         None => scenario::initial_sigma().to_vec(),
         Some(v) => {
@@ -199,19 +223,32 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
             x
         }
     };
-    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![sigma0 * sigma0, sigma0 * sigma0, heading * heading]));
-    let p0 = DMatrix::from_diagonal(&DVector::from_iterator(STATES, p0_sigma.iter().map(|s| s * s)));
     // Squares that overflow or underflow: named by the setting squared.
+    let variance = |key: &str, span: Option<std::ops::Range<usize>>, sigma: f64, what: &str| {
+        let v = sigma * sigma;
+        if v.is_finite() && v >= f64::MIN_POSITIVE {
+            return Ok(v);
+        }
+        let message = format!("its square {v:e}, a variance of the {what}, is not a usable positive number");
+        Err(source.derived_error(&[(key, span)], message))
+    };
+    let s2 = variance("sigma0", span(&file.sigma0), sigma0, "measurement covariance R")?;
+    let h2 = variance("heading_sigma_deg", span(&file.heading_sigma_deg), heading, "measurement covariance R")?;
+    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![s2, s2, h2]));
+    let p0_span = file.p0_sigma.as_ref().map(Spanned::span);
+    let mut p0 = DMatrix::zeros(STATES, STATES);
+    for (i, s) in p0_sigma.iter().enumerate() {
+        p0[(i, i)] = variance("p0_sigma", p0_span.clone(), *s, "initial covariance P0").map_err(|e| match e {
+            Error::At { at, message } => Error::At { at, message: format!("{message} (entry {})", i + 1) },
+            e => e,
+        })?;
+    }
     settings::check_covariance(&r).map_err(|why| {
         let keys = [("sigma0", span(&file.sigma0)), ("heading_sigma_deg", span(&file.heading_sigma_deg))];
-        source.derived_error(
-            &keys,
-            format!("the measurement covariance R = diag(sigma0², sigma0², heading²) it sets {why}"),
-        )
+        source.derived_error(&keys, format!("the measurement covariance R = diag(sigma0², sigma0², heading²) {why}"))
     })?;
     settings::check_covariance(&p0).map_err(|why| {
-        let keys = [("p0_sigma", file.p0_sigma.as_ref().map(Spanned::span))];
-        source.derived_error(&keys, format!("the initial covariance P0 = diag(p0_sigma²) it sets {why}"))
+        source.derived_error(&[("p0_sigma", p0_span.clone())], format!("the initial covariance P0 {why}"))
     })?;
     let settings = Settings { model, sigma0, r, p0 };
     // What the filter itself checks, in the file's terms.
@@ -228,6 +265,19 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
         source.derived_error(keys, format!("the filter refuses the matrices derived from it: {e}"))
     })?;
     Ok(settings)
+}
+
+/// The discrete error model, with a finite `Φ` and `Q` (else why not, in words).
+fn process_model(params: InsParams, noise: InsNoise, ts: f64) -> Result<DiscreteInsModel, String> {
+    let model = InsErrorModel::new(params, noise).and_then(|m| m.discretize(ts)).map_err(|e| e.to_string())?;
+    let finite = |m: &DMatrix<f64>| m.iter().all(|v| v.is_finite());
+    if !finite(&model.phi) {
+        return Err("the transition matrix Φ = e^(F ts) is not finite".into());
+    }
+    if !finite(&model.q) {
+        return Err("the process noise Q is not finite".into());
+    }
+    Ok(model)
 }
 
 fn setup(s: &Settings) -> Setup {
@@ -696,5 +746,40 @@ mod tests {
         let e = scaling(&options(&fis), 0.2).err().unwrap().to_string();
         assert!(e.starts_with("--fis: ") && e.contains("fis.toml"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_step_the_rule_file_makes_fail_names_the_rule_file() {
+        use fuzzy_inference::{InputVariable, MembershipFunction, OutputScale, OutputVariable, Rule};
+        // A system whose outputs are negative: refused at load as a rule file (at `[output]`)…
+        let any = |name: &str| InputVariable {
+            name: name.into(),
+            range: (0.0, 100.0),
+            sets: vec![("any".into(), MembershipFunction::trapezoid(0.0, 0.0, f64::INFINITY, f64::INFINITY))],
+        };
+        let output = OutputVariable {
+            name: "t".into(),
+            universe: (-1.0, 1.0),
+            sets: vec![("neg".into(), MembershipFunction::triangle(-1.0, -0.5, 0.0))],
+            scale: OutputScale::Linear,
+        };
+        let rules = vec![Rule::new(&[("N", "any")], "neg")];
+        let system = FuzzySystem::new(vec![any("N"), any("RTK"), any("d")], output, rules, 0.5).unwrap();
+        let e = system.clone().bind(&BDS_INS_INTERFACE).unwrap_err().to_string();
+        assert!(e.contains("must be positive and finite"), "{e}");
+        // …and if such a system reaches the filter anyway, the failure names it, not the row.
+        let settings = read_config(None, &Limits::default()).unwrap();
+        let probe = Rc::new(Probe::default());
+        let scaling = Scaling::Fuzzy(Box::new(FuzzyScaling::new(system).unwrap()), Rc::clone(&probe));
+        let rules = Rules { probe: Some(probe), path: Some("rules.toml".into()) };
+        let mut runner = Runner { settings: &settings, coding: RtkCoding::Paper, status: StatusPolicy::Warn, rules };
+        let text = "k,u1,u2,u3,y1,y2,y3,y4,y5\n0,0,0,0,0,0,0,20,3\n";
+        let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5).unwrap();
+        let mut tally = StatusTally::default();
+        let e = runner.run(scaling, &mut data, &mut Vec::new(), Path::new("o.csv"), &mut tally).unwrap_err();
+        assert!(matches!(e, Error::RuleFile { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.starts_with("rules.toml: the noise scale t_k must be positive and finite, got -0.5"), "{e}");
+        assert!(e.contains("(at d.csv:2:1, step k = 0: the rule file's output, not the row, is the cause)"), "{e}");
     }
 }
