@@ -124,7 +124,7 @@ mod tests {
         let p = run(Args::parse(&[OsString::from("--out"), bad.clone()], &["out", "seed"], &[]));
         assert_eq!(p.path("out"), Some(PathBuf::from(&bad)));
         assert!(p.value("out").unwrap_err().contains("is not valid UTF-8"));
-        let e = Args::parse(&[bad.clone()], &["out"], &[]).unwrap_err();
+        let e = Args::parse(std::slice::from_ref(&bad), &["out"], &[]).unwrap_err();
         assert!(e.starts_with("unexpected argument \"d\u{fffd}\""), "{e}");
         let mut option = b"--".to_vec();
         option.extend_from_slice(b"\xffout");
