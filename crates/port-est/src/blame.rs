@@ -31,7 +31,6 @@ impl LargestCell {
 
 /// The error for a numerical failure (`what`) of `row`'s step, after finding its cause: `est`
 /// is tried again (and spent: the run stops here).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn numerical_failure<R: Read>(
     what: &str,
     est: &mut AnyEstimator,

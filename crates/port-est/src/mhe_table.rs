@@ -72,11 +72,10 @@ fn vector(v: &Spanned<Vec<f64>>, key: &str, len: usize, allow_infinite: bool) ->
 }
 
 /// The bytes a moving-horizon estimator allocates for a model with `n` states, `m` outputs and
-/// `p` inputs, a horizon of `horizon` disturbances in `blocks` blocks (an estimate of its
-/// buffers, within a few per cent for large windows: the condensed window maps and rows, three
-/// dense Hessian-sized matrices and the box-QP's factor, the ring buffers of the last `N + 2`
-/// steps; `clarabel`: Clarabel's copies of the Hessian too). `None` when the count overflows
-/// `u128`.
+/// `p` inputs, a horizon of `horizon` disturbances in `blocks` blocks: an estimate from above of
+/// its buffers — the condensed window maps and rows, the Hessian-sized matrices of the window and
+/// the box-QP's factor (three, counted as four; six with `clarabel`, whose QP copies them), the
+/// ring buffers of the last `N + 2` steps. `None` when the count overflows `u128`.
 #[must_use]
 pub fn memory_estimate(n: usize, m: usize, p: usize, horizon: usize, blocks: usize, clarabel: bool) -> Option<u128> {
     let [n, m, p, horizon, blocks] = [n, m, p, horizon, blocks].map(|v| v as u128);
@@ -98,8 +97,15 @@ pub fn memory_estimate(n: usize, m: usize, p: usize, horizon: usize, blocks: usi
 impl MheTable {
     /// Refuses a horizon or block count whose estimator would exceed `limits`, before anything
     /// is allocated for it: at the key that makes the window large.
-    fn check_resources(&self, n: usize, m: usize, p: usize, limits: &Limits) -> Result<(), Complaint> {
-        let horizon = self.horizon.as_ref().map_or(6, |h| *h.get_ref());
+    fn check_resources(
+        &self,
+        n: usize,
+        m: usize,
+        p: usize,
+        default_horizon: usize,
+        limits: &Limits,
+    ) -> Result<(), Complaint> {
+        let horizon = self.horizon.as_ref().map_or(default_horizon, |h| *h.get_ref());
         let blocks = self.blocks.as_ref().map_or(0, |b| b.get_ref().len());
         let clarabel = self.inner.as_ref().is_some_and(|i| i.get_ref() == "clarabel")
             || self.output_constraint.as_ref().is_some_and(|o| *o.get_ref());
@@ -140,7 +146,8 @@ impl MheTable {
     ) -> Result<(MheSettings, KeySpans), Complaint> {
         let w = (vector(&self.w_lower, "w_lower", n, true)?, vector(&self.w_upper, "w_upper", n, true)?);
         let v = (vector(&self.v_lower, "v_lower", m, false)?, vector(&self.v_upper, "v_upper", m, false)?);
-        self.check_resources(n, m, p, limits)?;
+        let mut s = MheSettings::new(w, v);
+        self.check_resources(n, m, p, s.horizon, limits)?;
         if let Some(b) = &self.blocks
             && b.get_ref().iter().try_fold(0_usize, |sum, &d| sum.checked_add(d)).is_none()
         {
@@ -157,7 +164,6 @@ impl MheTable {
                 ),
             ));
         }
-        let mut s = MheSettings::new(w, v);
         let horizon = self.horizon.as_ref().map_or(s.horizon, |h| *h.get_ref());
         s.horizon = horizon;
         s.blocks = match (&self.preset, &self.blocks) {
