@@ -1,10 +1,12 @@
 //! `cargo xtask`: the repository's automation entry point (see `cargo xtask help`).
 //!
 //! Always run through the alias in `.cargo/config.toml`, which builds it optimised, so that the
-//! numbers and timings it prints never come from a debug build.
+//! numbers and timings it prints never come from a debug build. Arguments are taken as the
+//! operating system gives them (paths need not be UTF-8); each command answers `--help`.
 
 use xtask::{reproduce, sdplib};
 
+use std::ffi::OsString;
 use std::process::ExitCode;
 
 const HELP: &str = "\
@@ -17,26 +19,40 @@ Commands:
                          (default DIR: out/reproduce)
   sdplib [--dir D] [--backend NAME]
                          Solve the SDPLIB suite and print a table (default: every compiled backend)
-  help                   This text
+  help [COMMAND]         This text, or a command's (as COMMAND --help)
 ";
 
 fn main() -> ExitCode {
-    let mut argv = std::env::args().skip(1);
+    // Ctrl-C or SIGTERM: no temporary file or half-built paper directory is left behind.
+    if let Err(e) = atomic_output::remove_temporaries_on_signals() {
+        eprintln!("warning: cannot watch for SIGINT/SIGTERM: {e}");
+    }
+    let mut argv = std::env::args_os().skip(1);
     let command = argv.next();
-    let rest: Vec<String> = argv.collect();
-    let result = match command.as_deref() {
-        Some("reproduce") => reproduce::run(&rest),
-        Some("sdplib") => sdplib::run(&rest),
-        Some("filter") => {
-            Err("`cargo xtask filter` moved to the installable CLI: `cargo run -p port-est -- filter …` \
-                               (or `cargo install --path crates/port-est`, then `port-est filter …`)"
-                .to_owned())
-        }
-        Some("help") | Some("--help") | Some("-h") | None => {
+    let rest: Vec<OsString> = argv.collect();
+    let help = [OsString::from("--help")];
+    let result = match command.as_ref().map(|c| c.to_str()) {
+        Some(Some("reproduce")) => reproduce::run(&rest),
+        Some(Some("sdplib")) => sdplib::run(&rest),
+        Some(Some("filter")) => Err("`cargo xtask filter` moved to the installable CLI: `cargo run -p port-est -- \
+                                     filter …` (or `cargo install --path crates/port-est`, then `port-est filter …`)"
+            .to_owned()),
+        Some(Some("help")) => match rest.first().and_then(|c| c.to_str()) {
+            Some("reproduce") => reproduce::run(&help),
+            Some("sdplib") => sdplib::run(&help),
+            _ => {
+                print!("{HELP}");
+                Ok(())
+            }
+        },
+        Some(Some("--help" | "-h")) | None => {
             print!("{HELP}");
             Ok(())
         }
-        Some(other) => Err(format!("unknown command {other:?}\n\n{HELP}")),
+        Some(_) => {
+            let shown = command.as_ref().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+            Err(format!("unknown command {shown:?}\n\n{HELP}"))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

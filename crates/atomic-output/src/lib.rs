@@ -7,10 +7,17 @@
 //!   [`AtomicFile::commit`]; dropped without a commit, it removes its temporary file.
 //! - [`write_atomic`] writes a whole buffer in one call.
 //!
-//! The temporary file is made by the [`tempfile`] crate (`.NAME.XXXXXX.tmp` beside the target,
-//! created exclusively under an unpredictable name) and published by its `persist` (a rename, which
-//! replaces an existing target). A new file gets the permissions [`std::fs::File::create`] would
-//! give it; a replaced regular file keeps its permissions. No directory is created.
+//! The temporary file is made by the [`tempfile`] crate (`.NAME.PID.XXXXXX.tmp` beside the target,
+//! `PID` the writing process, created exclusively under an unpredictable name) and published by its
+//! `persist` (a rename, which replaces an existing target). A new file gets the permissions
+//! [`std::fs::File::create`] would give it; a replaced regular file keeps its permissions. No
+//! directory is created.
+//!
+//! Interruptions: [`remove_temporaries_on_signals`] (called once by a program's `main`) removes the
+//! process's uncommitted temporary files on SIGINT, SIGTERM or SIGHUP before it exits;
+//! [`stale_temporaries`] finds those a killed process (SIGKILL, an abort, a power cut) left beside
+//! a target, so that the next run can name them. [`AtomicDir`] builds a whole directory beside its
+//! target and renames it into place.
 //!
 //! ```
 //! use std::io::Write as _;
@@ -29,12 +36,17 @@
 //! # Ok::<(), std::io::Error>(())
 //! ```
 
-use std::ffi::OsString;
 use std::fs;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use tempfile::NamedTempFile;
+
+mod cleanup;
+mod dir;
+
+pub use cleanup::{StaleTemporary, remove_temporaries_on_signals, stale_temporaries};
+pub use dir::AtomicDir;
 
 /// A file being written atomically: [`AtomicFile::commit`] renames it over the target; dropping
 /// it without a commit (or a failed commit) removes the temporary file and leaves the target as
@@ -44,6 +56,8 @@ pub struct AtomicFile {
     /// The buffered temporary file; `None` once committed or dropped.
     writer: Option<BufWriter<NamedTempFile>>,
     target: PathBuf,
+    /// Known to the signal handler until this value drops.
+    _pending: cleanup::Pending,
 }
 
 impl AtomicFile {
@@ -62,9 +76,7 @@ impl AtomicFile {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
-        let mut prefix = OsString::from(".");
-        prefix.push(name);
-        prefix.push(".");
+        let prefix = cleanup::temporary_prefix(name);
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp");
         let kept = fs::metadata(target).ok().filter(fs::Metadata::is_file).map(|m| m.permissions());
@@ -80,11 +92,12 @@ impl AtomicFile {
             builder.permissions(permissions);
         }
         let file = builder.tempfile_in(dir)?;
+        let pending = cleanup::Pending::register(file.path());
         if let Some(permissions) = kept {
             // A mode given at creation is reduced by the umask: the replaced file's mode exactly.
             file.as_file().set_permissions(permissions)?;
         }
-        Ok(Self { writer: Some(BufWriter::new(file)), target: target.to_owned() })
+        Ok(Self { writer: Some(BufWriter::new(file)), target: target.to_owned(), _pending: pending })
     }
 
     /// The path the content is published at.
@@ -99,13 +112,24 @@ impl AtomicFile {
     /// # Errors
     /// The error of writing, syncing or renaming; the temporary file is removed then and the
     /// target left as it was.
-    pub fn commit(mut self) -> io::Result<()> {
+    pub fn commit(self) -> io::Result<()> {
+        let target = self.target.clone();
+        self.commit_as(&target)
+    }
+
+    /// As [`AtomicFile::commit`], but publishes the content at `path` instead of the target
+    /// (`path` must be in the target's directory for the rename to be atomic; a partial result
+    /// kept under another name, say).
+    ///
+    /// # Errors
+    /// As [`AtomicFile::commit`].
+    pub fn commit_as(mut self, path: &Path) -> io::Result<()> {
         let Some(writer) = self.writer.take() else {
             return Err(io::Error::other("already committed"));
         };
         let file = writer.into_inner().map_err(io::IntoInnerError::into_error)?;
         file.as_file().sync_all()?;
-        file.persist(&self.target).map_err(|e| e.error)?;
+        file.persist(path).map_err(|e| e.error)?;
         Ok(())
     }
 }

@@ -124,6 +124,64 @@ pub enum FuzzyError {
         /// The value given.
         value: f64,
     },
+    /// The output used when no rule fires lies outside the outputs the system can give (the
+    /// output universe, through the output scale: `[10^lo, 10^hi]` for a `log10` universe).
+    #[error("the default output {value} lies outside the system's outputs [{lo}, {hi}] (the output universe{scale})")]
+    DefaultOutsideUniverse {
+        /// The value given.
+        value: f64,
+        /// Smallest output.
+        lo: f64,
+        /// Largest output.
+        hi: f64,
+        /// How the universe maps to outputs, in words (empty for a linear scale).
+        scale: &'static str,
+    },
+    /// More rules than a system may have.
+    #[error("{count} rules, the limit is {limit} (fuzzy_inference::MAX_RULES)")]
+    TooManyRules {
+        /// How many were given.
+        count: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// An input whose name is none of the quantities the system is bound to.
+    #[error("input `{name}` is not one of the quantities this system is fed: {expected}")]
+    UnknownInput {
+        /// The input's name.
+        name: String,
+        /// The quantities and their accepted names, in words.
+        expected: String,
+    },
+    /// A quantity the system is fed has no input.
+    #[error("no input for {meaning} (name it {names})")]
+    MissingInput {
+        /// The names accepted for it, in words.
+        names: String,
+        /// What the quantity is.
+        meaning: &'static str,
+    },
+    /// Two inputs name the same quantity.
+    #[error("inputs `{first}` and `{second}` both name {meaning}")]
+    DuplicateInput {
+        /// The first input's name.
+        first: String,
+        /// The second input's name.
+        second: String,
+        /// What the quantity is.
+        meaning: &'static str,
+    },
+    /// The outputs the system can give do not suit its use (a noise scale must be positive and
+    /// finite, say).
+    #[error("the system's outputs [{lo}, {hi}] (from the output universe) must be {requirement}")]
+    OutputRange {
+        /// Smallest output.
+        lo: f64,
+        /// Largest output.
+        hi: f64,
+        /// What the use needs, in words.
+        requirement: &'static str,
+    },
     /// More sets than the allocation-free evaluation supports.
     #[error("{what}: {count} sets, the limit is {limit}")]
     TooManySets {
@@ -209,6 +267,14 @@ pub enum LoadError {
         location: Location,
         /// The TOML parser's message.
         message: String,
+    },
+    /// The file is larger than a system file may be (it is read whole).
+    #[error("{path}: larger than {limit} bytes, the limit for a fuzzy-system file (fuzzy_inference::MAX_FILE_BYTES)")]
+    TooLarge {
+        /// The path.
+        path: String,
+        /// The limit in bytes.
+        limit: u64,
     },
     /// Well-formed TOML describing an invalid system.
     #[error("{location}: {source}")]

@@ -79,7 +79,8 @@ fn errors_name_file_line_and_column() {
     let e = error(&SMALL.replace("triangle = [0.0, 0.0, 0.5]", "triangle = [0.0, 0.0, 0.5], trapezoid = [0, 0, 1, 1]"));
     assert!(e.starts_with("test.toml:15:5: set `small`: give exactly one"), "{e}");
     let e = error(&SMALL.replace("default_output = 0.5", "default_output = 0.5\ndefuzzifier = { grid = 1 }"));
-    assert!(e.starts_with("test.toml: defuzzifier: grid needs >= 2 points"), "{e}");
+    // Located at the setting (it was the file alone before the limits were located).
+    assert!(e.starts_with("test.toml:2:15: defuzzifier: grid needs >= 2 points"), "{e}");
     let e = FuzzySystem::from_toml_file("/nonexistent/system.toml").unwrap_err();
     assert!(matches!(e, LoadError::Io { .. }), "{e}");
 }

@@ -27,24 +27,30 @@
 //! system (three inputs `[N, RTK, d]`, e.g. an edited copy of
 //! `crates/fuzzy-inference/systems/bds_ins.toml`); `--scaling none` runs the plain Kalman filter.
 
+use std::cell::Cell;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use bds_ins_dynamics::{
-    DiscreteInsModel, Earth, InsErrorModel, InsNoise, InsParams, RtkStatus, STATES, correct, idx, measurement, scenario,
+    BdsInsError, DiscreteInsModel, Earth, InsErrorModel, InsNoise, InsParams, RtkStatus, STATES, correct, idx,
+    measurement, scenario,
 };
 use estimators::{
     AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, Estimate, Estimator, EstimatorError, FuzzyScaling,
     NoiseScaling, Setup, StepDetails,
 };
-use fuzzy_inference::FuzzySystem;
+use fuzzy_inference::{BDS_INS_INTERFACE, FuzzySystem};
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
+use toml::Spanned;
 
 use crate::data::{DataReader, DataRow};
 use crate::error::Error;
+use crate::limits::Limits;
 use crate::output::OutputFile;
-use crate::run::{StatusPolicy, StatusTally, enforce};
+use crate::run::{OnError, StatusPolicy, StatusTally, enforce};
+use crate::settings::{self, SettingsFile};
 
 /// How the RTK column is coded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -75,6 +81,10 @@ pub struct BdsInsOptions {
     /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
     /// data contradict the noise description).
     pub checks: Option<estimators::DataChecks>,
+    /// What an error does with the steps before it.
+    pub on_error: OnError,
+    /// Size limit of the settings and rule files.
+    pub limits: Limits,
 }
 
 /// What a run did.
@@ -91,97 +101,263 @@ pub struct BdsInsSummary {
 /// The settings file, as written.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ConfigFile {
-    ts: Option<f64>,
-    latitude_deg: Option<f64>,
-    flat: Option<bool>,
-    sigma0: Option<f64>,
-    heading_sigma_deg: Option<f64>,
-    accel_white: Option<f64>,
-    gyro_white: Option<f64>,
-    p0_sigma: Option<Vec<f64>>,
+pub(crate) struct ConfigFile {
+    ts: Option<Spanned<f64>>,
+    latitude_deg: Option<Spanned<f64>>,
+    flat: Option<Spanned<bool>>,
+    sigma0: Option<Spanned<f64>>,
+    heading_sigma_deg: Option<Spanned<f64>>,
+    accel_white: Option<Spanned<f64>>,
+    gyro_white: Option<Spanned<f64>>,
+    p0_sigma: Option<Spanned<Vec<f64>>>,
 }
 
 /// The validated settings.
 #[derive(Debug, Clone)]
-struct Settings {
+pub(crate) struct Settings {
     model: DiscreteInsModel,
     sigma0: f64,
     r: DMatrix<f64>,
     p0: DMatrix<f64>,
 }
 
-fn read_config(path: Option<&Path>) -> Result<Settings, Error> {
-    let file: ConfigFile = crate::model::read_settings_toml(path)?;
-    let p = path.unwrap_or(Path::new("<defaults>"));
-    let bad = |message: String| Error::File { path: p.to_owned(), message };
-    let positive = |key: &str, v: f64| {
-        if v.is_finite() && v > 0.0 { Ok(v) } else { Err(bad(format!("`{key}` must be positive and finite, got {v}"))) }
+fn read_config(path: Option<&Path>, limits: &Limits) -> Result<Settings, Error> {
+    let (file, source): (ConfigFile, SettingsFile) = SettingsFile::read(path, limits.file_bytes)?;
+    settings_of(&file, &source)
+}
+
+/// Checks every setting at its key, then the matrices derived from them (named by the settings
+/// they come from).
+pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Settings, Error> {
+    let span = |v: &Option<Spanned<f64>>| v.as_ref().map(Spanned::span);
+    let positive = |key: &str, v: &Option<Spanned<f64>>, default: f64| match v {
+        Some(v) => settings::positive(source, key, v),
+        None => Ok(default),
     };
-    let ts = positive("ts", file.ts.unwrap_or(scenario::PAPER_PERIOD))?;
-    let sigma0 = positive("sigma0", file.sigma0.unwrap_or(scenario::SIGMA0))?;
+    let non_negative = |key: &str, v: &Option<Spanned<f64>>, default: f64| match v {
+        Some(v) => settings::non_negative(source, key, v),
+        None => Ok(default),
+    };
+    let ts = positive("ts", &file.ts, scenario::PAPER_PERIOD)?;
+    let sigma0 = positive("sigma0", &file.sigma0, scenario::SIGMA0)?;
     let heading =
-        positive("heading_sigma_deg", file.heading_sigma_deg.unwrap_or(scenario::HEADING_SIGMA0.to_degrees()))?
-            .to_radians();
-    let earth = if file.flat.unwrap_or(false) {
+        positive("heading_sigma_deg", &file.heading_sigma_deg, scenario::HEADING_SIGMA0.to_degrees())?.to_radians();
+    let flat = file.flat.as_ref().is_some_and(|f| *f.get_ref());
+    let earth = if flat {
         Earth::Flat
     } else {
-        Earth::Rotating { latitude: file.latitude_deg.map_or(bds_ins_dynamics::DIGEST_LATITUDE, f64::to_radians) }
+        let latitude = match &file.latitude_deg {
+            Some(v) => {
+                let deg = *v.get_ref();
+                if !deg.is_finite() {
+                    return Err(source.error("latitude_deg", v, format!("must be finite, got {deg}")));
+                }
+                deg.to_radians()
+            }
+            None => bds_ins_dynamics::DIGEST_LATITUDE,
+        };
+        Earth::Rotating { latitude }
     };
     let digest = InsNoise::digest_filter();
     let noise = InsNoise {
-        accel_white: file.accel_white.unwrap_or(digest.accel_white),
-        gyro_white: file.gyro_white.unwrap_or(digest.gyro_white),
+        accel_white: non_negative("accel_white", &file.accel_white, digest.accel_white)?,
+        gyro_white: non_negative("gyro_white", &file.gyro_white, digest.gyro_white)?,
         ..digest
     };
-    let model = InsErrorModel::new(InsParams { earth, ..InsParams::digest() }, noise)
-        .and_then(|m| m.discretize(ts))
-        .map_err(|e| bad(format!("INS error model: {e}")))?;
-    let p0_sigma = match file.p0_sigma {
-        None => scenario::initial_sigma().to_vec(),
-        Some(v) if v.len() == STATES && v.iter().all(|s| s.is_finite() && *s > 0.0) => v,
-        Some(_) => return Err(bad(format!("`p0_sigma` must be {STATES} positive numbers (paper state order)"))),
+    // Φ and Q come from the period, the Earth model and the noise intensities together: a
+    // failure is put on the first given setting whose default makes it go away.
+    let process_keys = [
+        ("accel_white", span(&file.accel_white)),
+        ("gyro_white", span(&file.gyro_white)),
+        ("ts", span(&file.ts)),
+        ("latitude_deg", span(&file.latitude_deg)),
+    ];
+    let params = InsParams { earth, ..InsParams::digest() };
+    if let (Err(BdsInsError::OutOfRange { lo, hi, .. }), Some(v)) = (params.validate(), &file.latitude_deg) {
+        let (lo, hi) = (lo.to_degrees(), hi.to_degrees());
+        return Err(source.error(
+            "latitude_deg",
+            v,
+            format!("must lie in [{lo:.0}, {hi:.0}] degrees, got {}", v.get_ref()),
+        ));
+    }
+    let model = match process_model(params, noise, ts) {
+        Ok(model) => model,
+        Err(e) => {
+            let defaults = InsParams::digest();
+            let culprits = [
+                (
+                    "accel_white",
+                    span(&file.accel_white),
+                    process_model(params, InsNoise { accel_white: digest.accel_white, ..noise }, ts),
+                ),
+                (
+                    "gyro_white",
+                    span(&file.gyro_white),
+                    process_model(params, InsNoise { gyro_white: digest.gyro_white, ..noise }, ts),
+                ),
+                ("ts", span(&file.ts), process_model(params, noise, scenario::PAPER_PERIOD)),
+                (
+                    "latitude_deg",
+                    span(&file.latitude_deg),
+                    process_model(InsParams { earth: defaults.earth, ..params }, noise, ts),
+                ),
+            ];
+            let given: Vec<(&str, Option<std::ops::Range<usize>>)> = culprits
+                .iter()
+                .filter(|(_, span, fixed)| span.is_some() && fixed.is_ok())
+                .chain(culprits.iter().filter(|(_, span, _)| span.is_some()))
+                .map(|(k, span, _)| (*k, span.clone()))
+                .collect();
+            let message =
+                format!("the INS error model derived from `accel_white`, `gyro_white`, `ts` and `latitude_deg`: {e}");
+            return Err(source.derived_error(&given, message));
+        }
     };
-    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![sigma0 * sigma0, sigma0 * sigma0, heading * heading]));
-    let p0 = DMatrix::from_diagonal(&DVector::from_iterator(STATES, p0_sigma.iter().map(|s| s * s)));
-    Ok(Settings { model, sigma0, r, p0 })
+    let p0_sigma = match &file.p0_sigma {
+        None => scenario::initial_sigma().to_vec(),
+        Some(v) => {
+            let x = settings::vector(source, "p0_sigma", v, STATES)?;
+            if let Some(i) = x.iter().position(|s| *s <= 0.0) {
+                let message =
+                    format!("entry {} = {} must be positive (13 standard deviations, paper state order)", i + 1, x[i]);
+                return Err(source.error("p0_sigma", v, message));
+            }
+            x
+        }
+    };
+    // Squares that overflow or underflow: named by the setting squared.
+    let variance = |key: &str, span: Option<std::ops::Range<usize>>, sigma: f64, what: &str| {
+        let v = sigma * sigma;
+        if v.is_finite() && v >= f64::MIN_POSITIVE {
+            return Ok(v);
+        }
+        let message = format!("its square {v:e}, a variance of the {what}, is not a usable positive number");
+        Err(source.derived_error(&[(key, span)], message))
+    };
+    let s2 = variance("sigma0", span(&file.sigma0), sigma0, "measurement covariance R")?;
+    let h2 = variance("heading_sigma_deg", span(&file.heading_sigma_deg), heading, "measurement covariance R")?;
+    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![s2, s2, h2]));
+    let p0_span = file.p0_sigma.as_ref().map(Spanned::span);
+    let mut p0 = DMatrix::zeros(STATES, STATES);
+    for (i, s) in p0_sigma.iter().enumerate() {
+        p0[(i, i)] = variance("p0_sigma", p0_span.clone(), *s, "initial covariance P0").map_err(|e| match e {
+            Error::At { at, message } => Error::At { at, message: format!("{message} (entry {})", i + 1) },
+            e => e,
+        })?;
+    }
+    settings::check_covariance(&r).map_err(|why| {
+        let keys = [("sigma0", span(&file.sigma0)), ("heading_sigma_deg", span(&file.heading_sigma_deg))];
+        source.derived_error(&keys, format!("the measurement covariance R = diag(sigma0², sigma0², heading²) {why}"))
+    })?;
+    settings::check_covariance(&p0).map_err(|why| {
+        source.derived_error(&[("p0_sigma", p0_span.clone())], format!("the initial covariance P0 {why}"))
+    })?;
+    let settings = Settings { model, sigma0, r, p0 };
+    // What the filter itself checks, in the file's terms.
+    AdaptiveKalmanFilter::new(setup(&settings), ConstantScaling(1.0)).map_err(|e| {
+        let keys: &[(&str, Option<std::ops::Range<usize>>)] = match &e {
+            AdaptiveError::Filter(
+                EstimatorError::NotPositiveDefinite { what: "R" } | EstimatorError::NotSymmetric { what: "R" },
+            ) => &[("sigma0", span(&file.sigma0)), ("heading_sigma_deg", span(&file.heading_sigma_deg))],
+            AdaptiveError::Filter(EstimatorError::NotPositiveDefinite { what: "P0" }) => {
+                &[("p0_sigma", file.p0_sigma.as_ref().map(Spanned::span))]
+            }
+            _ => &process_keys,
+        };
+        source.derived_error(keys, format!("the filter refuses the matrices derived from it: {e}"))
+    })?;
+    Ok(settings)
+}
+
+/// The discrete error model, with a finite `Φ` and `Q` (else why not, in words).
+fn process_model(params: InsParams, noise: InsNoise, ts: f64) -> Result<DiscreteInsModel, String> {
+    let model = InsErrorModel::new(params, noise).and_then(|m| m.discretize(ts)).map_err(|e| e.to_string())?;
+    let finite = |m: &DMatrix<f64>| m.iter().all(|v| v.is_finite());
+    if !finite(&model.phi) {
+        return Err("the transition matrix Φ = e^(F ts) is not finite".into());
+    }
+    if !finite(&model.q) {
+        return Err("the process noise Q is not finite".into());
+    }
+    Ok(model)
+}
+
+fn setup(s: &Settings) -> Setup {
+    Setup {
+        x0: DVector::zeros(STATES),
+        p0: s.p0.clone(),
+        process_noise: s.model.q.clone(),
+        measurement_noise: s.r.clone(),
+        inputs: 0,
+    }
+}
+
+/// What the runner sees of the fuzzy scaling inside the filter: the last `t` it gave, and a
+/// scale that replaces it (to tell whether a failed step is the rule file's doing).
+#[derive(Debug, Default)]
+struct Probe {
+    last: Cell<Option<f64>>,
+    forced: Cell<Option<f64>>,
 }
 
 /// The scaling chosen on the command line.
 enum Scaling {
-    Fuzzy(Box<FuzzyScaling>),
+    Fuzzy(Box<FuzzyScaling>, Rc<Probe>),
     Unit(ConstantScaling),
 }
 
 impl NoiseScaling for Scaling {
     fn scale(&mut self, c: &estimators::ScalingContext<'_>) -> Result<f64, AdaptiveError> {
         match self {
-            Scaling::Fuzzy(f) => f.scale(c),
+            Scaling::Fuzzy(f, probe) => {
+                if let Some(t) = probe.forced.get() {
+                    return Ok(t);
+                }
+                probe.last.set(None);
+                let t = f.scale(c)?;
+                probe.last.set(Some(t));
+                Ok(t)
+            }
             Scaling::Unit(u) => u.scale(c),
         }
     }
 }
 
-fn scaling(options: &BdsInsOptions, sigma0: f64) -> Result<Scaling, Error> {
+/// Reads the rule file (`--fis`), its inputs bound to the receiver's quantities by name.
+fn rule_file(path: &Path, limits: &Limits) -> Result<FuzzySystem, Error> {
+    parse_rule_file(path, &crate::limits::read_text(path, "rule file", limits.file_bytes)?)
+}
+
+/// A rule file's system from its text, its inputs bound to the receiver's quantities by name.
+fn parse_rule_file(path: &Path, text: &str) -> Result<FuzzySystem, Error> {
+    FuzzySystem::from_toml_str_for(text, &path.display().to_string(), &BDS_INS_INTERFACE)
+        .map_err(|e| Error::Usage(format!("--fis: {e}")))
+}
+
+fn scaling(options: &BdsInsOptions, sigma0: f64) -> Result<(Scaling, Option<Rc<Probe>>), Error> {
     if !options.fuzzy {
-        return Ok(Scaling::Unit(ConstantScaling(1.0)));
+        return Ok((Scaling::Unit(ConstantScaling(1.0)), None));
     }
     let system = match &options.fis {
-        Some(path) => FuzzySystem::from_toml_file(path).map_err(|e| Error::Usage(format!("--fis: {e}")))?,
+        Some(path) => rule_file(path, &options.limits)?,
         None => FuzzySystem::bds_ins(sigma0).map_err(|e| Error::Usage(format!("fuzzy system: {e}")))?,
     };
     let f = FuzzyScaling::new(system).map_err(|e| {
         let shown = options.fis.as_deref().unwrap_or(Path::new("<default>")).display().to_string();
         Error::Usage(format!("--fis {shown}: {e}"))
     })?;
-    Ok(Scaling::Fuzzy(Box::new(f)))
+    let probe = Rc::new(Probe::default());
+    Ok((Scaling::Fuzzy(Box::new(f), Rc::clone(&probe)), Some(probe)))
 }
 
 /// Runs the filter over `options.input` and writes `options.output` (atomically).
 ///
 /// # Errors
 /// Every [`Error`]: the output checks, a malformed settings, fuzzy-system or data file (at its
-/// `file:line:column`), a receiver status or a step the filter rejects (at its data cell).
+/// `file:line:column`), a receiver status or a step the filter rejects (at its data cell), a
+/// step the rule file makes fail (naming the rule file); with [`OnError::KeepPartial`] the steps
+/// before the error are kept in `OUT.partial.csv` and the error says so.
 pub fn bds_ins(options: &BdsInsOptions) -> Result<BdsInsSummary, Error> {
     let mut inputs: Vec<(&'static str, &Path)> = vec![("input", &options.input)];
     if let Some(c) = &options.config {
@@ -191,13 +367,70 @@ pub fn bds_ins(options: &BdsInsOptions) -> Result<BdsInsSummary, Error> {
         inputs.push(("fis", f));
     }
     let mut out = OutputFile::create(&options.output, &inputs)?;
-    let settings = read_config(options.config.as_deref())?;
-    let scaling = scaling(options, settings.sigma0)?;
+    let settings = read_config(options.config.as_deref(), &options.limits)?;
+    let (scaling, probe) = scaling(options, settings.sigma0)?;
     let mut data = DataReader::open(&options.input, 3, 5)?;
-    let policy = (options.status, options.checks);
-    let summary = run(&settings, scaling, options.rtk_coding, policy, &mut data, &mut out, &options.output)?;
-    out.commit()?;
-    Ok(summary)
+    let rules = Rules { probe, path: options.fis.clone() };
+    let mut tally = StatusTally::default();
+    let mut runner = Runner {
+        settings: &settings,
+        coding: options.rtk_coding,
+        status: options.status,
+        checks: options.checks,
+        rules,
+    };
+    match runner.run(scaling, &mut data, &mut out, &options.output, &mut tally) {
+        Ok(()) => {
+            out.commit()?;
+            Ok(BdsInsSummary { epochs: tally.steps, outages: tally.predicted, tally })
+        }
+        Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
+    }
+}
+
+/// Checks the text of a settings file (named `path` in errors) as `port-est bds-ins --config`
+/// does: every complaint at its key's `file:line:column`, derived matrices named by the settings
+/// they come from.
+///
+/// # Errors
+/// As [`bds_ins`] for a settings file.
+pub fn check_settings(path: &Path, text: &str) -> Result<(), Error> {
+    let (file, source): (ConfigFile, SettingsFile) = SettingsFile::from_text(path, text)?;
+    settings_of(&file, &source).map(drop)
+}
+
+/// The whole of `port-est bds-ins` but the files: the settings of `config` and the rule file of
+/// `fis` (each a file's name and text; `None`: the defaults), the log `data`, the rows written to
+/// `out` (tests and fuzzing drive it).
+///
+/// # Errors
+/// As [`bds_ins`].
+pub fn run_log<R: Read, W: Write>(
+    config: Option<(&Path, &str)>,
+    fis: Option<(&Path, &str)>,
+    coding: RtkCoding,
+    data: &mut DataReader<R>,
+    out: &mut W,
+) -> Result<BdsInsSummary, Error> {
+    let settings = match config {
+        Some((path, text)) => {
+            let (file, source): (ConfigFile, SettingsFile) = SettingsFile::from_text(path, text)?;
+            settings_of(&file, &source)?
+        }
+        None => read_config(None, &Limits::default())?,
+    };
+    let system = match fis {
+        Some((path, text)) => parse_rule_file(path, text)?,
+        None => FuzzySystem::bds_ins(settings.sigma0).map_err(|e| Error::Usage(format!("fuzzy system: {e}")))?,
+    };
+    let f = FuzzyScaling::new(system).map_err(|e| Error::Usage(format!("--fis: {e}")))?;
+    let probe = Rc::new(Probe::default());
+    let scaling = Scaling::Fuzzy(Box::new(f), Rc::clone(&probe));
+    let rules = Rules { probe: Some(probe), path: fis.map(|(p, _)| p.to_owned()) };
+    let mut runner = Runner { settings: &settings, coding, status: StatusPolicy::Warn, checks: None, rules };
+    let mut tally = StatusTally::default();
+    runner.run(scaling, data, out, Path::new("<output>"), &mut tally)?;
+    Ok(BdsInsSummary { epochs: tally.steps, outages: tally.predicted, tally })
 }
 
 /// Column index (for `DataReader::locate`) of `y4` and `y5`.
@@ -229,84 +462,137 @@ fn rtk_code<R: Read>(row: &DataRow, coding: RtkCoding, data: &DataReader<R>) -> 
     }
 }
 
-/// A step's error at its data row: the receiver status at its cell, with a hint for RTK codes.
-fn step_error<R: Read>(e: EstimatorError, data: &DataReader<R>, k: u64, coding: RtkCoding) -> Error {
-    match e {
-        EstimatorError::Adaptive { index: Some(i), source } => {
-            let column = if i == 3 { SATELLITES_COLUMN } else { RTK_COLUMN };
-            let hint = if coding == RtkCoding::Paper && matches!(*source, AdaptiveError::RtkOutOfRange(_)) {
-                " (0 marks an epoch without a fix; --gga reads NMEA GGA qualities)"
-            } else {
-                ""
-            };
-            Error::at(data.locate(Some(column)), format!("{source}{hint}"))
-        }
-        e => crate::run::step_error(e, data, k),
+/// The fuzzy system in use and where it came from, to blame it for the failures it causes.
+struct Rules {
+    probe: Option<Rc<Probe>>,
+    path: Option<PathBuf>,
+}
+
+impl Rules {
+    fn shown(&self) -> PathBuf {
+        self.path.clone().unwrap_or_else(|| PathBuf::from("<built-in fuzzy system>"))
     }
 }
 
-fn run<R: Read, W: Write>(
-    s: &Settings,
-    scaling: Scaling,
+struct Runner<'a> {
+    settings: &'a Settings,
     coding: RtkCoding,
-    (status, checks): (StatusPolicy, Option<estimators::DataChecks>),
-    data: &mut DataReader<R>,
-    out: &mut W,
-    out_path: &Path,
-) -> Result<BdsInsSummary, Error> {
-    let wio = |e| Error::io(out_path, e);
-    writeln!(out, "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d,status").map_err(wio)?;
-    let setup = Setup {
-        x0: DVector::zeros(STATES),
-        p0: s.p0.clone(),
-        process_noise: s.model.q.clone(),
-        measurement_noise: s.r.clone(),
-        inputs: 0,
-    };
-    let mut filter = AdaptiveKalmanFilter::new(setup, scaling).map_err(|e| Error::Usage(format!("filter: {e}")))?;
-    if let Some(checks) = checks {
-        filter.set_data_checks(checks).map_err(Error::Estimator)?;
+    status: StatusPolicy,
+    checks: Option<estimators::DataChecks>,
+    rules: Rules,
+}
+
+impl Runner<'_> {
+    /// A step's error at its data row: the receiver status at its cell (with a hint for RTK
+    /// codes), a noise scale the rule file gave naming the rule file.
+    fn step_error<R: Read>(
+        &self,
+        e: EstimatorError,
+        data: &DataReader<R>,
+        k: u64,
+        retry: impl FnOnce(f64) -> bool,
+    ) -> Error {
+        let rule_file =
+            |message: String| Error::RuleFile { path: self.rules.shown(), message, at: data.locate(Some(0)), k };
+        match e {
+            EstimatorError::Adaptive { index: Some(i), source } => {
+                let column = if i == 3 { SATELLITES_COLUMN } else { RTK_COLUMN };
+                let hint = if self.coding == RtkCoding::Paper && matches!(*source, AdaptiveError::RtkOutOfRange(_)) {
+                    " (0 marks an epoch without a fix; --gga reads NMEA GGA qualities)"
+                } else {
+                    ""
+                };
+                Error::at(data.locate(Some(column)), format!("{source}{hint}"))
+            }
+            EstimatorError::Adaptive { index: None, source }
+                if matches!(*source, AdaptiveError::InvalidScale(_) | AdaptiveError::Fuzzy(_)) =>
+            {
+                rule_file(source.to_string())
+            }
+            EstimatorError::NumericalFailure(what) if self.rules.probe.is_some() => {
+                // The same step with t = 1: if it succeeds, the rule file's t made it fail.
+                let t = self.rules.probe.as_ref().and_then(|p| p.last.get());
+                match t {
+                    Some(t) if t != 1.0 && retry(1.0) => rule_file(format!(
+                        "numerical failure: {what} with the noise scale t = {t:e} the rule file gave"
+                    )),
+                    _ => crate::run::step_error(EstimatorError::NumericalFailure(what), data, k),
+                }
+            }
+            e => crate::run::step_error(e, data, k),
+        }
     }
-    let mut row = DataRow::zeros(3, 5);
-    let u = DVector::zeros(0);
-    // The measurement the filter consumes: the INS-minus-BDS difference (13) and the receiver
-    // status [N, RTK] of the epoch (RTK 0: no fix, a prediction only).
-    let mut y = DVector::zeros(5);
-    let mut tally = StatusTally::default();
-    while data.read_row(&mut row)? {
-        let ins = [row.u[0], row.u[1], row.u[2]];
-        let code = rtk_code(&row, coding, data)?;
-        let z = measurement(ins, [row.y[0], row.y[1], row.y[2]]);
-        y.rows_mut(0, 3).copy_from_slice(&z);
-        y[3] = row.y[3];
-        y[4] = code;
-        let e = Estimator::step(&mut filter, &s.model, &u, &y).map_err(|e| step_error(e, data, row.k, coding))?;
-        enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
-        tally.record(e.status());
-        let Some(label) = row.k.checked_add(1) else {
-            return Err(Error::at(data.locate(Some(0)), format!("k = {} is too large", row.k)));
-        };
-        let c = correct(ins, &e.center).map_err(|e| Error::Usage(e.to_string()))?;
-        let (dx, dy, dpsi) = (e.center[idx::DX], e.center[idx::DY], e.center[idx::DPSI]);
-        let sd = |i: usize| e.std_dev[i];
-        let (t, d) = match e.details {
-            StepDetails::Adaptive(Some(r)) => (format!("{:e}", r.scale), format!("{:e}", r.distance)),
-            _ => (String::new(), String::new()),
-        };
-        writeln!(
-            out,
-            "{label},{:e},{:e},{:e},{dx:e},{dy:e},{dpsi:e},{:e},{:e},{:e},{t},{d},{}",
-            c[0],
-            c[1],
-            c[2],
-            sd(idx::DX),
-            sd(idx::DY),
-            sd(idx::DPSI),
-            e.status
-        )
-        .map_err(wio)?;
+
+    fn run<R: Read, W: Write>(
+        &mut self,
+        scaling: Scaling,
+        data: &mut DataReader<R>,
+        out: &mut W,
+        out_path: &Path,
+        tally: &mut StatusTally,
+    ) -> Result<(), Error> {
+        let s = self.settings;
+        let wio = |e| Error::io(out_path, e);
+        writeln!(out, "k,x,y,psi,dx,dy,dpsi,sd_dx,sd_dy,sd_dpsi,t,d,status").map_err(wio)?;
+        let mut filter =
+            AdaptiveKalmanFilter::new(setup(s), scaling).map_err(|e| Error::Usage(format!("filter: {e}")))?;
+        if let Some(checks) = self.checks {
+            filter.set_data_checks(checks).map_err(Error::Estimator)?;
+        }
+        let mut row = DataRow::zeros(3, 5);
+        let u = DVector::zeros(0);
+        // The measurement the filter consumes: the INS-minus-BDS difference (13) and the receiver
+        // status [N, RTK] of the epoch (RTK 0: no fix, a prediction only).
+        let mut y = DVector::zeros(5);
+        while data.read_row(&mut row)? {
+            let ins = [row.u[0], row.u[1], row.u[2]];
+            let code = rtk_code(&row, self.coding, data)?;
+            let z = measurement(ins, [row.y[0], row.y[1], row.y[2]]);
+            y.rows_mut(0, 3).copy_from_slice(&z);
+            y[3] = row.y[3];
+            y[4] = code;
+            let e = match Estimator::step(&mut filter, &s.model, &u, &y) {
+                Ok(e) => e,
+                Err(err) => {
+                    let probe = self.rules.probe.clone();
+                    let retry = |t: f64| {
+                        // The filter is unchanged by the failed step: try it again with `t`.
+                        let Some(p) = probe else { return false };
+                        p.forced.set(Some(t));
+                        let ok = Estimator::step(&mut filter, &s.model, &u, &y).is_ok();
+                        p.forced.set(None);
+                        ok
+                    };
+                    return Err(self.step_error(err, data, row.k, retry));
+                }
+            };
+            enforce(self.status, e.status(), || data.locate(Some(0)), row.k)?;
+            let Some(label) = row.k.checked_add(1) else {
+                return Err(Error::at(data.locate(Some(0)), format!("k = {} is too large", row.k)));
+            };
+            let c = correct(ins, &e.center).map_err(|e| Error::Usage(e.to_string()))?;
+            let (dx, dy, dpsi) = (e.center[idx::DX], e.center[idx::DY], e.center[idx::DPSI]);
+            let sd = |i: usize| e.std_dev[i];
+            let (t, d) = match e.details {
+                StepDetails::Adaptive(Some(r)) => (format!("{:e}", r.scale), format!("{:e}", r.distance)),
+                _ => (String::new(), String::new()),
+            };
+            writeln!(
+                out,
+                "{label},{:e},{:e},{:e},{dx:e},{dy:e},{dpsi:e},{:e},{:e},{:e},{t},{d},{}",
+                c[0],
+                c[1],
+                c[2],
+                sd(idx::DX),
+                sd(idx::DY),
+                sd(idx::DPSI),
+                e.status
+            )
+            .map_err(wio)?;
+            tally.record(e.status());
+        }
+        Ok(())
     }
-    Ok(BdsInsSummary { epochs: tally.steps, outages: tally.predicted, tally })
 }
 
 #[cfg(test)]
@@ -316,7 +602,7 @@ mod tests {
     /// A log in the documented layout from the reproduction's field route: the truth drives due
     /// east at 10 m/s from (0, 0), heading 90°; INS = truth + error state, BDS = truth + BDS error.
     fn log(seconds: usize, outage_every: usize) -> (String, Vec<[f64; 2]>) {
-        let s = read_config(None).unwrap();
+        let s = read_config(None, &Limits::default()).unwrap();
         let truth_model = InsErrorModel::new(InsParams::digest(), InsNoise::digest()).unwrap().discretize(1.0).unwrap();
         let mut rng = models::Xoshiro256StarStar::seed_from_u64(5);
         let xs = bds_ins_dynamics::simulate_error_states(&truth_model, &scenario::initial_error(), seconds, &mut rng)
@@ -347,8 +633,42 @@ mod tests {
         (text, truth)
     }
 
+    fn options(fis: Option<&Path>, fuzzy: bool, coding: RtkCoding) -> BdsInsOptions {
+        BdsInsOptions {
+            input: "d.csv".into(),
+            output: "o.csv".into(),
+            config: None,
+            fis: fis.map(Path::to_owned),
+            fuzzy,
+            rtk_coding: coding,
+            status: StatusPolicy::Warn,
+            checks: None,
+            on_error: OnError::Discard,
+            limits: Limits::default(),
+        }
+    }
+
+    pub(super) fn run_with(text: &str, options: &BdsInsOptions) -> Result<(String, BdsInsSummary), Error> {
+        let settings = read_config(None, &Limits::default())?;
+        let (scaling, probe) = scaling(options, settings.sigma0)?;
+        let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5)?;
+        let mut out = Vec::new();
+        let rules = Rules { probe, path: options.fis.clone() };
+        let mut runner = Runner {
+            settings: &settings,
+            coding: options.rtk_coding,
+            status: options.status,
+            checks: options.checks,
+            rules,
+        };
+        let mut tally = StatusTally::default();
+        runner.run(scaling, &mut data, &mut out, Path::new("o.csv"), &mut tally)?;
+        let summary = BdsInsSummary { epochs: tally.steps, outages: tally.predicted, tally };
+        Ok((String::from_utf8(out).unwrap(), summary))
+    }
+
     fn run_text(text: &str, fuzzy: bool, coding: RtkCoding) -> Result<(String, BdsInsSummary), Error> {
-        run_checked(text, fuzzy, coding, None)
+        run_with(text, &options(None, fuzzy, coding))
     }
 
     fn run_checked(
@@ -357,23 +677,7 @@ mod tests {
         coding: RtkCoding,
         checks: Option<estimators::DataChecks>,
     ) -> Result<(String, BdsInsSummary), Error> {
-        let settings = read_config(None)?;
-        let options = BdsInsOptions {
-            input: "d.csv".into(),
-            output: "o.csv".into(),
-            config: None,
-            fis: None,
-            fuzzy,
-            rtk_coding: coding,
-            status: StatusPolicy::Warn,
-            checks: None,
-        };
-        let scaling = scaling(&options, settings.sigma0)?;
-        let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5)?;
-        let mut out = Vec::new();
-        let policy = (StatusPolicy::Warn, checks);
-        let summary = run(&settings, scaling, coding, policy, &mut data, &mut out, Path::new("o.csv"))?;
-        Ok((String::from_utf8(out).unwrap(), summary))
+        run_with(text, &BdsInsOptions { checks, ..options(None, fuzzy, coding) })
     }
 
     #[test]
@@ -448,18 +752,21 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("port-est-bds-ins-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let cfg = dir.join("c.toml");
+        let read = |cfg: &Path| read_config(Some(cfg), &Limits::default());
         std::fs::write(&cfg, "ts = 0.5\nlatitude_deg = 45.0\nsigma0 = 0.05\np0_sigma = [1.0]\n").unwrap();
-        let e = read_config(Some(&cfg)).unwrap_err().to_string();
-        assert!(e.contains("`p0_sigma` must be 13 positive numbers"), "{e}");
+        let e = read(&cfg).unwrap_err().to_string();
+        assert!(e.contains("c.toml:4:12: `p0_sigma`: expected 13 entries, found 1"), "{e}");
         std::fs::write(&cfg, "ts = 0.5\nflat = true\nsigma0 = -1\n").unwrap();
-        assert!(read_config(Some(&cfg)).unwrap_err().to_string().contains("`sigma0` must be positive"));
+        let e = read(&cfg).unwrap_err().to_string();
+        assert!(e.contains("c.toml:3:10: `sigma0`: must be positive"), "{e}");
         std::fs::write(&cfg, "ts = 0.5\nlatitude = 3\n").unwrap();
-        let e = read_config(Some(&cfg)).unwrap_err().to_string();
+        let e = read(&cfg).unwrap_err().to_string();
         assert!(e.contains("c.toml:2:1"), "{e}");
         std::fs::write(&cfg, "ts = 0.5\nlatitude_deg = 95.0\n").unwrap();
-        assert!(read_config(Some(&cfg)).unwrap_err().to_string().contains("latitude"));
+        let e = read(&cfg).unwrap_err().to_string();
+        assert!(e.contains("c.toml:2:16: `latitude_deg`: must lie in [-89, 89] degrees"), "{e}");
         std::fs::write(&cfg, "ts = 0.5\nlatitude_deg = 45.0\nsigma0 = 0.05\n").unwrap();
-        let s = read_config(Some(&cfg)).unwrap();
+        let s = read(&cfg).unwrap();
         assert_eq!((s.model.ts, s.sigma0), (0.5, 0.05));
         // The shipped system loads; a malformed one is refused, naming the file.
         let fis = dir.join("fis.toml");
@@ -467,20 +774,47 @@ mod tests {
             std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzzy-inference/systems/bds_ins.toml"))
                 .unwrap();
         std::fs::write(&fis, &system).unwrap();
-        let options = |fis: &Path| BdsInsOptions {
-            input: "d.csv".into(),
-            output: "o.csv".into(),
-            config: None,
-            fis: Some(fis.to_owned()),
-            fuzzy: true,
-            rtk_coding: RtkCoding::Paper,
-            status: StatusPolicy::Warn,
-            checks: None,
-        };
+        let options = |fis: &Path| options(Some(fis), true, RtkCoding::Paper);
         assert!(scaling(&options(&fis), 0.2).is_ok());
         std::fs::write(&fis, "default_output = 1\n").unwrap();
         let e = scaling(&options(&fis), 0.2).err().unwrap().to_string();
         assert!(e.starts_with("--fis: ") && e.contains("fis.toml"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_step_the_rule_file_makes_fail_names_the_rule_file() {
+        use fuzzy_inference::{InputVariable, MembershipFunction, OutputScale, OutputVariable, Rule};
+        // A system whose outputs are negative: refused at load as a rule file (at `[output]`)…
+        let any = |name: &str| InputVariable {
+            name: name.into(),
+            range: (0.0, 100.0),
+            sets: vec![("any".into(), MembershipFunction::trapezoid(0.0, 0.0, f64::INFINITY, f64::INFINITY))],
+        };
+        let output = OutputVariable {
+            name: "t".into(),
+            universe: (-1.0, 1.0),
+            sets: vec![("neg".into(), MembershipFunction::triangle(-1.0, -0.5, 0.0))],
+            scale: OutputScale::Linear,
+        };
+        let rules = vec![Rule::new(&[("N", "any")], "neg")];
+        let system = FuzzySystem::new(vec![any("N"), any("RTK"), any("d")], output, rules, 0.5).unwrap();
+        let e = system.clone().bind(&BDS_INS_INTERFACE).unwrap_err().to_string();
+        assert!(e.contains("must be positive and finite"), "{e}");
+        // …and if such a system reaches the filter anyway, the failure names it, not the row.
+        let settings = read_config(None, &Limits::default()).unwrap();
+        let probe = Rc::new(Probe::default());
+        let scaling = Scaling::Fuzzy(Box::new(FuzzyScaling::new(system).unwrap()), Rc::clone(&probe));
+        let rules = Rules { probe: Some(probe), path: Some("rules.toml".into()) };
+        let mut runner =
+            Runner { settings: &settings, coding: RtkCoding::Paper, status: StatusPolicy::Warn, checks: None, rules };
+        let text = "k,u1,u2,u3,y1,y2,y3,y4,y5\n0,0,0,0,0,0,0,20,3\n";
+        let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5).unwrap();
+        let mut tally = StatusTally::default();
+        let e = runner.run(scaling, &mut data, &mut Vec::new(), Path::new("o.csv"), &mut tally).unwrap_err();
+        assert!(matches!(e, Error::RuleFile { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.starts_with("rules.toml: the noise scale t_k must be positive and finite, got -0.5"), "{e}");
+        assert!(e.contains("(at d.csv:2:1, step k = 0: the rule file's output, not the row, is the cause)"), "{e}");
     }
 }

@@ -15,6 +15,33 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+    /// The largest model, settings or rule file read (each is read whole): bytes, or with K, M,
+    /// G (KiB, MiB, GiB)
+    #[arg(long, value_name = "SIZE", global = true, default_value = "16MiB", value_parser = size)]
+    pub max_file_size: u64,
+}
+
+/// A size argument (`4096`, `64MiB`, `2G`).
+fn size(text: &str) -> Result<u64, String> {
+    crate::limits::parse_size(text)
+}
+
+/// What an error does with the steps before it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnErrorArg {
+    /// Write nothing (the output is published only when every step succeeded)
+    Discard,
+    /// Keep the steps before the error in OUT.partial.csv beside the output
+    KeepPartial,
+}
+
+impl From<OnErrorArg> for crate::OnError {
+    fn from(a: OnErrorArg) -> Self {
+        match a {
+            OnErrorArg::Discard => crate::OnError::Discard,
+            OnErrorArg::KeepPartial => crate::OnError::KeepPartial,
+        }
+    }
 }
 
 /// The subcommands.
@@ -39,7 +66,11 @@ Files:
               deviation per state), one row per step labelled k+1; written atomically.
   CONFIG.toml optional: `ts` (s), `x0` (3), `p0`, `q`, `r` (3×3 covariances, arrays of rows). Defaults:
               the digest's vehicle and settings (T = 1 ms, Q = T·diag(1e-4, 1e-4, 1e-6),
-              R = diag(0.05², 0.05², 0.002²), P0 = diag(0.1², 0.1², 0.01²)); x0 from the first row.";
+              R = diag(0.05², 0.05², 0.002²), P0 = diag(0.1², 0.1², 0.01²)); x0 from the first row.
+              Every error is reported at the key's file:line:column.
+
+--on-error keep-partial keeps the steps before an error in OUT.partial.csv (a log that turns bad
+after many good steps). Limits: see crates/port-est/README.md (--max-file-size).";
 
 /// The arguments of `port-est truck`.
 #[derive(Debug, Args)]
@@ -60,6 +91,10 @@ pub struct TruckArgs {
     /// How the estimator checks its data.
     #[command(flatten)]
     pub checks: CheckArgs,
+    /// What an error does with the steps before it: `discard` (write nothing) or `keep-partial`
+    /// (keep them in OUT.partial.csv; the error says where and why the run stopped)
+    #[arg(long, value_name = "POLICY", value_enum, default_value = "discard")]
+    pub on_error: OnErrorArg,
 }
 
 fn status_policy(strict: bool) -> crate::StatusPolicy {
@@ -108,6 +143,8 @@ impl From<TruckArgs> for crate::truck::TruckOptions {
             config: a.config,
             status: status_policy(a.strict),
             checks: a.checks.checks(),
+            on_error: a.on_error.into(),
+            limits: crate::Limits::default(),
         }
     }
 }
@@ -126,9 +163,13 @@ Files:
   CONFIG.toml optional: `ts` (s, default 1), `latitude_deg` (31), `flat` (false), `sigma0` (nominal BDS
               horizontal sigma, m, 0.2), `heading_sigma_deg` (0.2), `accel_white` (m/s^2/sqrt(Hz)),
               `gyro_white` (rad/s/sqrt(Hz)), `p0_sigma` (13 initial sigmas, paper state order).
-  SYSTEM.toml optional fuzzy system with inputs [N, RTK, d] (default: the 45-rule system of
-              docs/bds-ins-fuzzy-kf.md with the d sets scaled by sigma0; an editable copy is
-              crates/fuzzy-inference/systems/bds_ins.toml).
+  SYSTEM.toml optional fuzzy system whose inputs are named `N` (or `satellites`), `RTK` and `d` (or
+              `distance`), in any order: each is matched by its name, an unknown or missing name is
+              an error at its line (default: the 45-rule system of docs/bds-ins-fuzzy-kf.md with the
+              d sets scaled by sigma0; an editable copy is crates/fuzzy-inference/systems/bds_ins.toml).
+
+--on-error keep-partial keeps the steps before an error in OUT.partial.csv. Limits: see
+crates/port-est/README.md (--max-file-size).
 
 Example:
   port-est bds-ins --input examples/bds-ins/data.csv --output out.csv";
@@ -146,7 +187,7 @@ pub struct BdsInsArgs {
     /// Settings overriding the digest's defaults (TOML)
     #[arg(short, long, value_name = "CONFIG.toml")]
     pub config: Option<PathBuf>,
-    /// A fuzzy system with inputs [N, RTK, d] replacing the built-in one (TOML)
+    /// A fuzzy system replacing the built-in one (TOML), its inputs named N, RTK and d (any order)
     #[arg(long, value_name = "SYSTEM.toml")]
     pub fis: Option<PathBuf>,
     /// `fuzzy`: R scaled by the fuzzy system every epoch; `none`: the plain Kalman filter
@@ -161,6 +202,10 @@ pub struct BdsInsArgs {
     /// How the estimator checks its data.
     #[command(flatten)]
     pub checks: CheckArgs,
+    /// What an error does with the steps before it: `discard` (write nothing) or `keep-partial`
+    /// (keep them in OUT.partial.csv; the error says where and why the run stopped)
+    #[arg(long, value_name = "POLICY", value_enum, default_value = "discard")]
+    pub on_error: OnErrorArg,
 }
 
 impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
@@ -174,6 +219,8 @@ impl From<BdsInsArgs> for crate::bds_ins::BdsInsOptions {
             rtk_coding: if a.gga { crate::bds_ins::RtkCoding::Gga } else { crate::bds_ins::RtkCoding::Paper },
             status: status_policy(a.strict),
             checks: a.checks.checks(),
+            on_error: a.on_error.into(),
+            limits: crate::Limits::default(),
         }
     }
 }
@@ -200,8 +247,13 @@ Files:
               predicted, not-converged, fallback or relaxed, with `+inconsistent` and
               `+not-guaranteed` where they apply. Steps that do not end cleanly are counted in a
               warning on stderr; --strict makes the first one an error. The file is written to a
-              temporary file beside it and renamed on success, and may not be the model or the
-              input.
+              temporary file beside it and renamed on success (removed on Ctrl-C or SIGTERM; one
+              left by a killed run is named by the next), and may not be the model or the input.
+              --on-error keep-partial keeps the steps before an error in OUT.partial.csv.
+
+Limits (each refused with a message naming it): --max-file-size (model file, 16 MiB),
+--mhe-memory-limit (the [mhe] horizon and blocks, 256 MiB), --max-gap (steps bridged at one gap,
+10000), [mhe] max_sweeps <= 10000, data lines <= 1 MiB.
 
 Malformed files are reported at their file:line:column.
 
@@ -240,6 +292,18 @@ pub struct FilterArgs {
     /// How the estimator checks its data.
     #[command(flatten)]
     pub checks: CheckArgs,
+    /// What an error does with the steps before it: `discard` (write nothing) or `keep-partial`
+    /// (keep them in OUT.partial.csv; the error says where and why the run stopped)
+    #[arg(long, value_name = "POLICY", value_enum, default_value = "discard")]
+    pub on_error: OnErrorArg,
+    /// With `--gaps bridge`: the most missing steps bridged at one gap (a larger gap is an error
+    /// at its row)
+    #[arg(long, value_name = "N", default_value_t = crate::limits::DEFAULT_MAX_GAP)]
+    pub max_gap: u64,
+    /// The most memory a moving-horizon estimator (rmhe, mhe) may take for its [mhe] horizon and
+    /// blocks: bytes, or with K, M, G
+    #[arg(long, value_name = "SIZE", default_value = "256MiB", value_parser = size)]
+    pub mhe_memory_limit: u64,
 }
 
 /// The registry's estimators that run on the linear model of a model file, with their summaries
@@ -267,6 +331,12 @@ impl From<FilterArgs> for crate::FilterOptions {
             gaps,
             status: status_policy(a.strict),
             checks: a.checks.checks(),
+            on_error: a.on_error.into(),
+            limits: crate::Limits {
+                mhe_memory_bytes: a.mhe_memory_limit,
+                max_gap: a.max_gap,
+                ..crate::Limits::default()
+            },
         }
     }
 }

@@ -108,6 +108,8 @@ pub struct DataReader<R: Read> {
     last_k: Option<u64>,
     /// Whether `k` may skip values (the caller bridges the gap).
     allow_gaps: bool,
+    /// The most missing steps accepted at one gap.
+    max_gap: u64,
 }
 
 impl DataReader<File> {
@@ -175,6 +177,7 @@ impl<R: Read> DataReader<R> {
             rows: 0,
             last_k: None,
             allow_gaps: false,
+            max_gap: crate::limits::DEFAULT_MAX_GAP,
         };
         r.read_header()?;
         Ok(r)
@@ -184,6 +187,13 @@ impl<R: Read> DataReader<R> {
     /// missing steps (`port-est filter --gaps bridge`).
     pub fn set_allow_gaps(&mut self, allow: bool) {
         self.allow_gaps = allow;
+    }
+
+    /// The most missing steps accepted at one gap when gaps are allowed (default
+    /// [`crate::limits::DEFAULT_MAX_GAP`]; `--max-gap`): a larger gap is an error at its row,
+    /// so that one bad `k` cannot make the caller bridge billions of steps.
+    pub fn set_max_gap(&mut self, max_gap: u64) {
+        self.max_gap = max_gap;
     }
 
     /// The file's name, as given.
@@ -302,7 +312,16 @@ impl<R: Read> DataReader<R> {
                 );
                 return Err(Error::at(self.locate(Some(0)), message));
             }
-            if k != prev + 1 && !self.allow_gaps {
+            let missing = k - prev - 1;
+            if missing > self.max_gap && self.allow_gaps {
+                let message = format!(
+                    "k jumps from {prev} to {k}: a gap of {missing} missing steps, more than --max-gap {} (each \
+                     missing step is bridged by a predicted output row); raise --max-gap to bridge it",
+                    self.max_gap
+                );
+                return Err(Error::at(self.locate(Some(0)), message));
+            }
+            if missing > 0 && !self.allow_gaps {
                 let message = format!(
                     "k jumps from {prev} to {k}: the rows k = {}..={} are missing (dropped rows or concatenated logs); \
                      k must increase by one from row to row",

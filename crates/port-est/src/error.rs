@@ -98,6 +98,80 @@ pub enum Error {
     /// for an estimator without one).
     #[error("{0}")]
     Usage(String),
+    /// A file read whole is larger than the limit (`--max-file-size`).
+    #[error(
+        "{}: larger than {}, the limit for a {what} (raise it with --max-file-size)",
+        path.display(),
+        crate::limits::show_bytes(u128::from(*limit))
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its role (`model file`, `settings file`, `rule file`).
+        what: &'static str,
+        /// The limit in bytes.
+        limit: u64,
+    },
+    /// The rule file (`--fis`) made a step fail (a noise scale the filter cannot use).
+    #[error("{}: {message} (at {at}, step k = {k}: the rule file's output, not the row, is the cause)", path.display())]
+    RuleFile {
+        /// The rule file, or `<built-in system>`.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+        /// The data row where it happened.
+        at: Location,
+        /// The row's `k`.
+        k: u64,
+    },
+    /// A run stopped at an error; what was done with the steps before it
+    /// (`--on-error keep-partial`).
+    #[error("{source} ({kept})")]
+    Stopped {
+        /// Why the run stopped.
+        #[source]
+        source: Box<Error>,
+        /// What became of the steps before it.
+        kept: Kept,
+    },
+}
+
+/// What became of the steps written before a run stopped (`--on-error keep-partial`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Kept {
+    /// They are in this file (named `OUT.partial.csv`).
+    Partial {
+        /// The partial file.
+        path: PathBuf,
+        /// Steps (rows) it holds.
+        steps: u64,
+    },
+    /// They were streamed to a device or pipe as they were computed.
+    Streamed {
+        /// The output.
+        path: PathBuf,
+        /// Steps written.
+        steps: u64,
+    },
+    /// Nothing was kept: no step had succeeded, or the partial file could not be written.
+    Nothing {
+        /// Why.
+        reason: String,
+    },
+}
+
+impl fmt::Display for Kept {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Kept::Partial { path, steps } => {
+                write!(f, "the {steps} steps before it are kept in {}; the output was not written", path.display())
+            }
+            Kept::Streamed { path, steps } => {
+                write!(f, "the {steps} steps before it were written to {}", path.display())
+            }
+            Kept::Nothing { reason } => write!(f, "nothing kept: {reason}"),
+        }
+    }
 }
 
 impl Error {
@@ -105,7 +179,8 @@ impl Error {
     #[must_use]
     pub fn location(&self) -> Option<&Location> {
         match self {
-            Error::At { at, .. } | Error::Step { at, .. } => Some(at),
+            Error::At { at, .. } | Error::Step { at, .. } | Error::RuleFile { at, .. } => Some(at),
+            Error::Stopped { source, .. } => source.location(),
             _ => None,
         }
     }

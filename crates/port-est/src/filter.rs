@@ -16,11 +16,13 @@ use estimators::{AnyEstimator, DataChecks, EstimatorError, Setup};
 use models::StepModel;
 use nalgebra::DVector;
 
+use crate::blame::{self, LargestCell};
 use crate::data::{DataReader, DataRow};
 use crate::error::{Error, echo};
-use crate::model::{Model, read_model};
+use crate::limits::Limits;
+use crate::model::{Model, read_model_with};
 use crate::output::OutputFile;
-use crate::run::{EstimateColumns, StatusPolicy, StatusTally, enforce, step_error};
+use crate::run::{EstimateColumns, OnError, StatusPolicy, StatusTally, enforce, step_error};
 
 /// What `port-est filter` is asked to do.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,6 +45,10 @@ pub struct FilterOptions {
     /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
     /// data contradict the noise description).
     pub checks: Option<estimators::DataChecks>,
+    /// What an error does with the steps before it (`--on-error`).
+    pub on_error: OnError,
+    /// The resource limits (`--max-file-size`, `--mhe-memory-limit`, `--max-gap`).
+    pub limits: Limits,
 }
 
 /// The largest number of states for which `port-est filter` runs a set-membership filter with an
@@ -117,14 +123,21 @@ pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static Estimat
 /// [`StatusPolicy::Error`] a step that does not end cleanly.
 pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (entry, solver) = select(&options.estimator, options.solver.as_deref())?;
-    let mut out = OutputFile::create(&options.output, &[("input", &options.input), ("model", &options.model)])?;
-    let model = read_model(&options.model)?;
+    let inputs: [(&'static str, &Path); 2] = [("input", &options.input), ("model", &options.model)];
+    let mut out = OutputFile::create(&options.output, &inputs)?;
+    let model = read_model_with(&options.model, &options.limits)?;
     let mut data = DataReader::open(&options.input, model.inputs(), entry.measurement_len(model.outputs()))?;
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
-    let summary =
-        run_filter(&model, &mut data, entry, solver, options.status, options.checks, &mut out, &options.output)?;
-    out.commit()?;
-    Ok(summary)
+    data.set_max_gap(options.limits.max_gap);
+    let mut tally = StatusTally::default();
+    let policy = (options.status, options.checks);
+    match run_filter_into(&model, &mut data, entry, solver, policy, &mut out, &options.output, &mut tally) {
+        Ok(()) => {
+            out.commit()?;
+            Ok(FilterSummary { estimator: entry.name, tally })
+        }
+        Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
+    }
 }
 
 /// The settings of `entry` from the model file and the command line, in the model file's terms
@@ -206,6 +219,22 @@ pub fn run_filter<R: Read, W: Write>(
     out: &mut W,
     out_path: &Path,
 ) -> Result<FilterSummary, Error> {
+    let mut tally = StatusTally::default();
+    run_filter_into(model, data, entry, solver, (status, checks), out, out_path, &mut tally)?;
+    Ok(FilterSummary { estimator: entry.name, tally })
+}
+
+/// [`run_filter`], counting the steps written in `tally` (also when it fails).
+fn run_filter_into<R: Read, W: Write>(
+    model: &Model,
+    data: &mut DataReader<R>,
+    entry: &'static EstimatorEntry,
+    solver: Option<SmfSolver>,
+    (status, checks): (StatusPolicy, Option<DataChecks>),
+    out: &mut W,
+    out_path: &Path,
+    tally: &mut StatusTally,
+) -> Result<(), Error> {
     let mut est = build(model, entry, solver)?;
     if let Some(checks) = checks {
         est.set_data_checks(checks).map_err(|e| Error::Usage(format!("--on-inconsistent, --gate-probability: {e}")))?;
@@ -216,8 +245,8 @@ pub fn run_filter<R: Read, W: Write>(
 
     let sm = StepModel::new(&model.a, &model.b, &model.c);
     let mut row = DataRow::zeros(model.inputs(), entry.measurement_len(model.outputs()));
-    let mut tally = StatusTally::default();
     let mut last: Option<(u64, DVector<f64>)> = None;
+    let mut largest = LargestCell::default();
     while data.read_row(&mut row)? {
         // A gap (only with `--gaps bridge`): prediction-only steps with the last input held.
         if let Some((last_k, last_u)) = &last {
@@ -237,15 +266,8 @@ pub fn run_filter<R: Read, W: Write>(
         let e = match est.step(&sm, &row.u, &row.y) {
             Ok(e) => e,
             Err(EstimatorError::NumericalFailure(what)) => {
-                // Not this row's numbers: the model makes the estimate overflow or lose
-                // positive definiteness (an unstable `a`, huge noise sizes…).
-                let message = format!(
-                    "step k = {}: numerical failure: {what}; the cause is the model in {} (its `a`, `b`, `c`, `q`, \
-                     `r`, `p0`), not this row's numbers",
-                    row.k,
-                    model.path().display()
-                );
-                return Err(Error::At { at: data.locate(Some(0)), message });
+                let last_u = last.as_ref().map(|(_, u)| u);
+                return Err(blame::numerical_failure(what, &mut est, model, &sm, &row, last_u, &largest, data));
             }
             Err(EstimatorError::Adaptive { index: Some(i), source }) => {
                 // The receiver status columns follow the model's inputs and outputs.
@@ -259,6 +281,7 @@ pub fn run_filter<R: Read, W: Write>(
         columns.write(out, e).map_err(wio)?;
         writeln!(out).map_err(wio)?;
         tally.record(e.status());
+        largest.observe(&row, model.outputs(), data);
         match &mut last {
             Some((k, u)) => {
                 *k = row.k;
@@ -267,7 +290,7 @@ pub fn run_filter<R: Read, W: Write>(
             None => last = Some((row.k, row.u.clone())),
         }
     }
-    Ok(FilterSummary { estimator: entry.name, tally })
+    Ok(())
 }
 
 #[cfg(test)]

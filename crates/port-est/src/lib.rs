@@ -13,16 +13,23 @@
 //! published only when every step succeeded ([`output`]). Malformed files are reported at their
 //! `file:line:column` ([`Error`]). The binary is a thin layer over [`execute`], so that tests
 //! drive the same code.
+//!
+//! Every file read whole and every setting that sizes memory or time is bounded ([`limits`]);
+//! `--on-error keep-partial` keeps the steps before an error in `OUT.partial.csv`; temporary
+//! files are removed on SIGINT/SIGTERM, and those of a killed run are named by the next.
 
 pub mod bds_ins;
+mod blame;
 pub mod cli;
 pub mod data;
 pub mod error;
 pub mod filter;
-mod mhe_table;
+pub mod limits;
+pub mod mhe_table;
 pub mod model;
 pub mod output;
 pub mod run;
+mod settings;
 pub mod truck;
 
 use std::io::{self, Write};
@@ -30,8 +37,9 @@ use std::io::{self, Write};
 pub use cli::{Cli, Command, FilterArgs};
 pub use error::{Error, Location};
 pub use filter::{FilterOptions, FilterSummary, GapPolicy, filter};
-pub use model::{Model, parse_model, read_model};
-pub use run::{StatusPolicy, StatusTally};
+pub use limits::Limits;
+pub use model::{Model, parse_model, parse_model_with, read_model, read_model_with};
+pub use run::{OnError, StatusPolicy, StatusTally};
 
 use estimators::registry;
 
@@ -44,28 +52,38 @@ use estimators::registry;
 /// The command's [`Error`].
 pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Result<(), Error> {
     // A closed stderr is no reason to fail a run whose output is written.
-    let mut report = |what: String, tally: &StatusTally| {
+    let report = |stderr: &mut dyn Write, what: String, tally: &StatusTally| {
         let _ = writeln!(stderr, "{what}");
         for w in tally.warnings() {
             let _ = writeln!(stderr, "{w}");
         }
     };
+    let file_bytes = cli.max_file_size;
     match cli.command {
         Command::Filter(args) => {
-            let options = FilterOptions::from(args);
+            let mut options = FilterOptions::from(args);
+            options.limits.file_bytes = file_bytes;
+            warn_stale(&options.output, stderr);
             let s = filter(&options)?;
             let what = format!("{} steps of {} written to {}", s.tally.steps, s.estimator, options.output.display());
-            report(what, &s.tally);
+            report(stderr, what, &s.tally);
+            remove_stale_partial(&options.output, options.on_error, stderr);
             Ok(())
         }
         Command::Truck(args) => {
-            let options = truck::TruckOptions::from(args);
+            let mut options = truck::TruckOptions::from(args);
+            options.limits.file_bytes = file_bytes;
+            warn_stale(&options.output, stderr);
             let tally = truck::truck(&options)?;
-            report(format!("{} steps of the EKF written to {}", tally.steps, options.output.display()), &tally);
+            let what = format!("{} steps of the EKF written to {}", tally.steps, options.output.display());
+            report(stderr, what, &tally);
+            remove_stale_partial(&options.output, options.on_error, stderr);
             Ok(())
         }
         Command::BdsIns(args) => {
-            let options = bds_ins::BdsInsOptions::from(args);
+            let mut options = bds_ins::BdsInsOptions::from(args);
+            options.limits.file_bytes = file_bytes;
+            warn_stale(&options.output, stderr);
             let s = bds_ins::bds_ins(&options)?;
             let filter = if options.fuzzy { "the fuzzy-adaptive Kalman filter" } else { "the Kalman filter" };
             let what = format!(
@@ -74,13 +92,43 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
                 s.outages,
                 options.output.display()
             );
-            report(what, &s.tally);
+            report(stderr, what, &s.tally);
+            remove_stale_partial(&options.output, options.on_error, stderr);
             Ok(())
         }
         Command::Estimators => match write_estimators(stdout) {
             Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>".as_ref(), e)),
             _ => Ok(()),
         },
+    }
+}
+
+/// Names the temporary files beside `output` that a killed run left (its writer no longer
+/// runs), with how to remove them; they are not removed, as they may hold the only copy of a long
+/// run's rows.
+fn warn_stale(output: &std::path::Path, stderr: &mut dyn Write) {
+    let Ok(stale) = atomic_output::stale_temporaries(output) else { return };
+    for t in stale {
+        let by = t.pid.map_or_else(|| "an earlier run".to_owned(), |pid| format!("process {pid}, no longer running"));
+        let _ = writeln!(
+            stderr,
+            "warning: {} is a temporary file of {} left by an interrupted run ({by}); remove it: rm {}",
+            t.path.display(),
+            output.display(),
+            t.path.display()
+        );
+    }
+}
+
+/// After a successful run with `--on-error keep-partial`: the partial file of an earlier failed
+/// run is superseded by the complete output, so it is removed (and said so).
+fn remove_stale_partial(output: &std::path::Path, on_error: OnError, stderr: &mut dyn Write) {
+    if on_error != OnError::KeepPartial {
+        return;
+    }
+    let partial = output::partial_path(output);
+    if partial.is_file() && std::fs::remove_file(&partial).is_ok() {
+        let _ = writeln!(stderr, "removed {}, the partial output of an earlier run", partial.display());
     }
 }
 

@@ -4,6 +4,11 @@
 //! own validation (`MheSettings::validate`: blocks summing to the horizon, boxes containing 0,
 //! `lambda_v > 1`, a diagonal `r`) runs when such an estimator is built, and its message is
 //! reported at the key it names.
+//!
+//! Resources are checked before anything is allocated for them: the memory the estimator would
+//! take ([`memory_estimate`], computed without overflow) against `--mhe-memory-limit`, block
+//! lengths summed with checked arithmetic, `max_sweeps` against [`MAX_MHE_SWEEPS`]; each refusal
+//! is at the key's `file:line:column`.
 
 use std::ops::Range;
 
@@ -14,6 +19,8 @@ use estimators::mhe::{
 use nalgebra::DVector;
 use serde::Deserialize;
 use toml::Spanned;
+
+use crate::limits::{Limits, MAX_MHE_SWEEPS, show_bytes};
 
 /// The `[mhe]` table as written.
 #[derive(Debug, Deserialize)]
@@ -64,13 +71,99 @@ fn vector(v: &Spanned<Vec<f64>>, key: &str, len: usize, allow_infinite: bool) ->
     Ok(DVector::from_column_slice(x))
 }
 
+/// The bytes a moving-horizon estimator allocates for a model with `n` states, `m` outputs and
+/// `p` inputs, a horizon of `horizon` disturbances in `blocks` blocks: an estimate from above of
+/// its buffers — the condensed window maps and rows, the Hessian-sized matrices of the window and
+/// the box-QP's factor (three, counted as four; six with `clarabel`, whose QP copies them), the
+/// ring buffers of the last `N + 2` steps. `None` when the count overflows `u128`.
+#[must_use]
+pub fn memory_estimate(n: usize, m: usize, p: usize, horizon: usize, blocks: usize, clarabel: bool) -> Option<u128> {
+    let [n, m, p, horizon, blocks] = [n, m, p, horizon, blocks].map(|v| v as u128);
+    let mul = |a: u128, b: u128| a.checked_mul(b);
+    let add = |a: u128, b: u128| a.checked_add(b);
+    // Unknowns of a full window: x_s and one disturbance per block (at most N + 1 vectors).
+    let nz = mul(n, add(1, horizon.max(blocks))?)?;
+    let samples = add(horizon, 1)?;
+    let ring = add(horizon, 2)?;
+    let hessians = mul(if clarabel { 6 } else { 4 }, mul(nz, nz)?)?;
+    let window = mul(mul(samples, nz)?, add(n, m)?)?;
+    let per_step = add(add(mul(2, mul(n, n)?)?, mul(m, n)?)?, add(mul(3, n)?, add(p, mul(4, m)?)?)?)?;
+    let rings = mul(ring, per_step)?;
+    let vectors = add(mul(12, nz)?, mul(samples, add(mul(4, m)?, mul(2, n)?)?)?)?;
+    let f64s = add(add(hessians, window)?, add(rings, vectors)?)?;
+    mul(f64s, 8)
+}
+
 impl MheTable {
-    /// The settings for a model with `n` states and `m` outputs (the prior and the weights are
-    /// the model's `x0`, `p0`, `q`, `r`), and the spans of the keys given (for later complaints).
-    pub(crate) fn settings(&self, n: usize, m: usize) -> Result<(MheSettings, KeySpans), Complaint> {
+    /// Refuses a horizon or block count whose estimator would exceed `limits`, before anything
+    /// is allocated for it: at the key that makes the window large.
+    fn check_resources(
+        &self,
+        n: usize,
+        m: usize,
+        p: usize,
+        default_horizon: usize,
+        limits: &Limits,
+    ) -> Result<(), Complaint> {
+        let horizon = self.horizon.as_ref().map_or(default_horizon, |h| *h.get_ref());
+        let blocks = self.blocks.as_ref().map_or(0, |b| b.get_ref().len());
+        let clarabel = self.inner.as_ref().is_some_and(|i| i.get_ref() == "clarabel")
+            || self.output_constraint.as_ref().is_some_and(|o| *o.get_ref());
+        let estimate = memory_estimate(n, m, p, horizon, blocks, clarabel);
+        let limit = u128::from(limits.mhe_memory_bytes);
+        if estimate.is_some_and(|e| e <= limit) {
+            return Ok(());
+        }
+        let (key, span) = match (&self.horizon, &self.blocks, &self.preset) {
+            (_, Some(b), _) if blocks > horizon => ("blocks", b.span()),
+            (Some(h), ..) => ("horizon", h.span()),
+            (None, Some(b), _) => ("blocks", b.span()),
+            (None, None, Some(pr)) => ("preset", pr.span()),
+            (None, None, None) => ("w_lower", self.w_lower.span()),
+        };
+        let need = estimate.map_or_else(|| "more than 2^128 bytes".to_owned(), |e| format!("about {}", show_bytes(e)));
+        Err((
+            span,
+            format!(
+                "`mhe.{key}`: a horizon of N = {horizon} in {} blocks needs {need} for n = {n} states and m = {m} \
+                 outputs, more than the limit of {} (raise it with --mhe-memory-limit; a step's time grows as the \
+                 cube of the window's n·(N + 1) unknowns)",
+                if blocks == 0 { horizon } else { blocks },
+                show_bytes(limit)
+            ),
+        ))
+    }
+
+    /// The settings for a model with `n` states, `m` outputs and `p` inputs (the prior and the
+    /// weights are the model's `x0`, `p0`, `q`, `r`), and the spans of the keys given (for later
+    /// complaints); the estimator's memory is checked against `limits` first.
+    pub(crate) fn settings(
+        &self,
+        n: usize,
+        m: usize,
+        p: usize,
+        limits: &Limits,
+    ) -> Result<(MheSettings, KeySpans), Complaint> {
         let w = (vector(&self.w_lower, "w_lower", n, true)?, vector(&self.w_upper, "w_upper", n, true)?);
         let v = (vector(&self.v_lower, "v_lower", m, false)?, vector(&self.v_upper, "v_upper", m, false)?);
         let mut s = MheSettings::new(w, v);
+        self.check_resources(n, m, p, s.horizon, limits)?;
+        if let Some(b) = &self.blocks
+            && b.get_ref().iter().try_fold(0_usize, |sum, &d| sum.checked_add(d)).is_none()
+        {
+            return Err((b.span(), "`mhe.blocks`: the block lengths overflow when summed (they must sum to N)".into()));
+        }
+        if let Some(sweeps) = &self.max_sweeps
+            && *sweeps.get_ref() > MAX_MHE_SWEEPS
+        {
+            return Err((
+                sweeps.span(),
+                format!(
+                    "`mhe.max_sweeps` = {}: at most {MAX_MHE_SWEEPS} sweeps (or Newton iterations) per window",
+                    sweeps.get_ref()
+                ),
+            ));
+        }
         let horizon = self.horizon.as_ref().map_or(s.horizon, |h| *h.get_ref());
         s.horizon = horizon;
         s.blocks = match (&self.preset, &self.blocks) {

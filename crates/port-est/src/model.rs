@@ -12,6 +12,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::error::{Error, Location};
+use crate::limits::Limits;
 
 /// The model file, as written.
 #[derive(Debug, Deserialize)]
@@ -153,30 +154,6 @@ pub(crate) fn line_col(text: &str, offset: usize) -> (u64, u64) {
     (line as u64, col as u64)
 }
 
-/// Reads an optional TOML settings file into `T` (`T::default()` without a file); a syntax or
-/// type error is reported at its `file:line:column`. A leading UTF-8 byte-order mark is ignored.
-///
-/// # Errors
-/// [`Error::Io`] if the file cannot be read; [`Error::At`] (or [`Error::File`] without a
-/// position) for what TOML or the settings' types refuse.
-pub(crate) fn read_settings_toml<T: serde::de::DeserializeOwned + Default>(path: Option<&Path>) -> Result<T, Error> {
-    let Some(p) = path else {
-        return Ok(T::default());
-    };
-    let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    toml::from_str(text).map_err(|e| {
-        let message = e.message().to_owned();
-        match e.span() {
-            Some(span) => {
-                let (line, column) = line_col(text, span.start);
-                Error::At { at: Location::new(p, line, column), message }
-            }
-            None => Error::File { path: p.to_owned(), message },
-        }
-    })
-}
-
 /// Reading context: the file's text and name.
 struct Ctx<'t> {
     text: &'t str,
@@ -240,6 +217,14 @@ impl Ctx<'_> {
 /// [`Error::At`] for a TOML syntax error, an unknown, missing (at `1:1`) or ill-typed key, or a
 /// matrix or vector of the wrong size or with a non-finite entry.
 pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
+    parse_model_with(path, text, &Limits::default())
+}
+
+/// As [`parse_model`], with the resource limits of `limits` (the `[mhe]` table's memory).
+///
+/// # Errors
+/// As [`parse_model`], and a horizon or blocks beyond the limits at their key.
+pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Model, Error> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let cx = Ctx { text, path };
     let f: ModelFile = toml::from_str(text).map_err(|e| {
@@ -300,7 +285,7 @@ pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
         Some(table) => {
             let (settings, spans) = table
                 .get_ref()
-                .settings(x0.len(), r.nrows())
+                .settings(x0.len(), r.nrows(), p, limits)
                 .map_err(|(span, message)| Error::at(cx.at(span), message))?;
             let (line, column) = line_col(text, table.span().start);
             keys.push(("mhe", line, column));
@@ -315,22 +300,22 @@ pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
     Ok(Model { a, b, c, q, r, p0, x0, input_range, mhe, source: Source { path: path.to_owned(), keys } })
 }
 
-/// Reads and validates `MODEL.toml` (see [`parse_model`]).
+/// Reads and validates `MODEL.toml` (see [`parse_model`]) with the default [`Limits`].
 ///
 /// # Errors
-/// [`Error::Io`] if the file cannot be read; [`Error::At`] at the first byte that is not UTF-8;
-/// the errors of [`parse_model`].
+/// As [`read_model_with`].
 pub fn read_model(path: &Path) -> Result<Model, Error> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let good = e.utf8_error().valid_up_to();
-        let bytes = e.as_bytes();
-        let prefix = String::from_utf8_lossy(&bytes[..good]);
-        let prefix = prefix.strip_prefix('\u{feff}').unwrap_or(&prefix);
-        let (line, column) = line_col(prefix, prefix.len());
-        Error::at(Location::new(path, line, column), "not valid UTF-8 (the model file must be UTF-8 TOML)")
-    })?;
-    parse_model(path, &text)
+    read_model_with(path, &Limits::default())
+}
+
+/// Reads and validates `MODEL.toml` within `limits` (see [`parse_model_with`]).
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read; [`Error::TooLarge`] beyond `limits.file_bytes`;
+/// [`Error::At`] at the first byte that is not UTF-8; the errors of [`parse_model_with`].
+pub fn read_model_with(path: &Path, limits: &Limits) -> Result<Model, Error> {
+    let text = crate::limits::read_text(path, "model file", limits.file_bytes)?;
+    parse_model_with(path, &text, limits)
 }
 
 #[cfg(test)]

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use atomic_output::AtomicFile;
 
-use crate::error::Error;
+use crate::error::{Error, Kept};
+use crate::run::OnError;
 
 /// An output file being written. [`OutputFile::commit`] publishes it; dropping it without
 /// committing removes the temporary file.
@@ -19,6 +20,22 @@ pub struct OutputFile {
     sink: Option<Sink>,
     /// The path as the user gave it (for messages).
     shown: PathBuf,
+    /// The canonical target.
+    target: PathBuf,
+}
+
+/// `OUT.partial.csv` for `OUT.csv` (`OUT.partial` without an extension): where
+/// `--on-error keep-partial` keeps the steps before an error.
+#[must_use]
+pub fn partial_path(output: &Path) -> PathBuf {
+    let stem = output.file_stem().unwrap_or_default();
+    let mut name = stem.to_owned();
+    name.push(".partial");
+    if let Some(ext) = output.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    output.with_file_name(name)
 }
 
 /// Where the rows go.
@@ -120,7 +137,45 @@ impl OutputFile {
                 refuse(format!("cannot write in directory {}: {e}", dir.display()))
             })?),
         };
-        Ok(Self { sink: Some(sink), shown: output.to_owned() })
+        Ok(Self { sink: Some(sink), shown: output.to_owned(), target })
+    }
+
+    /// The error `e` that stopped a run after `steps` rows, with what `policy` did with them:
+    /// with [`OnError::KeepPartial`] the rows are published as `OUT.partial.csv` (never over one
+    /// of `inputs`), a streamed output keeps what it was sent; otherwise `e` as it is (the
+    /// temporary file is removed).
+    #[must_use]
+    pub fn fail(self, e: Error, steps: u64, policy: OnError, inputs: &[(&'static str, &Path)]) -> Error {
+        if policy != OnError::KeepPartial {
+            return e;
+        }
+        let kept = self.keep_partial(steps, inputs);
+        Error::Stopped { source: Box::new(e), kept }
+    }
+
+    fn keep_partial(mut self, steps: u64, inputs: &[(&'static str, &Path)]) -> Kept {
+        match self.sink.take() {
+            Some(Sink::InPlace(w)) => {
+                let _ = w.into_inner();
+                Kept::Streamed { path: self.shown.clone(), steps }
+            }
+            Some(Sink::Atomic(_)) if steps == 0 => Kept::Nothing { reason: "no step had succeeded".into() },
+            Some(Sink::Atomic(file)) => {
+                let partial = partial_path(&self.target);
+                if let Some((role, _)) = inputs.iter().find(|(_, p)| canonical(p).is_some_and(|c| c == partial)) {
+                    let reason = format!("{} is the {role} file", partial.display());
+                    return Kept::Nothing { reason };
+                }
+                // Named as the user named the output, unless that is a link to elsewhere.
+                let linked = fs::symlink_metadata(&self.shown).is_ok_and(|m| m.file_type().is_symlink());
+                let shown = if linked { partial.clone() } else { partial_path(&self.shown) };
+                match file.commit_as(&partial) {
+                    Ok(()) => Kept::Partial { path: shown, steps },
+                    Err(e) => Kept::Nothing { reason: format!("writing {}: {e}", partial.display()) },
+                }
+            }
+            None => Kept::Nothing { reason: "the output was already written".into() },
+        }
     }
 
     /// The path as given.

@@ -21,6 +21,18 @@ pub enum StatusPolicy {
     Error,
 }
 
+/// What a run does with the steps it wrote before an error (`--on-error`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum OnError {
+    /// Write nothing: the output is published only when every step succeeded (the default).
+    #[default]
+    Discard,
+    /// Keep the steps before the error in `OUT.partial.csv` beside the output (the output itself
+    /// is not written); the error names the file and how many steps it holds.
+    KeepPartial,
+}
+
 /// How many steps of a run ended how.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct StatusTally {

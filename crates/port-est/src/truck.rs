@@ -22,16 +22,19 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use estimators::registry::{self, names};
-use estimators::{AnyEstimator, Setup};
+use estimators::{AnyEstimator, EstimatorError, Setup};
 use models::DiscreteModel;
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
+use toml::Spanned;
 use truck_dynamics::{TruckEkfModel, TruckParams};
 
 use crate::data::{DataReader, DataRow};
 use crate::error::Error;
+use crate::limits::Limits;
 use crate::output::OutputFile;
-use crate::run::{StatusPolicy, StatusTally, enforce};
+use crate::run::{OnError, StatusPolicy, StatusTally, enforce};
+use crate::settings::{self, SettingsFile};
 
 /// What `port-est truck` needs.
 #[derive(Debug, Clone)]
@@ -47,22 +50,26 @@ pub struct TruckOptions {
     /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
     /// data contradict the noise description).
     pub checks: Option<estimators::DataChecks>,
+    /// What an error does with the steps before it.
+    pub on_error: OnError,
+    /// Size limit of the settings file.
+    pub limits: Limits,
 }
 
 /// The settings file, as written.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ConfigFile {
-    ts: Option<f64>,
-    x0: Option<Vec<f64>>,
-    p0: Option<Vec<Vec<f64>>>,
-    q: Option<Vec<Vec<f64>>>,
-    r: Option<Vec<Vec<f64>>>,
+pub(crate) struct ConfigFile {
+    ts: Option<Spanned<f64>>,
+    x0: Option<Spanned<Vec<f64>>>,
+    p0: Option<Spanned<Vec<Vec<f64>>>>,
+    q: Option<Spanned<Vec<Vec<f64>>>>,
+    r: Option<Spanned<Vec<Vec<f64>>>>,
 }
 
 /// The validated settings.
 #[derive(Debug, Clone)]
-struct Settings {
+pub(crate) struct Settings {
     ts: f64,
     x0: Option<DVector<f64>>,
     p0: DMatrix<f64>,
@@ -70,60 +77,151 @@ struct Settings {
     r: DMatrix<f64>,
 }
 
-fn matrix3(path: &Path, key: &str, rows: Vec<Vec<f64>>) -> Result<DMatrix<f64>, Error> {
-    if rows.len() != 3 || rows.iter().any(|r| r.len() != 3) {
-        return Err(Error::File { path: path.to_owned(), message: format!("`{key}` must be 3 rows of 3 numbers") });
-    }
-    Ok(DMatrix::from_fn(3, 3, |i, j| rows[i][j]))
+/// Reads the settings file (`None`: the digest's defaults).
+fn read_config(path: Option<&Path>, limits: &Limits) -> Result<Settings, Error> {
+    let (file, source): (ConfigFile, SettingsFile) = SettingsFile::read(path, limits.file_bytes)?;
+    settings_of(&file, &source)
 }
 
-fn read_config(path: Option<&Path>) -> Result<Settings, Error> {
-    let file: ConfigFile = crate::model::read_settings_toml(path)?;
-    let p = path.unwrap_or(Path::new("<defaults>"));
-    let ts = file.ts.unwrap_or(truck_dynamics::PAPER_SAMPLE_PERIOD);
-    // The digest's §4 settings (assumed there, not the paper's): Q = T diag(qc), R = diag(σ²).
-    let q = match file.q {
-        Some(rows) => matrix3(p, "q", rows)?,
-        None => DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4 * ts, 1e-4 * ts, 1e-6 * ts])),
+/// Checks every setting at its key, then the matrices the filter is given (those derived from
+/// `ts` named by it).
+pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Settings, Error> {
+    let ts = match &file.ts {
+        Some(v) => settings::positive(source, "ts", v)?,
+        None => truck_dynamics::PAPER_SAMPLE_PERIOD,
     };
-    let r = match file.r {
-        Some(rows) => matrix3(p, "r", rows)?,
+    // The digest's §4 settings (assumed there, not the paper's): Q = T diag(qc), R = diag(σ²).
+    let q = match &file.q {
+        Some(v) => settings::covariance(source, "q", v, 3)?,
+        None => {
+            let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4 * ts, 1e-4 * ts, 1e-6 * ts]));
+            settings::check_covariance(&q).map_err(|why| {
+                let span = file.ts.as_ref().map(Spanned::span);
+                source.derived_error(
+                    &[("ts", span)],
+                    format!("the default process noise Q = ts·diag(1e-4, 1e-4, 1e-6) it sets {why}; give `q`"),
+                )
+            })?;
+            q
+        }
+    };
+    let r = match &file.r {
+        Some(v) => settings::covariance(source, "r", v, 3)?,
         None => DMatrix::from_diagonal(&DVector::from_vec(vec![0.05f64.powi(2), 0.05f64.powi(2), 0.002f64.powi(2)])),
     };
-    let p0 = match file.p0 {
-        Some(rows) => matrix3(p, "p0", rows)?,
+    let p0 = match &file.p0 {
+        Some(v) => settings::covariance(source, "p0", v, 3)?,
         None => DMatrix::from_diagonal(&DVector::from_vec(vec![0.01, 0.01, 1e-4])),
     };
-    let x0 = match file.x0 {
-        Some(v) if v.len() == 3 => Some(DVector::from_vec(v)),
-        Some(_) => return Err(Error::File { path: p.to_owned(), message: "`x0` must have 3 entries".into() }),
+    let x0 = match &file.x0 {
+        Some(v) => {
+            let x = settings::vector(source, "x0", v, 3)?;
+            if x[0] <= 0.0 {
+                let message = format!("V_x = {} must be positive (the model drives forward: β divides by V_x)", x[0]);
+                return Err(source.error("x0", v, message));
+            }
+            Some(DVector::from_vec(x))
+        }
         None => None,
     };
-    Ok(Settings { ts, x0, p0, q, r })
+    let model = TruckEkfModel::new(TruckParams::digest_preset(), ts).map_err(|e| {
+        let span = file.ts.as_ref().map(Spanned::span);
+        source.derived_error(&[("ts", span)], format!("truck model: {e}"))
+    })?;
+    let settings = Settings { ts, x0, p0, q, r };
+    // What the filter itself checks, in the file's terms.
+    let probe = setup(&settings, &model, DVector::from_vec(vec![10.0, 0.0, 0.0]));
+    registry::build(names::EKF, probe, None).map_err(|e| {
+        let key = match &e {
+            EstimatorError::NotSymmetric { what }
+            | EstimatorError::NotPositiveDefinite { what }
+            | EstimatorError::NonFinite { what, .. } => match *what {
+                "Q" => Some(("q", file.q.as_ref().map(Spanned::span))),
+                "R" => Some(("r", file.r.as_ref().map(Spanned::span))),
+                "P0" => Some(("p0", file.p0.as_ref().map(Spanned::span))),
+                _ => None,
+            },
+            _ => None,
+        };
+        match key {
+            Some((k, span)) => {
+                source.derived_error(&[(k, span), ("ts", file.ts.as_ref().map(Spanned::span))], e.to_string())
+            }
+            None => Error::Estimator(e),
+        }
+    })?;
+    Ok(settings)
+}
+
+/// The filter's setup from the settings, starting at `x0`.
+fn setup(s: &Settings, model: &TruckEkfModel, x0: DVector<f64>) -> Setup {
+    Setup {
+        x0,
+        p0: s.p0.clone(),
+        process_noise: s.q.clone(),
+        measurement_noise: s.r.clone(),
+        inputs: model.dims().inputs,
+    }
 }
 
 /// Runs the EKF over `options.input` and writes `options.output` (atomically); returns the steps.
 ///
 /// # Errors
 /// Every [`Error`]: the output checks, a malformed settings or data file (at its
-/// `file:line:column`), a step the filter or the model rejects (at its data row).
+/// `file:line:column`), a step the filter or the model rejects (at its data row); with
+/// [`OnError::KeepPartial`] the steps before it are kept in `OUT.partial.csv` and the error says so.
 pub fn truck(options: &TruckOptions) -> Result<StatusTally, Error> {
     let mut inputs: Vec<(&'static str, &Path)> = vec![("input", &options.input)];
     if let Some(c) = &options.config {
         inputs.push(("config", c));
     }
     let mut out = OutputFile::create(&options.output, &inputs)?;
-    let settings = read_config(options.config.as_deref())?;
+    let settings = read_config(options.config.as_deref(), &options.limits)?;
     let mut data = DataReader::open(&options.input, 7, 3)?;
-    let tally = run_truck(
-        &settings_model(&settings)?,
-        &settings,
-        (options.status, options.checks),
-        &mut data,
-        &mut out,
-        &options.output,
-    )?;
-    out.commit()?;
+    let model = settings_model(&settings)?;
+    let mut tally = StatusTally::default();
+    let policy = (options.status, options.checks);
+    match run_truck(&model, &settings, policy, &mut data, &mut out, &options.output, &mut tally) {
+        Ok(()) => {
+            out.commit()?;
+            Ok(tally)
+        }
+        Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
+    }
+}
+
+/// Checks the text of a settings file (named `path` in errors) as `port-est truck --config`
+/// does: every complaint at its key's `file:line:column`.
+///
+/// # Errors
+/// As [`truck`] for a settings file.
+pub fn check_settings(path: &Path, text: &str) -> Result<(), Error> {
+    let (file, source): (ConfigFile, SettingsFile) = SettingsFile::from_text(path, text)?;
+    settings_of(&file, &source).map(drop)
+}
+
+/// The whole of `port-est truck` but the files: the settings of `config` (a settings file's name
+/// and text; `None`: the defaults) and the log `data`, the rows written to `out` (tests and
+/// fuzzing drive it).
+///
+/// # Errors
+/// As [`truck`].
+pub fn run_log<R: Read, W: Write>(
+    config: Option<(&Path, &str)>,
+    data: &mut DataReader<R>,
+    out: &mut W,
+    status: StatusPolicy,
+) -> Result<StatusTally, Error> {
+    let settings = match config {
+        Some((path, text)) => {
+            let (file, source): (ConfigFile, SettingsFile) = SettingsFile::from_text(path, text)?;
+            settings_of(&file, &source)?
+        }
+        None => read_config(None, &Limits::default())?,
+    };
+    let model = settings_model(&settings)?;
+    let mut tally = StatusTally::default();
+    run_truck(&model, &settings, (status, None), data, out, Path::new("<output>"), &mut tally)?;
     Ok(tally)
 }
 
@@ -138,36 +236,38 @@ fn run_truck<R: Read, W: Write>(
     data: &mut DataReader<R>,
     out: &mut W,
     out_path: &Path,
-) -> Result<StatusTally, Error> {
+    tally: &mut StatusTally,
+) -> Result<(), Error> {
     let wio = |e| Error::io(out_path, e);
     writeln!(out, "k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma,status").map_err(wio)?;
     let mut row = DataRow::zeros(7, 3);
     let mut est: Option<AnyEstimator> = None;
-    let mut tally = StatusTally::default();
+    let mut from_row = false;
     while data.read_row(&mut row)? {
         if est.is_none() {
+            from_row = s.x0.is_none();
             let x0 = s.x0.clone().unwrap_or_else(|| DVector::from_vec(vec![row.y[0], 0.0, row.y[2]]));
-            let setup = Setup {
-                x0,
-                p0: s.p0.clone(),
-                process_noise: s.q.clone(),
-                measurement_noise: s.r.clone(),
-                inputs: model.dims().inputs,
-            };
-            let mut ekf = registry::build(names::EKF, setup, None).map_err(Error::Estimator)?;
+            let mut ekf = registry::build(names::EKF, setup(s, model, x0), None).map_err(Error::Estimator)?;
             if let Some(checks) = checks {
                 ekf.set_data_checks(checks).map_err(Error::Estimator)?;
             }
             est = Some(ekf);
         }
         let Some(f) = est.as_mut() else { break };
-        let e = f.step(model, &row.u, &row.y).map_err(|source| Error::Step {
-            at: data.locate(Some(0)),
-            k: row.k,
-            source,
-        })?;
+        let e = match f.step(model, &row.u, &row.y) {
+            Ok(e) => e,
+            Err(source) if from_row && tally.steps == 0 => {
+                // The initial state is this row's measurement: say so, and which setting replaces it.
+                let message = format!(
+                    "step k = {}: {source} (the filter starts from this row's measurement, V_x = y1 = {}, \
+                     V_y = 0, γ = y3 = {}: give `x0` in the settings file, --config, to start elsewhere)",
+                    row.k, row.y[0], row.y[2]
+                );
+                return Err(Error::at(data.locate(Some(8)), message));
+            }
+            Err(source) => return Err(Error::Step { at: data.locate(Some(0)), k: row.k, source }),
+        };
         enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
-        tally.record(e.status());
         let Some(label) = row.k.checked_add(1) else {
             return Err(Error::at(data.locate(Some(0)), format!("k = {} is too large", row.k)));
         };
@@ -186,8 +286,9 @@ fn run_truck<R: Read, W: Write>(
             e.status()
         )
         .map_err(wio)?;
+        tally.record(e.status());
     }
-    Ok(tally)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -220,12 +321,13 @@ mod tests {
     #[test]
     fn the_ekf_tracks_a_logged_slalom() {
         let (text, betas) = log(3.0);
-        let settings = read_config(None).unwrap();
+        let settings = read_config(None, &Limits::default()).unwrap();
         let model = settings_model(&settings).unwrap();
         let mut data = DataReader::from_text(Path::new("truck.csv"), &text, 7, 3).unwrap();
         let mut out = Vec::new();
-        let tally =
-            run_truck(&model, &settings, (StatusPolicy::Warn, None), &mut data, &mut out, Path::new("o.csv")).unwrap();
+        let mut tally = StatusTally::default();
+        run_truck(&model, &settings, (StatusPolicy::Warn, None), &mut data, &mut out, Path::new("o.csv"), &mut tally)
+            .unwrap();
         assert_eq!((tally.steps as usize, tally.unclean()), (betas.len(), 0));
         let out = String::from_utf8(out).unwrap();
         let lines: Vec<&str> = out.lines().collect();
@@ -242,16 +344,25 @@ mod tests {
 
     #[test]
     fn bad_rows_and_settings_are_located() {
-        let settings = read_config(None).unwrap();
+        let settings = read_config(None, &Limits::default()).unwrap();
         let model = settings_model(&settings).unwrap();
-        // V_x = 0 in the first measurement: the model divides by it.
+        // V_x = 0 in the first measurement: the model divides by it, and the filter started there.
         let text = "k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n0,0,0,0,0,0,0,0,0,0,0\n";
         let mut data = DataReader::from_text(Path::new("t.csv"), text, 7, 3).unwrap();
-        let e =
-            run_truck(&model, &settings, (StatusPolicy::Warn, None), &mut data, &mut Vec::new(), Path::new("o.csv"))
-                .unwrap_err()
-                .to_string();
-        assert!(e.starts_with("t.csv:2:1: step k = 0: model: "), "{e}");
+        let mut tally = StatusTally::default();
+        let e = run_truck(
+            &model,
+            &settings,
+            (StatusPolicy::Warn, None),
+            &mut data,
+            &mut Vec::new(),
+            Path::new("o.csv"),
+            &mut tally,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("t.csv:2:17: step k = 0: model: "), "{e}");
+        assert!(e.contains("give `x0` in the settings file"), "{e}");
         // A wrong header names the expected column.
         let e = DataReader::from_text(Path::new("t.csv"), "k,delta\n", 7, 3).unwrap_err().to_string();
         assert!(e.starts_with("t.csv:1:"), "{e}");
@@ -259,10 +370,10 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let cfg = dir.join("c.toml");
         std::fs::write(&cfg, "ts = 0.001\nq = [[1.0, 0.0], [0.0, 1.0]]\n").unwrap();
-        let e = read_config(Some(&cfg)).unwrap_err().to_string();
-        assert!(e.contains("`q` must be 3 rows of 3 numbers"), "{e}");
+        let e = read_config(Some(&cfg), &Limits::default()).unwrap_err().to_string();
+        assert!(e.contains("c.toml:2:5: `q`: must be 3 rows of 3 numbers"), "{e}");
         std::fs::write(&cfg, "ts = \"fast\"\n").unwrap();
-        let e = read_config(Some(&cfg)).unwrap_err().to_string();
+        let e = read_config(Some(&cfg), &Limits::default()).unwrap_err().to_string();
         assert!(e.contains("c.toml:1:6"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

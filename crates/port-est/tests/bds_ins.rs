@@ -26,6 +26,8 @@ fn options(input: PathBuf, output: PathBuf) -> BdsInsOptions {
         rtk_coding: RtkCoding::Paper,
         status: port_est::StatusPolicy::Warn,
         checks: None,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
     }
 }
 

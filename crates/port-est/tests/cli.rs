@@ -17,7 +17,11 @@ fn help_of_the_binary_and_of_filter() {
     let out = port_est(&["--help"]);
     assert!(out.status.success());
     let help = text(&out.stdout);
-    assert!(help.contains("Usage: port-est <COMMAND>") && help.contains("filter") && help.contains("estimators"));
+    // `[OPTIONS]`: the global `--max-file-size`.
+    assert!(
+        help.contains("Usage: port-est [OPTIONS] <COMMAND>") && help.contains("filter") && help.contains("estimators")
+    );
+    assert!(help.contains("--max-file-size <SIZE>"), "{help}");
 
     let out = port_est(&["filter", "--help"]);
     assert!(out.status.success());
@@ -157,4 +161,34 @@ fn non_converged_windows_are_reported_and_can_be_refused() {
     let err = text(&out.stderr);
     assert!(err.contains("ended not-converged and --strict refuses"), "{err}");
     assert!(!out_file.exists(), "nothing is written when a step is refused");
+}
+
+#[test]
+fn the_limits_are_options_of_the_command_line() {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter");
+    let (model, data) = (examples.join("model.toml"), examples.join("data.csv"));
+    let (model, data) = (model.to_str().unwrap(), data.to_str().unwrap());
+    let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-limits");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let out = out_dir.join("out.csv");
+    let out = out.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["filter", "-m", model, "-i", data, "-o", out];
+        args.extend_from_slice(extra);
+        let o = port_est(&args);
+        (o.status.code(), text(&o.stderr))
+    };
+    // Global, before or after the subcommand.
+    let (code, err) = run(&["--max-file-size", "100"]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("larger than 100 B, the limit for a model file (raise it with --max-file-size)"), "{err}");
+    let o = port_est(&["--max-file-size", "1K", "filter", "-m", model, "-i", data, "-o", out]);
+    assert!(text(&o.stderr).contains("larger than 1 KiB"), "{}", text(&o.stderr));
+    let (code, err) = run(&["-e", "rmhe", "--mhe-memory-limit", "1K"]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("`mhe.horizon`: a horizon of N = 6") && err.contains("more than the limit of 1 KiB"), "{err}");
+    let (code, _) = run(&["--max-file-size", "lots"]);
+    assert_eq!(code, Some(2), "a bad size is a usage error");
+    let (code, err) = run(&["--on-error", "keep-partial", "--max-gap", "3"]);
+    assert_eq!((code, err.contains("40 steps")), (Some(0), true), "{err}");
 }

@@ -34,6 +34,8 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
         gaps: port_est::GapPolicy::Error,
         status: port_est::StatusPolicy::Warn,
         checks: None,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
     };
     (dir, options)
 }

@@ -46,6 +46,8 @@ fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
         gaps: GapPolicy::Error,
         status: port_est::StatusPolicy::Warn,
         checks: None,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
     })
     .map(|s| s.tally.steps)
     .map_err(|e| e.to_string());

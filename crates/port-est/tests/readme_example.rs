@@ -48,6 +48,8 @@ fn readme_filter_example_runs_for_every_estimator() {
             gaps: port_est::GapPolicy::Error,
             status: port_est::StatusPolicy::Warn,
             checks: None,
+            on_error: port_est::OnError::Discard,
+            limits: port_est::Limits::default(),
         })
         .unwrap_or_else(|e| panic!("{label}: {e}"));
         assert_eq!(summary.tally.steps, 40, "{label}");

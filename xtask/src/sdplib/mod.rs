@@ -1,6 +1,6 @@
 //! `cargo xtask sdplib [--dir D] [--backend NAME]`: solve the SDPLIB suite, print a table.
 
-use std::path::PathBuf;
+use std::ffi::OsString;
 use std::time::Instant;
 
 pub mod suite;
@@ -8,18 +8,41 @@ pub mod suite;
 use lmi::{backend_by_name, backend_names, read_sdpa_file};
 use suite::{Expected, Verdict, objective_tolerance, sdplib_dir, suite, suite_settings, verdict};
 
-use crate::args::Args;
+use crate::args::{Args, Parsed};
+
+/// `cargo xtask sdplib --help`.
+pub const HELP: &str = "\
+cargo xtask sdplib [--dir D] [--backend NAME]
+
+Solves the SDPLIB suite with every compiled SDP backend (or one) and prints a table: status,
+objective against the reference, relative error, iterations, times; infeasibility certificates
+are checked independently. Exits non-zero when a problem fails.
+
+Options:
+  --dir D          the directory of the SDPLIB problems (default: $SDPLIB_DIR, else ../shared/sdplib)
+  --backend NAME   one backend (faer-ipm; clarabel when built with that feature)
+  -h, --help       this text
+";
 
 /// Runs `cargo xtask sdplib` with the given arguments.
-pub fn run(args: &[String]) -> Result<(), String> {
-    let args = Args::parse(args, &["dir", "backend"], &[])?;
-    let dir = match args.value("dir") {
-        Some(d) => PathBuf::from(d),
+///
+/// # Errors
+/// Bad arguments, a missing suite, a failed problem.
+pub fn run(args: &[OsString]) -> Result<(), String> {
+    let args = match Args::parse(args, &["dir", "backend"], &[])? {
+        Parsed::Run(args) => args,
+        Parsed::Help => {
+            print!("{HELP}");
+            return Ok(());
+        }
+    };
+    let dir = match args.path("dir") {
+        Some(d) => d,
         None => sdplib_dir().ok_or("SDPLIB directory not found: pass --dir or set SDPLIB_DIR")?,
     };
     // A missing directory is named as such (`SuiteError::MissingDir`).
     let problems = suite(&dir).map_err(|e| e.to_string())?;
-    let backends: Vec<String> = match args.value("backend") {
+    let backends: Vec<String> = match args.value("backend")? {
         Some(b) => vec![b.to_owned()],
         None => backend_names().into_iter().map(str::to_owned).collect(),
     };
@@ -95,8 +118,15 @@ mod tests {
     #[test]
     fn a_missing_dir_is_reported_as_such() {
         let dir = std::env::temp_dir().join("xtask-sdplib-no-such-dir");
-        let err = run(&["--dir".to_owned(), dir.display().to_string()]).unwrap_err();
+        let err = run(&["--dir".into(), dir.clone().into_os_string()]).unwrap_err();
         assert!(err.contains(&format!("SDPLIB directory {} does not exist", dir.display())), "{err}");
         assert!(!err.contains("SDPA format error"), "{err}");
+    }
+
+    #[test]
+    fn help_is_an_answer_not_an_unknown_option() {
+        assert_eq!(run(&["--help".into()]), Ok(()));
+        assert_eq!(run(&["--dir".into(), "x".into(), "-h".into()]), Ok(()));
+        assert!(HELP.contains("--backend NAME"));
     }
 }

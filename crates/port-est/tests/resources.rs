@@ -1,0 +1,202 @@
+//! Bounded resources for every setting and file: absurd `[mhe]` horizons and blocks, a `k` that
+//! jumps by billions under `--gaps bridge`, endless model, settings and rule files, and an absurd
+//! defuzzification resolution are refused quickly, at their place, naming the limit.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
+use port_est::truck::{TruckOptions, truck};
+use port_est::{Error, FilterOptions, GapPolicy, Limits, OnError, StatusPolicy, filter, parse_model_with};
+
+const MODEL: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
+b  = [[0.0], [0.01]]
+c  = [[1.0, 0.0]]
+q  = [[1e-6, 0.0], [0.0, 1e-4]]
+r  = [[4e-4]]
+p0 = [[0.25, 0.0], [0.0, 0.25]]
+x0 = [0.0, 0.0]
+[mhe]
+w_lower = [-1e-3, -1e-2]
+w_upper = [1e-3, 1e-2]
+v_lower = [-0.02]
+v_upper = [0.02]
+";
+
+fn dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-resources").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn quickly<T>(what: &str, f: impl FnOnce() -> T) -> T {
+    let t0 = Instant::now();
+    let out = f();
+    assert!(t0.elapsed() < Duration::from_secs(10), "{what} took {:?}", t0.elapsed());
+    out
+}
+
+fn model_error(extra: &str, limits: &Limits) -> String {
+    let text = format!("{MODEL}{extra}\n");
+    quickly(extra, || parse_model_with(Path::new("m.toml"), &text, limits)).unwrap_err().to_string()
+}
+
+#[test]
+fn absurd_horizons_are_refused_at_their_key_with_the_estimate_and_the_limit() {
+    let limits = Limits::default();
+    for horizon in ["100000", "1000000000", "9223372036854775807", "18446744073709551615"] {
+        for preset in ["", "preset = \"rmhe\"", "preset = \"rmhe-op\"", "preset = \"rmhe-of\""] {
+            let e = model_error(&format!("horizon = {horizon}\n{preset}"), &limits);
+            assert!(e.starts_with("m.toml:13:11: `mhe.horizon`: a horizon of N = "), "{horizon} {preset}: {e}");
+            assert!(e.contains("more than the limit of 256 MiB") && e.contains("--mhe-memory-limit"), "{e}");
+            assert!(e.contains("needs about ") || e.contains("more than 2^128 bytes"), "{e}");
+        }
+    }
+    // Blocks that make the window large, without a horizon: at `blocks`.
+    let many = vec!["1"; 200_000].join(", ");
+    let e = model_error(&format!("blocks = [{many}]"), &limits);
+    assert!(e.starts_with("m.toml:13:10: `mhe.blocks`: a horizon of N = 6 in 200000 blocks"), "{e}");
+    // Negative or non-integer horizons are type errors at the value, never a panic.
+    for bad in ["-1", "1e9", "-9223372036854775808"] {
+        let e = model_error(&format!("horizon = {bad}"), &limits);
+        assert!(e.starts_with("m.toml:13:11: "), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn the_memory_limit_is_the_users_to_raise() {
+    let e = model_error("horizon = 2000", &Limits::default());
+    assert!(e.contains("needs about 672.9 MiB"), "{e}");
+    let raised = Limits { mhe_memory_bytes: 4 << 30, ..Limits::default() };
+    let text = format!("{MODEL}horizon = 2000\n");
+    let model = parse_model_with(Path::new("m.toml"), &text, &raised).unwrap();
+    assert_eq!(model.mhe.unwrap().horizon, 2000);
+    // The paper's horizons are far below the default.
+    assert!(parse_model_with(Path::new("m.toml"), &format!("{MODEL}horizon = 60\n"), &Limits::default()).is_ok());
+}
+
+#[test]
+fn sums_and_sweeps_of_user_numbers_are_checked() {
+    let limits = Limits::default();
+    let e = model_error("blocks = [18446744073709551615, 2]", &limits);
+    assert!(e.starts_with("m.toml:13:10: `mhe.blocks`: the block lengths overflow when summed"), "{e}");
+    let e = model_error("max_sweeps = 1000000000000", &limits);
+    assert!(e.starts_with("m.toml:13:14: `mhe.max_sweeps` = 1000000000000: at most 10000"), "{e}");
+    let e = model_error("solver = \"exact-saddle\"\nmax_sweeps = 18446744073709551615", &limits);
+    assert!(e.contains("`mhe.max_sweeps`"), "{e}");
+}
+
+fn filter_options(d: &Path, model: &Path, input: &Path, gaps: GapPolicy, limits: Limits) -> FilterOptions {
+    FilterOptions {
+        model: model.to_owned(),
+        input: input.to_owned(),
+        output: d.join("out.csv"),
+        estimator: "smf".into(),
+        solver: None,
+        gaps,
+        status: StatusPolicy::Warn,
+        checks: None,
+        on_error: OnError::Discard,
+        limits,
+    }
+}
+
+#[test]
+fn bridged_gaps_are_capped_at_the_row_with_the_gap_size() {
+    let d = dir("gaps");
+    let model = d.join("m.toml");
+    std::fs::write(&model, MODEL).unwrap();
+    let input = d.join("d.csv");
+    for (jump, max_gap, ok) in [(1_000_000_001_u64, None, false), (6, Some(3), false), (6, Some(4), true)] {
+        std::fs::write(&input, format!("k,u1,y1\n0,0.1,0.0\n1,0.1,0.0\n{jump},0.1,0.0\n")).unwrap();
+        let limits = Limits { max_gap: max_gap.unwrap_or(Limits::default().max_gap), ..Limits::default() };
+        let r = quickly("a gap", || filter(&filter_options(&d, &model, &input, GapPolicy::Bridge, limits)));
+        if ok {
+            assert_eq!(r.unwrap().tally.steps, jump + 1);
+            continue;
+        }
+        let e = r.unwrap_err().to_string();
+        let missing = jump - 2;
+        let limit = max_gap.unwrap_or(10_000);
+        assert!(e.contains("d.csv:4:1: k jumps from 1 to"), "{e}");
+        assert!(e.contains(&format!("a gap of {missing} missing steps, more than --max-gap {limit}")), "{e}");
+        assert!(!d.join("out.csv").exists());
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn endless_model_settings_and_rule_files_are_refused_at_the_size_limit() {
+    let d = dir("endless");
+    let zero = Path::new("/dev/zero");
+    let data = d.join("d.csv");
+    std::fs::write(&data, "k,u1,y1\n0,0,0\n").unwrap();
+    let e = quickly("model", || filter(&filter_options(&d, zero, &data, GapPolicy::Error, Limits::default())));
+    let e = e.unwrap_err();
+    assert!(matches!(e, Error::TooLarge { .. }), "{e}");
+    assert_eq!(
+        e.to_string(),
+        "/dev/zero: larger than 16 MiB, the limit for a model file (raise it with --max-file-size)"
+    );
+    let truck_options = TruckOptions {
+        input: data.clone(),
+        output: d.join("t.csv"),
+        config: Some(zero.to_owned()),
+        status: StatusPolicy::Warn,
+        checks: None,
+        on_error: OnError::Discard,
+        limits: Limits::default(),
+    };
+    let e = quickly("truck settings", || truck(&truck_options)).unwrap_err().to_string();
+    assert!(e.contains("the limit for a settings file (raise it with --max-file-size)"), "{e}");
+    let bds = |config: Option<&Path>, fis: Option<&Path>| BdsInsOptions {
+        input: data.clone(),
+        output: d.join("b.csv"),
+        config: config.map(Path::to_owned),
+        fis: fis.map(Path::to_owned),
+        fuzzy: true,
+        rtk_coding: RtkCoding::Paper,
+        status: StatusPolicy::Warn,
+        checks: None,
+        on_error: OnError::Discard,
+        limits: Limits { file_bytes: 1 << 20, ..Limits::default() },
+    };
+    let e = quickly("bds settings", || bds_ins(&bds(Some(zero), None))).unwrap_err().to_string();
+    assert!(e.contains("larger than 1 MiB, the limit for a settings file"), "{e}");
+    let e = quickly("rule file", || bds_ins(&bds(None, Some(zero)))).unwrap_err().to_string();
+    assert!(e.contains("larger than 1 MiB, the limit for a rule file"), "{e}");
+    // A regular file just over a (small) limit, and one within it.
+    let model = d.join("m.toml");
+    std::fs::write(&model, MODEL).unwrap();
+    let small = Limits { file_bytes: MODEL.len() as u64 - 1, ..Limits::default() };
+    let e = filter(&filter_options(&d, &model, &data, GapPolicy::Error, small)).unwrap_err();
+    assert!(matches!(e, Error::TooLarge { .. }), "{e}");
+    let fits = Limits { file_bytes: MODEL.len() as u64, ..Limits::default() };
+    assert!(filter(&filter_options(&d, &model, &data, GapPolicy::Error, fits)).is_ok());
+}
+
+#[test]
+fn a_rule_file_asking_for_an_absurd_resolution_is_refused_at_its_line() {
+    let d = dir("resolution");
+    let shipped = include_str!("../../fuzzy-inference/systems/bds_ins.toml");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/bds-ins/data.csv");
+    for setting in ["{ sampled = 10000000000 }", "{ sampled = 1e10 }", "{ grid = 1000000 }"] {
+        let fis = d.join("fis.toml");
+        std::fs::write(&fis, shipped.replace("defuzzifier = \"exact\"", &format!("defuzzifier = {setting}"))).unwrap();
+        let options = BdsInsOptions {
+            input: data.clone(),
+            output: d.join("out.csv"),
+            config: None,
+            fis: Some(fis.clone()),
+            fuzzy: true,
+            rtk_coding: RtkCoding::Paper,
+            status: StatusPolicy::Warn,
+            checks: None,
+            on_error: OnError::Discard,
+            limits: Limits::default(),
+        };
+        let e = quickly(setting, || bds_ins(&options)).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("--fis: {}:8:", fis.display())), "{setting}: {e}");
+    }
+}
