@@ -9,10 +9,21 @@ use pyo3::types::PyDict;
 
 use crate::errors::value_error;
 
-/// The array-like `obj` as a float64 array of any dimension.
+/// The array-like `obj` as an aligned float64 array of any dimension. Arrays that NumPy marks
+/// unaligned (as unpickled from out-of-band buffers, say) are copied first: a view of them would
+/// not be sound.
 fn array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<PyArrayLikeDyn<'py, f64, AllowTypeChange>> {
-    obj.extract::<PyArrayLikeDyn<'py, f64, AllowTypeChange>>()
-        .map_err(|e| value_error(format!("{what} must be an array of real numbers: {e}")))
+    let extract = |o: &Bound<'py, PyAny>| {
+        o.extract::<PyArrayLikeDyn<'py, f64, AllowTypeChange>>()
+            .map_err(|e| value_error(format!("{what} must be an array of real numbers: {e}")))
+    };
+    let a = extract(obj)?;
+    if a.is_aligned() {
+        return Ok(a);
+    }
+    let copy = a.as_any().call_method0("copy")?;
+    let a = extract(&copy)?;
+    if a.is_aligned() { Ok(a) } else { Err(value_error(format!("{what}: could not make an aligned copy"))) }
 }
 
 fn shape_text(shape: &[usize]) -> String {

@@ -105,12 +105,12 @@ pub fn value_error(message: impl Into<String>) -> PyErr {
 pub enum Guarded<T> {
     /// The call ran.
     Ran(T),
-    /// The estimator panicked now or earlier and cannot be used.
+    /// The code panicked (with this message).
     Broken(String),
 }
 
 /// Runs `f` so that a panic inside stays in Rust: it becomes [`Guarded::Broken`] with the panic's
-/// message.
+/// message (the panic hook has printed it to stderr too).
 pub fn guard<T>(f: impl FnOnce() -> T) -> Guarded<T> {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(v) => Guarded::Ran(v),
@@ -120,15 +120,30 @@ pub fn guard<T>(f: impl FnOnce() -> T) -> Guarded<T> {
                 .map(|s| (*s).to_owned())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".to_owned());
-            Guarded::Broken(format!(
-                "internal error in the estimator ({what}); it cannot be used any more: build a new one, and please \
-                 report this"
-            ))
+            Guarded::Broken(what)
         }
     }
 }
 
-/// The Python error of a broken estimator.
+/// The Python error of an internal failure (`message` says what).
 pub fn broken(message: String) -> PyErr {
     EstimationError::new_err(message)
+}
+
+/// The Python error of an estimator that panicked with `what`: it cannot be used any more (its
+/// lock is poisoned).
+pub fn panicked(what: &str) -> PyErr {
+    broken(format!(
+        "internal error in the estimator ({what}); it cannot be used any more: build a new one, and please report \
+         this"
+    ))
+}
+
+/// Runs `f` (binding code outside an estimator call: model evaluations, conversions) so that a
+/// panic inside becomes an `EstimationError` instead of crossing into Python.
+pub fn no_panic<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    match guard(f) {
+        Guarded::Ran(r) => r,
+        Guarded::Broken(what) => Err(broken(format!("internal error ({what}); please report this"))),
+    }
 }

@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{mat_out, square, table, vec_out, vector};
-use crate::errors::{Guarded, broken, estimator_error, guard, value_error};
+use crate::errors::{Guarded, broken, estimator_error, guard, no_panic, panicked, value_error};
 use crate::estimate::Estimate;
 use crate::model::{Model, SharedModel};
 use crate::run::{MAX_RUN_VALUES, RunResult, run_log};
@@ -145,6 +145,17 @@ impl Estimator {
         given: Option<&Bound<'_, PyDict>>,
         file: FileSettings<'_>,
     ) -> PyResult<Self> {
+        no_panic(|| Self::create_unguarded(py, name, model, initial, given, file))
+    }
+
+    fn create_unguarded(
+        py: Python<'_>,
+        name: &str,
+        model: &Bound<'_, Model>,
+        initial: Initial<'_, '_>,
+        given: Option<&Bound<'_, PyDict>>,
+        file: FileSettings<'_>,
+    ) -> PyResult<Self> {
         let entry = registry::lookup(name).map_err(|e| estimator_error(py, &e, None))?;
         let shared = model.get().shared();
         if !entry.needs.is_offered_by(shared.as_ref()) {
@@ -165,7 +176,12 @@ impl Estimator {
                 return Err(value_error(message));
             }
             Guarded::Ran(r) => r.map_err(|e| estimator_error(py, &e, None))?,
-            Guarded::Broken(message) => return Err(broken(message)),
+            Guarded::Broken(what) => {
+                return Err(broken(format!(
+                    "internal error while building {} ({what}); please report this",
+                    entry.name
+                )));
+            }
         };
         let dims = inner.dims();
         Ok(Self { inner: Mutex::new(inner), entry, model: model.clone().unbind(), setup, dims })
@@ -184,8 +200,10 @@ impl Estimator {
         model.map_or_else(|| self.model.get().shared(), |m| m.get().shared())
     }
 
+    /// The length of `y` the estimator consumes (its dims count the fuzzy-adaptive filter's
+    /// receiver status).
     fn measurement_len(&self) -> usize {
-        self.entry.measurement_len(self.dims.outputs)
+        self.dims.outputs
     }
 
     fn input(&self, u: Option<&Bound<'_, PyAny>>) -> PyResult<DVector<f64>> {
@@ -208,7 +226,38 @@ impl Estimator {
         match ran {
             Guarded::Ran(Some(r)) => r.map_err(|e| estimator_error(py, &e, None)),
             Guarded::Ran(None) => Err(self.lock().err().unwrap_or_else(|| broken("the estimator is unusable".into()))),
-            Guarded::Broken(message) => Err(broken(message)),
+            Guarded::Broken(what) => Err(panicked(&what)),
+        }
+    }
+
+    fn run_rows(
+        &self,
+        py: Python<'_>,
+        us: Option<&Bound<'_, PyAny>>,
+        ys: &Bound<'_, PyAny>,
+        model: Option<&Bound<'_, Model>>,
+    ) -> PyResult<RunResult> {
+        let (rows, ys) = table(Some(ys), "ys", None, self.measurement_len())?;
+        if rows.checked_mul(self.dims.states).is_none_or(|v| v > MAX_RUN_VALUES) {
+            return Err(value_error(format!(
+                "a run of {rows} steps of {} states exceeds MAX_RUN_VALUES = {MAX_RUN_VALUES} values per result \
+                 table: split the log into consecutive runs",
+                self.dims.states
+            )));
+        }
+        let (_, us) = table(us, "us", Some(rows), self.dims.inputs)?;
+        let model = self.model_of(model);
+        let ran = py.detach(|| {
+            guard(|| {
+                let mut est = self.inner.lock().ok()?;
+                Some(run_log(&mut est, model.as_ref(), &us, &ys, rows))
+            })
+        });
+        match ran {
+            Guarded::Ran(Some(Ok(out))) => RunResult::from_output(py, out),
+            Guarded::Ran(Some(Err((row, e)))) => Err(estimator_error(py, &e, Some(row))),
+            Guarded::Ran(None) => Err(self.lock().err().unwrap_or_else(|| broken("the estimator is unusable".into()))),
+            Guarded::Broken(what) => Err(panicked(&what)),
         }
     }
 }
@@ -242,16 +291,14 @@ impl Estimator {
         u: Option<&Bound<'_, PyAny>>,
         model: Option<&Bound<'_, Model>>,
     ) -> PyResult<Estimate> {
-        let u = self.input(u)?;
-        self.call(py, model, Call::Predict(u))
+        no_panic(|| self.call(py, model, Call::Predict(self.input(u)?)))
     }
 
     /// Updates with the measurement ``y`` (length ``dim_z``) taken after the last prediction. The
     /// moving-horizon estimators offer ``step`` only (an ``EstimationError`` says so).
     #[pyo3(signature = (y, *, model = None))]
     fn update(&self, py: Python<'_>, y: &Bound<'_, PyAny>, model: Option<&Bound<'_, Model>>) -> PyResult<Estimate> {
-        let y = vector(y, "y", self.measurement_len())?;
-        self.call(py, model, Call::Update(y))
+        no_panic(|| self.call(py, model, Call::Update(vector(y, "y", self.measurement_len())?)))
     }
 
     /// One step: predict with ``u`` (None: zeros), update with ``y``. Either both happen or, on an
@@ -264,9 +311,11 @@ impl Estimator {
         y: &Bound<'_, PyAny>,
         model: Option<&Bound<'_, Model>>,
     ) -> PyResult<Estimate> {
-        let u = self.input(u)?;
-        let y = vector(y, "y", self.measurement_len())?;
-        self.call(py, model, Call::Step(u, y))
+        no_panic(|| {
+            let u = self.input(u)?;
+            let y = vector(y, "y", self.measurement_len())?;
+            self.call(py, model, Call::Step(u, y))
+        })
     }
 
     /// Filters a whole log inside Rust with the GIL released: ``us`` has shape ``(T, dim_u)`` (None
@@ -286,28 +335,7 @@ impl Estimator {
         ys: &Bound<'_, PyAny>,
         model: Option<&Bound<'_, Model>>,
     ) -> PyResult<RunResult> {
-        let (rows, ys) = table(Some(ys), "ys", None, self.measurement_len())?;
-        if rows.checked_mul(self.dims.states).is_none_or(|v| v > MAX_RUN_VALUES) {
-            return Err(value_error(format!(
-                "a run of {rows} steps of {} states exceeds MAX_RUN_VALUES = {MAX_RUN_VALUES} values per result \
-                 table: split the log into consecutive runs",
-                self.dims.states
-            )));
-        }
-        let (_, us) = table(us, "us", Some(rows), self.dims.inputs)?;
-        let model = self.model_of(model);
-        let ran = py.detach(|| {
-            guard(|| {
-                let mut est = self.inner.lock().ok()?;
-                Some(run_log(&mut est, model.as_ref(), &us, &ys, rows))
-            })
-        });
-        match ran {
-            Guarded::Ran(Some(Ok(out))) => RunResult::from_output(py, out),
-            Guarded::Ran(Some(Err((row, e)))) => Err(estimator_error(py, &e, Some(row))),
-            Guarded::Ran(None) => Err(self.lock().err().unwrap_or_else(|| broken("the estimator is unusable".into()))),
-            Guarded::Broken(message) => Err(broken(message)),
-        }
+        no_panic(|| self.run_rows(py, us, ys, model))
     }
 
     /// The current centre (mean), a read-only copy, shape (n,).

@@ -16,7 +16,7 @@ use truck_dynamics::{TruckEkfModel, TruckParams};
 use vessel_dynamics::{DiscreteVessel, Vessel, VesselParams};
 
 use crate::convert::{mat_out, matrix, vec_out, vector};
-use crate::errors::value_error;
+use crate::errors::{no_panic, value_error};
 
 /// A model shared with the estimators (and with worker threads while the GIL is released).
 pub type SharedModel = Arc<dyn AnyModel + Send + Sync>;
@@ -90,6 +90,18 @@ impl Model {
         })
     }
 
+    #[allow(non_snake_case)]
+    fn from_array_likes(A: &Bound<'_, PyAny>, B: &Bound<'_, PyAny>, C: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let a = matrix(A, "A", None, None)?;
+        let n = a.nrows();
+        if a.ncols() != n {
+            return Err(value_error(format!("A must be square, got shape ({n}, {})", a.ncols())));
+        }
+        let b = matrix(B, "B", Some(n), None)?;
+        let c = matrix(C, "C", None, Some(n))?;
+        Self::from_matrices(a, b, c)
+    }
+
     fn build(recipe: Recipe) -> PyResult<Self> {
         let err = |e: &dyn std::fmt::Display| value_error(e.to_string());
         let (inner, description): (SharedModel, String) = match &recipe {
@@ -154,14 +166,7 @@ impl Model {
     #[new]
     #[allow(non_snake_case)]
     fn new(A: &Bound<'_, PyAny>, B: &Bound<'_, PyAny>, C: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let a = matrix(A, "A", None, None)?;
-        let n = a.nrows();
-        if a.ncols() != n {
-            return Err(value_error(format!("A must be square, got shape ({n}, {})", a.ncols())));
-        }
-        let b = matrix(B, "B", Some(n), None)?;
-        let c = matrix(C, "C", None, Some(n))?;
-        Self::from_matrices(a, b, c)
+        no_panic(|| Self::from_array_likes(A, B, C))
     }
 
     /// The truck paper's EKF model (3-axle port truck, Pacejka-89 tyres): state ``[V_x, V_y, gamma]``,
@@ -246,10 +251,12 @@ impl Model {
         x: &Bound<'py, PyAny>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (x, u) = (self.state(x)?, self.input(u)?);
-        let mut out = DVector::zeros(self.model_dims().states);
-        self.inner.discrete().f(&x, &u, &mut out).map_err(model_error)?;
-        vec_out(py, out.as_slice())
+        no_panic(|| {
+            let (x, u) = (self.state(x)?, self.input(u)?);
+            let mut out = DVector::zeros(self.model_dims().states);
+            self.inner.discrete().f(&x, &u, &mut out).map_err(model_error)?;
+            vec_out(py, out.as_slice())
+        })
     }
 
     /// ``h(x, u)``, the measurement of state ``x`` without noise (``u`` defaults to zeros).
@@ -260,10 +267,12 @@ impl Model {
         x: &Bound<'py, PyAny>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (x, u) = (self.state(x)?, self.input(u)?);
-        let mut out = DVector::zeros(self.model_dims().outputs);
-        self.inner.discrete().h(&x, &u, &mut out).map_err(model_error)?;
-        vec_out(py, out.as_slice())
+        no_panic(|| {
+            let (x, u) = (self.state(x)?, self.input(u)?);
+            let mut out = DVector::zeros(self.model_dims().outputs);
+            self.inner.discrete().h(&x, &u, &mut out).map_err(model_error)?;
+            vec_out(py, out.as_slice())
+        })
     }
 
     /// The Jacobian ``F = df/dx`` at ``(x, u)`` (n×n); ValueError for a model without Jacobians.
@@ -274,15 +283,17 @@ impl Model {
         x: &Bound<'py, PyAny>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (x, u) = (self.state(x)?, self.input(u)?);
-        let d = self.model_dims();
-        let m = self
-            .inner
-            .differentiable()
-            .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
-        let mut out = DMatrix::zeros(d.states, d.states);
-        m.f_jacobian(&x, &u, &mut out).map_err(model_error)?;
-        mat_out(py, &out)
+        no_panic(|| {
+            let (x, u) = (self.state(x)?, self.input(u)?);
+            let d = self.model_dims();
+            let m = self
+                .inner
+                .differentiable()
+                .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
+            let mut out = DMatrix::zeros(d.states, d.states);
+            m.f_jacobian(&x, &u, &mut out).map_err(model_error)?;
+            mat_out(py, &out)
+        })
     }
 
     /// The Jacobian ``H = dh/dx`` at ``(x, u)`` (m×n); ValueError for a model without Jacobians.
@@ -293,15 +304,17 @@ impl Model {
         x: &Bound<'py, PyAny>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (x, u) = (self.state(x)?, self.input(u)?);
-        let d = self.model_dims();
-        let m = self
-            .inner
-            .differentiable()
-            .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
-        let mut out = DMatrix::zeros(d.outputs, d.states);
-        m.h_jacobian(&x, &u, &mut out).map_err(model_error)?;
-        mat_out(py, &out)
+        no_panic(|| {
+            let (x, u) = (self.state(x)?, self.input(u)?);
+            let d = self.model_dims();
+            let m = self
+                .inner
+                .differentiable()
+                .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
+            let mut out = DMatrix::zeros(d.outputs, d.states);
+            m.h_jacobian(&x, &u, &mut out).map_err(model_error)?;
+            mat_out(py, &out)
+        })
     }
 
     /// Rebuilds a model from its recipe (pickling).
@@ -322,7 +335,7 @@ impl Model {
             "car" => Recipe::Car { speed: f(0)?, ts: f(1)? },
             _ => return Err(bad()),
         };
-        Self::build(recipe)
+        no_panic(|| Self::build(recipe))
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {

@@ -47,8 +47,8 @@ pub fn run_log(
     rows: usize,
 ) -> Result<RunOutput, (usize, EstimatorError)> {
     let d = est.dims();
-    let (n, p) = (d.states, d.inputs);
-    let m = est.entry().measurement_len(d.outputs);
+    // (The estimator's measurement length: the fuzzy-adaptive filter's counts its receiver status.)
+    let (n, p, m) = (d.states, d.inputs, d.outputs);
     let kind = est.estimate().kind();
     let names = est.estimate().details().field_names();
     let mut out = RunOutput {
