@@ -3,7 +3,7 @@
 //! Always run through the alias in `.cargo/config.toml`, which builds it optimised, so that the
 //! numbers and timings it prints never come from a debug build.
 
-use xtask::{reproduce, sdplib};
+use xtask::{reproduce, sdplib, test_suite};
 
 use std::process::ExitCode;
 
@@ -17,6 +17,10 @@ Commands:
                          (default DIR: out/reproduce)
   sdplib [--dir D] [--backend NAME]
                          Solve the SDPLIB suite and print a table (default: every compiled backend)
+  test [--rust-only | --python-only] [CARGO TEST ARGS...]
+                         Every test: `cargo test --workspace ARGS`, then the Python package's tests
+                         (a virtual environment in target/python-venv with the pinned requirements
+                         of crates/port-estimation-py, the package built by maturin, pytest)
   help                   This text
 ";
 
@@ -27,6 +31,7 @@ fn main() -> ExitCode {
     let result = match command.as_deref() {
         Some("reproduce") => reproduce::run(&rest),
         Some("sdplib") => sdplib::run(&rest),
+        Some("test") => test_suite::run_tests(&rest),
         Some("filter") => {
             Err("`cargo xtask filter` moved to the installable CLI: `cargo run -p port-est -- filter …` \
                                (or `cargo install --path crates/port-est`, then `port-est filter …`)"
