@@ -157,3 +157,18 @@ def test_the_type_stubs_cover_the_native_module():
             own = {a for a in vars(obj) if not a.startswith("_") or a in ("__len__",)}
             assert own <= stubs[name], f"{name}: {own - stubs[name]} not in the stub"
     assert (PACKAGE / "py.typed").exists()
+
+
+def test_the_readme_examples_run(tmp_path, monkeypatch):
+    """The Python examples of the workspace's README and of this package's (not the cluster one)."""
+    monkeypatch.chdir(tmp_path)
+    for readme in (ROOT / "README.md", PACKAGE.parents[1] / "README.md"):
+        blocks = readme.read_text().split("```python\n")[1:]
+        ran = 0
+        for block in blocks:
+            code = block.split("```", 1)[0]
+            if "Client(" in code:
+                continue
+            exec(compile(code, str(readme), "exec"), {})
+            ran += 1
+        assert ran, readme
