@@ -75,7 +75,11 @@ pub fn venv_python(venv: &Path) -> PathBuf {
 
 /// Runs `cmd`, echoing it; `Err(what)` when it cannot start or fails.
 fn run(cmd: &mut Command, what: &str) -> Result<(), String> {
-    let shown = format!("{cmd:?}").replace('"', "");
+    let shown = std::iter::once(cmd.get_program())
+        .chain(cmd.get_args())
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ");
     eprintln!("==> {shown}");
     match cmd.status() {
         Ok(s) if s.success() => Ok(()),
@@ -96,17 +100,20 @@ fn succeeds(cmd: &mut Command) -> bool {
 pub fn run_tests(args: &[String]) -> Result<(), String> {
     let plan = TestPlan::parse(args)?;
     let root = root();
+    let mut failures = Vec::new();
     if plan.rust {
         let cargo = std::env::var_os("CARGO").unwrap_or_else(|| OsString::from("cargo"));
-        run(
+        let rust = run(
             Command::new(cargo).current_dir(&root).args(["test", "--workspace"]).args(&plan.cargo_args),
             "the Rust tests failed",
-        )?;
+        );
+        failures.extend(rust.err());
     }
+    // The Python half runs even when the Rust half failed: one run reports both.
     if plan.python {
-        python_tests(&root)?;
+        failures.extend(python_tests(&root).err());
     }
-    Ok(())
+    if failures.is_empty() { Ok(()) } else { Err(failures.join("\n")) }
 }
 
 /// Steps 1–4 of the module documentation.

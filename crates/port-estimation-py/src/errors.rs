@@ -102,6 +102,7 @@ pub fn value_error(message: impl Into<String>) -> PyErr {
 }
 
 /// What a guarded call returns: the estimator's result, or why it could not run.
+#[non_exhaustive]
 pub enum Guarded<T> {
     /// The call ran.
     Ran(T),

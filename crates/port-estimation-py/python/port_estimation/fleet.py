@@ -17,8 +17,9 @@ the estimator's own numbers
     How each step ended.
 
 Each output is written to a temporary file beside it and renamed, so a reader never sees half a
-file. A log longer than ``MAX_RUN_VALUES / n`` rows is filtered in consecutive pieces (the same
-numbers as one run) and written piece by piece, so memory stays bounded.
+file. A log is filtered in consecutive pieces (the same numbers as one run) and written piece by
+piece (``DEFAULT_CHUNK_ROWS`` rows at a time), so a task's memory stays bounded whatever the length
+of its log.
 
 On a cluster::
 
@@ -44,9 +45,13 @@ import numpy as np
 
 from ._native import MAX_RUN_VALUES, Estimator, Model, ModelFile
 
-__all__ = ["filter_log", "filter_logs", "log_columns", "read_log", "write_log"]
+__all__ = ["DEFAULT_CHUNK_ROWS", "filter_log", "filter_logs", "log_columns", "read_log", "write_log"]
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+#: Rows per ``run`` call and per written piece unless ``chunk_rows`` says otherwise: 2^20 rows keep a
+#: task's results near ``3 * 8 * 2^20 * n`` bytes (100 MB for n = 4) whatever the log's length.
+DEFAULT_CHUNK_ROWS = 1 << 20
 
 
 def log_columns(inputs: int, measurements: int) -> list[str]:
@@ -151,7 +156,7 @@ def _filter_one(path: str, out_path: str, spec: Mapping[str, Any]) -> dict[str, 
     start = time.perf_counter()
     est = _build(spec)
     k, us, ys = read_log(path, inputs=est.dim_u, measurements=est.dim_z)
-    chunk = spec["chunk_rows"] or max(1, MAX_RUN_VALUES // est.dim_x)
+    chunk = spec["chunk_rows"] or max(1, min(DEFAULT_CHUNK_ROWS, MAX_RUN_VALUES // est.dim_x))
     counts = {"steps": 0, "unclean": 0}
 
     def pieces():
@@ -245,7 +250,8 @@ def filter_logs(
     client : dask.distributed.Client, optional
         Run on this cluster, one task per log; None filters the logs in this process, in order.
     chunk_rows : int, optional
-        Rows per ``run`` call and per written piece (default: as many as ``MAX_RUN_VALUES`` allows).
+        Rows per ``run`` call and per written piece (default ``DEFAULT_CHUNK_ROWS``, fewer if
+        ``MAX_RUN_VALUES`` demands).
 
     Returns
     -------
