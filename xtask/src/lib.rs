@@ -5,3 +5,4 @@ pub mod args;
 
 pub mod reproduce;
 pub mod sdplib;
+pub mod test_suite;

@@ -4,7 +4,7 @@
 //! numbers and timings it prints never come from a debug build. Arguments are taken as the
 //! operating system gives them (paths need not be UTF-8); each command answers `--help`.
 
-use xtask::{reproduce, sdplib};
+use xtask::{reproduce, sdplib, test_suite};
 
 use std::ffi::OsString;
 use std::process::ExitCode;
@@ -19,6 +19,10 @@ Commands:
                          (default DIR: out/reproduce)
   sdplib [--dir D] [--backend NAME]
                          Solve the SDPLIB suite and print a table (default: every compiled backend)
+  test [--rust-only | --python-only] [CARGO TEST ARGS...]
+                         Every test: `cargo test --workspace ARGS`, then the Python package's tests
+                         (a virtual environment in target/python-venv, the package built by maturin,
+                         pytest)
   help [COMMAND]         This text, or a command's (as COMMAND --help)
 ";
 
@@ -34,12 +38,14 @@ fn main() -> ExitCode {
     let result = match command.as_ref().map(|c| c.to_str()) {
         Some(Some("reproduce")) => reproduce::run(&rest),
         Some(Some("sdplib")) => sdplib::run(&rest),
+        Some(Some("test")) => test_suite::run_tests(&rest),
         Some(Some("filter")) => Err("`cargo xtask filter` moved to the installable CLI: `cargo run -p port-est -- \
                                      filter …` (or `cargo install --path crates/port-est`, then `port-est filter …`)"
             .to_owned()),
         Some(Some("help")) => match rest.first().and_then(|c| c.to_str()) {
             Some("reproduce") => reproduce::run(&help),
             Some("sdplib") => sdplib::run(&help),
+            Some("test") => test_suite::run_tests(&help),
             _ => {
                 print!("{HELP}");
                 Ok(())

@@ -7,8 +7,8 @@
 //!   must be added to [`LAYERS`].
 //! * **Rooms of one job.** No Rust source file of the repository has more than 1 000 lines.
 //! * **One registry.** Only `estimators::registry` dispatches on estimator names: library code of
-//!   the command line and of the reproduction compares, matches or looks up no estimator name
-//!   written as a literal (it uses `registry::names` or the registry's rows).
+//!   the command line, of the reproduction and of the Python binding compares, matches or looks up
+//!   no estimator name written as a literal (it uses `registry::names` or the registry's rows).
 //! * **No unwrap on input.** Library code (`crates/*/src`, outside `#[cfg(test)]` modules) has no
 //!   `.unwrap()` or `.expect(` unless the line or the one above carries a
 //!   `// tidy: invariant — <why it cannot fail>` comment.
@@ -42,6 +42,10 @@ const LAYERS: &[(&str, &[&str])] = &[
             "fuzzy-inference",
             "atomic-output",
         ],
+    ),
+    (
+        "port-estimation-py",
+        &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "port-est", "*-dynamics", "fuzzy-inference"],
     ),
 ];
 
@@ -110,6 +114,8 @@ fn layering_rules_reject_what_the_architecture_forbids() {
     assert!(!allowed(layer_of("estimators").unwrap(), "carrier-dynamics"));
     assert!(!allowed(layer_of("truck-dynamics").unwrap(), "estimators"));
     assert!(allowed(layer_of("port-est").unwrap(), "truck-dynamics"));
+    assert!(allowed(layer_of("port-estimation-py").unwrap(), "port-est"));
+    assert!(!allowed(layer_of("port-est").unwrap(), "port-estimation-py"));
     assert!(layer_of("some-new-crate").is_none());
 }
 
@@ -246,7 +252,7 @@ fn name_dispatches(text: &str, names: &[&str]) -> Vec<usize> {
 fn only_the_registry_dispatches_on_estimator_names() {
     let names: Vec<&str> = estimators::registry::ESTIMATORS.iter().map(|e| e.name).collect();
     let mut files = Vec::new();
-    for dir in ["crates/port-est/src", "xtask/src", "crates/vessel-control/src"] {
+    for dir in ["crates/port-est/src", "xtask/src", "crates/vessel-control/src", "crates/port-estimation-py/src"] {
         rust_files(&root().join(dir), &mut files);
     }
     assert!(files.len() > 20, "found only {} files", files.len());

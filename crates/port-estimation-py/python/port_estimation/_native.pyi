@@ -1,0 +1,273 @@
+"""Type stubs of the native module ``port_estimation._native`` (the Rust binding).
+
+The documentation is in the docstrings of the module itself: ``help(port_estimation.KalmanFilter)``.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Final, Literal, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+PathLike = Union[str, os.PathLike[str]]
+Kind = Literal["gaussian", "guaranteed ellipsoid", "point"]
+Capability = Literal["linear", "differentiable", "discrete"]
+
+MAX_RUN_VALUES: Final[int]
+__version__: Final[str]
+
+class EstimationError(Exception):
+    row: int | None
+
+class NumericalError(EstimationError): ...
+
+class InconsistentDataError(EstimationError):
+    step: int
+    # The set-membership filter's proof: the separating distance.
+    excess: float
+    # The Gaussian filters' innovation gate: NIS, its chi-squared threshold and probability.
+    nis: float
+    threshold: float
+    probability: float
+
+class Model:
+    def __init__(self, A: ArrayLike, B: ArrayLike, C: ArrayLike) -> None: ...
+    @staticmethod
+    def truck(ts: float = 0.001) -> Model: ...
+    @staticmethod
+    def vessel(ts: float = 0.1, rk4_substeps: int | None = None) -> Model: ...
+    @staticmethod
+    def carrier(speed: float = 6.0, load: int = 1, ts: float = 0.001) -> Model: ...
+    @staticmethod
+    def car(speed: float = 25.0, ts: float = 0.5) -> Model: ...
+    @property
+    def dims(self) -> tuple[int, int, int]: ...
+    @property
+    def capability(self) -> Capability: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def A(self) -> FloatArray | None: ...
+    @property
+    def B(self) -> FloatArray | None: ...
+    @property
+    def C(self) -> FloatArray | None: ...
+    def f(self, x: ArrayLike, u: ArrayLike | None = None) -> FloatArray: ...
+    def h(self, x: ArrayLike, u: ArrayLike | None = None) -> FloatArray: ...
+    def F(self, x: ArrayLike, u: ArrayLike | None = None) -> FloatArray: ...
+    def H(self, x: ArrayLike, u: ArrayLike | None = None) -> FloatArray: ...
+    @staticmethod
+    def _restore(kind: str, args: tuple[Any, ...]) -> Model: ...
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
+
+class ModelFile:
+    def estimator(self, name: str = "smf", **settings: Any) -> Estimator: ...
+    @property
+    def model(self) -> Model: ...
+    @property
+    def x0(self) -> FloatArray: ...
+    @property
+    def P0(self) -> FloatArray: ...
+    @property
+    def Q(self) -> FloatArray: ...
+    @property
+    def R(self) -> FloatArray: ...
+    @property
+    def u_lower(self) -> FloatArray | None: ...
+    @property
+    def u_upper(self) -> FloatArray | None: ...
+    @property
+    def has_mhe(self) -> bool: ...
+    @property
+    def path(self) -> str: ...
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
+
+class Estimate:
+    @property
+    def kind(self) -> Kind: ...
+    @property
+    def center(self) -> FloatArray: ...
+    @property
+    def shape(self) -> FloatArray: ...
+    @property
+    def lower(self) -> FloatArray | None: ...
+    @property
+    def upper(self) -> FloatArray | None: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def clean(self) -> bool: ...
+    @property
+    def guaranteed(self) -> bool: ...
+    @property
+    def details(self) -> dict[str, float | None]: ...
+
+class RunResult:
+    @property
+    def center(self) -> FloatArray: ...
+    @property
+    def lower(self) -> FloatArray: ...
+    @property
+    def upper(self) -> FloatArray: ...
+    @property
+    def trace(self) -> FloatArray: ...
+    @property
+    def status(self) -> list[str]: ...
+    @property
+    def clean(self) -> BoolArray: ...
+    @property
+    def details(self) -> dict[str, FloatArray]: ...
+    @property
+    def kind(self) -> Kind: ...
+    def __len__(self) -> int: ...
+
+class Estimator:
+    def __init__(
+        self,
+        name: str,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        **settings: Any,
+    ) -> None: ...
+    def predict(self, u: ArrayLike | None = None, *, model: Model | None = None) -> Estimate: ...
+    def update(self, y: ArrayLike, *, model: Model | None = None) -> Estimate: ...
+    def step(self, u: ArrayLike | None, y: ArrayLike, *, model: Model | None = None) -> Estimate: ...
+    def run(self, us: ArrayLike | None, ys: ArrayLike, *, model: Model | None = None) -> RunResult: ...
+    def set_data_checks(
+        self,
+        policy: Literal["error", "flag", "restart", "off"] = "error",
+        *,
+        gate_probability: float | None = None,
+    ) -> None: ...
+    @property
+    def x(self) -> FloatArray: ...
+    @property
+    def P(self) -> FloatArray: ...
+    @property
+    def estimate(self) -> Estimate: ...
+    @property
+    def Q(self) -> FloatArray: ...
+    @property
+    def R(self) -> FloatArray: ...
+    @property
+    def dim_x(self) -> int: ...
+    @property
+    def dim_u(self) -> int: ...
+    @property
+    def dim_z(self) -> int: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def kind(self) -> Kind: ...
+    @property
+    def model(self) -> Model: ...
+
+class KalmanFilter(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+    ) -> None: ...
+
+class ExtendedKalmanFilter(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+    ) -> None: ...
+
+class UnscentedKalmanFilter(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        alpha: float | None = None,
+        beta: float | None = None,
+        kappa: float | None = None,
+    ) -> None: ...
+
+class SetMembershipFilter(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        solver: str | None = None,
+        inconsistency: Literal["error", "flag", "restart"] | None = None,
+    ) -> None: ...
+
+class MovingHorizonEstimator(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        robust: bool = True,
+        **settings: Any,
+    ) -> None: ...
+
+class NonlinearMHE(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        **settings: Any,
+    ) -> None: ...
+
+class FuzzyKalmanFilter(Estimator):
+    def __init__(
+        self,
+        model: Model,
+        *,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        fis: PathLike | None = None,
+        horizontal: tuple[int, int] | None = None,
+    ) -> None: ...
+
+class EstimatorRow(TypedDict):
+    name: str
+    kind: Kind
+    summary: str
+    needs: Capability
+    settings: str
+    keywords: list[str]
+    extra_measurements: int
+
+def estimators() -> list[EstimatorRow]: ...
+def solvers() -> list[str]: ...
+def read_model(path: PathLike) -> ModelFile: ...
+def parse_model(text: str, path: PathLike = "<string>") -> ModelFile: ...

@@ -1,0 +1,159 @@
+//! What Python sees when something goes wrong: `ValueError` for bad input (dimensions, NaN,
+//! matrices that are not symmetric positive definite, unknown names, bad settings), the package's
+//! `EstimationError` and its subclasses `NumericalError` and `InconsistentDataError` for what the
+//! estimation itself runs into, and never a Rust panic (every call into the estimators runs under
+//! [`std::panic::catch_unwind`]; an estimator that panicked is refused from then on).
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use estimators::EstimatorError;
+use models::ModelError;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::prelude::*;
+
+create_exception!(
+    port_estimation,
+    EstimationError,
+    PyException,
+    "Base class of the errors of the estimation itself (bad input raises ValueError instead).\n\n\
+     Raised as such when an estimator cannot do what was asked (an update without the prediction it \
+     is joint with, an operation the estimator does not offer, an SDP backend that cannot be set up) or \
+     failed internally. After any exception the estimator's state is what it was before the call."
+);
+create_exception!(
+    port_estimation,
+    NumericalError,
+    EstimationError,
+    "A step failed numerically: the estimate overflowed or a covariance or shape lost positive \
+     definiteness (usually an unstable model or noise sizes far out of scale). The estimator is \
+     unchanged."
+);
+create_exception!(
+    port_estimation,
+    InconsistentDataError,
+    EstimationError,
+    "The measurement of a step provably contradicts the predicted set and the noise bounds of a \
+     set-membership filter (an outlier, a biased sensor, noise beyond its bound or a wrong model).\n\n\
+     Attributes\n----------\nstep : int\n    The filter's step (1 for its first step).\nexcess : float\n    \
+     How far outside, relative to the set's extent in the separating direction.\nrow : int or None\n    \
+     The row of the log in ``run`` (None for a single step).\n\n\
+     The filter is unchanged; build it with ``inconsistency=\"flag\"`` to publish such steps marked \
+     inconsistent instead, or ``\"restart\"`` to move the set to the data."
+);
+
+/// Whether an estimator error is the caller's input (a `ValueError`).
+pub fn is_bad_input(e: &EstimatorError) -> bool {
+    match e {
+        EstimatorError::DimensionMismatch { .. }
+        | EstimatorError::NonFinite { .. }
+        | EstimatorError::NotSymmetric { .. }
+        | EstimatorError::NotPositiveDefinite { .. }
+        | EstimatorError::InvalidInputBounds { .. }
+        | EstimatorError::InputOutsideBounds { .. }
+        | EstimatorError::EmptySystem(_)
+        | EstimatorError::UnknownEstimator { .. }
+        | EstimatorError::UnknownSolver { .. }
+        | EstimatorError::MissingSetting { .. }
+        | EstimatorError::InvalidSetting { .. }
+        | EstimatorError::InvalidConfiguration { .. }
+        | EstimatorError::ModelLacksCapability { .. }
+        | EstimatorError::WrongSettings { .. }
+        | EstimatorError::Adaptive { .. } => true,
+        EstimatorError::Model(m) => !is_numerical_model_error(m),
+        _ => false,
+    }
+}
+
+/// Model errors that are numerical failures rather than bad input.
+fn is_numerical_model_error(e: &ModelError) -> bool {
+    matches!(
+        e,
+        ModelError::ExponentialOverflow { .. } | ModelError::SingularPadeDenominator | ModelError::Diverged { .. }
+    )
+}
+
+/// The Python exception for an estimator's error; `row` is the log row of a whole-log run.
+pub fn estimator_error(py: Python<'_>, e: &EstimatorError, row: Option<usize>) -> PyErr {
+    let at = row.map(|r| format!("row {r}: ")).unwrap_or_default();
+    let message = format!("{at}{e}");
+    let err = match e {
+        EstimatorError::InconsistentData { step, excess } => {
+            let err = InconsistentDataError::new_err(message);
+            let value = err.value(py);
+            // Setting attributes on a fresh exception instance cannot fail short of memory
+            // exhaustion; the exception is still raised if it did.
+            let _ = value.setattr("step", *step);
+            let _ = value.setattr("excess", *excess);
+            err
+        }
+        EstimatorError::Outlier { step, nis, threshold, probability } => {
+            let err = InconsistentDataError::new_err(message);
+            let value = err.value(py);
+            let _ = value.setattr("step", *step);
+            let _ = value.setattr("nis", *nis);
+            let _ = value.setattr("threshold", *threshold);
+            let _ = value.setattr("probability", *probability);
+            err
+        }
+        EstimatorError::NumericalFailure(_) => NumericalError::new_err(message),
+        EstimatorError::Model(m) if is_numerical_model_error(m) => NumericalError::new_err(message),
+        e if is_bad_input(e) => PyValueError::new_err(message),
+        _ => EstimationError::new_err(message),
+    };
+    let _ = err.value(py).setattr("row", row);
+    err
+}
+
+/// A `ValueError` with `message`.
+pub fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}
+
+/// What a guarded call returns: the estimator's result, or why it could not run.
+#[non_exhaustive]
+pub enum Guarded<T> {
+    /// The call ran.
+    Ran(T),
+    /// The code panicked (with this message).
+    Broken(String),
+}
+
+/// Runs `f` so that a panic inside stays in Rust: it becomes [`Guarded::Broken`] with the panic's
+/// message (the panic hook has printed it to stderr too).
+pub fn guard<T>(f: impl FnOnce() -> T) -> Guarded<T> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(v) => Guarded::Ran(v),
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".to_owned());
+            Guarded::Broken(what)
+        }
+    }
+}
+
+/// The Python error of an internal failure (`message` says what).
+pub fn broken(message: String) -> PyErr {
+    EstimationError::new_err(message)
+}
+
+/// The Python error of an estimator that panicked with `what`: it cannot be used any more (its
+/// lock is poisoned).
+pub fn panicked(what: &str) -> PyErr {
+    broken(format!(
+        "internal error in the estimator ({what}); it cannot be used any more: build a new one, and please report \
+         this"
+    ))
+}
+
+/// Runs `f` (binding code outside an estimator call: model evaluations, conversions) so that a
+/// panic inside becomes an `EstimationError` instead of crossing into Python.
+pub fn no_panic<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    match guard(f) {
+        Guarded::Ran(r) => r,
+        Guarded::Broken(what) => Err(broken(format!("internal error ({what}); please report this"))),
+    }
+}

@@ -1,0 +1,356 @@
+//! Keyword settings → the registry's typed [`EstimatorSettings`], chosen by the row's
+//! [`SettingsKind`] (never by the estimator's name): what a Python caller writes as
+//! `Estimator(name, model, solver="faer-ipm")` or `horizon=10`. Unknown keywords are refused
+//! with the list of those the estimator takes.
+
+use estimators::mhe::{
+    ArrivalRecursion, BlockWeighting, BlockingPreset, MheCost, MheSettings, NonlinearArrival, NonlinearPrior,
+    PriorMean, WindowSolver,
+};
+use estimators::registry::{
+    EstimatorEntry, EstimatorSettings, FuzzyAdaptiveSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
+};
+use estimators::{Dims, InconsistencyPolicy, UkfParams};
+use fuzzy_inference::FuzzySystem;
+use nalgebra::DVector;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::bound_vector;
+use crate::errors::value_error;
+
+/// What a model file of `port-est` contributes to an estimator's settings (its input range and
+/// its `[mhe]` table); keywords override it.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FileSettings<'a> {
+    /// `u_lower`, `u_upper`.
+    pub input_range: Option<&'a (DVector<f64>, DVector<f64>)>,
+    /// The `[mhe]` table.
+    pub mhe: Option<&'a MheSettings>,
+    /// The file, to report an estimator's complaint at the key it is about.
+    pub source: Option<&'a port_est::Model>,
+}
+
+/// The keywords each kind of settings takes (for error messages and `estimators()`).
+pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
+    match kind {
+        SettingsKind::None => &[],
+        SettingsKind::SetMembership => &["solver", "inconsistency"],
+        SettingsKind::SetMembershipInputBox => &["solver", "inconsistency", "u_lower", "u_upper"],
+        SettingsKind::MovingHorizon => &[
+            "w_lower",
+            "w_upper",
+            "v_lower",
+            "v_upper",
+            "horizon",
+            "preset",
+            "blocks",
+            "block_weighting",
+            "lambda_v",
+            "arrival",
+            "theta",
+            "prior_mean",
+            "window_solver",
+            "max_sweeps",
+            "tolerance",
+        ],
+        SettingsKind::Unscented => &["alpha", "beta", "kappa"],
+        SettingsKind::NonlinearMovingHorizon => &[
+            "horizon",
+            "max_iterations",
+            "tolerance",
+            "arrival",
+            "alpha",
+            "beta",
+            "kappa",
+            "prior",
+            "w_lower",
+            "w_upper",
+            "v_lower",
+            "v_upper",
+        ],
+        SettingsKind::FuzzyAdaptive => &["fis", "fis_toml", "horizontal"],
+        _ => &[],
+    }
+}
+
+/// The keyword arguments, consumed one by one; what is left over is an error.
+struct Kwargs<'py> {
+    dict: Bound<'py, PyDict>,
+}
+
+impl<'py> Kwargs<'py> {
+    fn new(py: Python<'py>, given: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
+        Ok(Self { dict: given.map_or_else(|| Ok(PyDict::new(py)), |d| d.copy())? })
+    }
+
+    /// The value of `key` (None when absent or given as None).
+    fn take(&self, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let value = self.dict.get_item(key)?;
+        if value.is_some() {
+            self.dict.del_item(key)?;
+        }
+        Ok(value.filter(|v| !v.is_none()))
+    }
+
+    fn extract<T: for<'a> FromPyObject<'a, 'py>>(&self, key: &str, what: &str) -> PyResult<Option<T>> {
+        self.take(key)?
+            .map(|v| v.extract::<T>().map_err(|_| value_error(format!("setting {key} must be {what}, got {v}"))))
+            .transpose()
+    }
+
+    fn float(&self, key: &str) -> PyResult<Option<f64>> {
+        self.extract(key, "a number")
+    }
+
+    fn count(&self, key: &str) -> PyResult<Option<usize>> {
+        self.extract(key, "a non-negative integer")
+    }
+
+    /// One of `options`, by name.
+    fn choice<T: Copy>(&self, key: &str, options: &[(&str, T)]) -> PyResult<Option<T>> {
+        let Some(name) = self.extract::<String>(key, "a string")? else {
+            return Ok(None);
+        };
+        match options.iter().find(|(n, _)| *n == name) {
+            Some((_, t)) => Ok(Some(*t)),
+            None => {
+                let known: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+                Err(value_error(format!("setting {key}: unknown value {name:?} (one of: {})", known.join(", "))))
+            }
+        }
+    }
+
+    /// A pair of bound vectors `(lower, upper)` of length `len`: both or neither.
+    fn bounds(&self, lower: &str, upper: &str, len: usize) -> PyResult<Option<(DVector<f64>, DVector<f64>)>> {
+        match (self.take(lower)?, self.take(upper)?) {
+            (Some(l), Some(u)) => Ok(Some((bound_vector(&l, lower, len)?, bound_vector(&u, upper, len)?))),
+            (None, None) => Ok(None),
+            _ => Err(value_error(format!("give both {lower} and {upper}, or neither"))),
+        }
+    }
+
+    /// Refuses what is left, naming what `entry` takes.
+    fn finish(self, entry: &EstimatorEntry) -> PyResult<()> {
+        if self.dict.is_empty() {
+            return Ok(());
+        }
+        let left: Vec<String> = self.dict.keys().iter().map(|k| k.to_string()).collect();
+        let takes = setting_names(entry.settings);
+        let takes = if takes.is_empty() { "no settings".to_owned() } else { takes.join(", ") };
+        Err(value_error(format!(
+            "unknown setting(s) {} for estimator {} (it takes: {takes})",
+            left.join(", "),
+            entry.name
+        )))
+    }
+}
+
+fn set_membership(kw: &Kwargs<'_>) -> PyResult<SetMembershipSettings> {
+    let solver = match kw.extract::<String>("solver", "a string")? {
+        Some(name) => SmfSolver::by_name(&name).map_err(|e| value_error(e.to_string()))?,
+        None => SmfSolver::default(),
+    };
+    let inconsistency = kw
+        .choice(
+            "inconsistency",
+            &[
+                ("error", InconsistencyPolicy::Error),
+                ("flag", InconsistencyPolicy::FlagAndContinue),
+                ("restart", InconsistencyPolicy::Restart),
+            ],
+        )?
+        .unwrap_or_default();
+    Ok(SetMembershipSettings { solver, inconsistency })
+}
+
+fn moving_horizon(kw: &Kwargs<'_>, dims: Dims, file: Option<&MheSettings>) -> PyResult<MheSettings> {
+    let w = kw.bounds("w_lower", "w_upper", dims.states)?;
+    let v = kw.bounds("v_lower", "v_upper", dims.outputs)?;
+    let mut s = match (file, w, v) {
+        (Some(f), w, v) => {
+            let mut s = f.clone();
+            if let Some(w) = w {
+                s.w_box = w;
+            }
+            if let Some(v) = v {
+                s.v_box = v;
+            }
+            s
+        }
+        (None, Some(w), Some(v)) => MheSettings::new(w, v),
+        (None, ..) => {
+            return Err(value_error(
+                "the moving-horizon estimators need the noise boxes: w_lower, w_upper (length n) and v_lower, v_upper \
+                 (length m)",
+            ));
+        }
+    };
+    if let Some(h) = kw.count("horizon")? {
+        s.horizon = h;
+        s.blocks = vec![1; h];
+    }
+    let presets = [BlockingPreset::Rmhe, BlockingPreset::RmheOp, BlockingPreset::RmheOf];
+    let preset_names: Vec<(String, BlockingPreset)> = presets.iter().map(|p| (p.name().to_lowercase(), *p)).collect();
+    let preset_options: Vec<(&str, BlockingPreset)> = preset_names.iter().map(|(n, p)| (n.as_str(), *p)).collect();
+    match (kw.choice("preset", &preset_options)?, kw.extract::<Vec<usize>>("blocks", "a list of block lengths")?) {
+        (Some(p), None) => s.blocks = p.lengths(s.horizon).map_err(|e| value_error(e.to_string()))?,
+        (None, Some(b)) => s.blocks = b,
+        (None, None) => {}
+        (Some(_), Some(_)) => return Err(value_error("give preset or blocks, not both")),
+    }
+    if let Some(bw) =
+        kw.choice("block_weighting", &[("length", BlockWeighting::Length), ("unit", BlockWeighting::Unit)])?
+    {
+        s.block_weighting = bw;
+    }
+    if let Some(l) = kw.float("lambda_v")? {
+        s.cost = MheCost::MinMax { lambda_v: l };
+    }
+    let theta = kw.float("theta")?;
+    match kw.choice("arrival", &[("kalman", false), ("h-infinity", true)])? {
+        Some(true) => s.arrival = ArrivalRecursion::HInfinity { theta: theta.unwrap_or(0.9) },
+        Some(false) => s.arrival = ArrivalRecursion::Kalman,
+        None if theta.is_some() => return Err(value_error("theta applies to arrival=\"h-infinity\"")),
+        None => {}
+    }
+    if let Some(p) = kw.choice("prior_mean", &[("smoothed", PriorMean::Smoothed), ("filtered", PriorMean::Filtered)])? {
+        s.prior_mean = p;
+    }
+    let (sweeps, tolerance) = (kw.count("max_sweeps")?, kw.float("tolerance")?);
+    let exact = kw.choice("window_solver", &[("coordinate-rotation", false), ("exact-saddle", true)])?;
+    let exact = exact.unwrap_or(matches!(s.solver, WindowSolver::ExactSaddle { .. }));
+    let base = match (exact, s.solver) {
+        (false, current @ WindowSolver::CoordinateRotation { .. })
+        | (true, current @ WindowSolver::ExactSaddle { .. }) => current,
+        (false, _) => WindowSolver::coordinate_rotation(),
+        (true, _) => WindowSolver::exact_saddle(),
+    };
+    s.solver = match base {
+        WindowSolver::CoordinateRotation { max_sweeps, tolerance: t, inner } => WindowSolver::CoordinateRotation {
+            max_sweeps: sweeps.unwrap_or(max_sweeps),
+            tolerance: tolerance.unwrap_or(t),
+            inner,
+        },
+        WindowSolver::ExactSaddle { max_iterations, tolerance: t } => WindowSolver::ExactSaddle {
+            max_iterations: sweeps.unwrap_or(max_iterations),
+            tolerance: tolerance.unwrap_or(t),
+        },
+        other => other,
+    };
+    Ok(s)
+}
+
+fn nonlinear_moving_horizon(kw: &Kwargs<'_>, dims: Dims, entry: &EstimatorEntry) -> PyResult<EstimatorSettings> {
+    let Some(EstimatorSettings::NonlinearMovingHorizon(mut s)) = entry.settings.default_settings() else {
+        return Err(value_error(format!("estimator {} has no default nonlinear MHE settings", entry.name)));
+    };
+    if let Some(h) = kw.count("horizon")? {
+        s.horizon = h;
+    }
+    if let Some(i) = kw.count("max_iterations")? {
+        s.max_iterations = i;
+    }
+    if let Some(t) = kw.float("tolerance")? {
+        s.tolerance = t;
+    }
+    let base = match s.arrival {
+        NonlinearArrival::Ukf(p) => p,
+        _ => UkfParams::default(),
+    };
+    let sigma = sigma_points(kw, base)?;
+    match kw.choice("arrival", &[("unscented", 0u8), ("extended", 1), ("fixed", 2)])? {
+        Some(1) => s.arrival = NonlinearArrival::Ekf,
+        Some(2) => s.arrival = NonlinearArrival::Fixed,
+        Some(_) => s.arrival = NonlinearArrival::Ukf(sigma),
+        None => {
+            if let NonlinearArrival::Ukf(_) = s.arrival {
+                s.arrival = NonlinearArrival::Ukf(sigma);
+            }
+        }
+    }
+    if let Some(p) = kw
+        .choice("prior", &[("smoothed", NonlinearPrior::Smoothed), ("arrival-filter", NonlinearPrior::ArrivalFilter)])?
+    {
+        s.prior = p;
+    }
+    if let Some(w) = kw.bounds("w_lower", "w_upper", dims.states)? {
+        s.w_box = Some(w);
+    }
+    if let Some(v) = kw.bounds("v_lower", "v_upper", dims.outputs)? {
+        s.v_box = Some(v);
+    }
+    Ok(EstimatorSettings::NonlinearMovingHorizon(s))
+}
+
+fn sigma_points(kw: &Kwargs<'_>, base: UkfParams) -> PyResult<UkfParams> {
+    Ok(UkfParams {
+        alpha: kw.float("alpha")?.unwrap_or(base.alpha),
+        beta: kw.float("beta")?.unwrap_or(base.beta),
+        kappa: kw.float("kappa")?.unwrap_or(base.kappa),
+    })
+}
+
+fn fuzzy_adaptive(kw: &Kwargs<'_>) -> PyResult<FuzzyAdaptiveSettings> {
+    let mut s = FuzzyAdaptiveSettings::default();
+    match (kw.extract::<std::path::PathBuf>("fis", "a path")?, kw.extract::<String>("fis_toml", "a string")?) {
+        (Some(path), None) => s.system = FuzzySystem::from_toml_file(&path).map_err(|e| value_error(e.to_string()))?,
+        (None, Some(text)) => {
+            s.system = FuzzySystem::from_toml_str(&text, "<fis_toml>").map_err(|e| value_error(e.to_string()))?;
+        }
+        (None, None) => {}
+        (Some(_), Some(_)) => return Err(value_error("give fis (a file) or fis_toml (its text), not both")),
+    }
+    if let Some((i, j)) = kw.extract::<(usize, usize)>("horizontal", "a pair of output indices")? {
+        s.horizontal = [i, j];
+    }
+    Ok(s)
+}
+
+/// The settings of `entry` from keywords over the model file's (`None`: the row's defaults).
+///
+/// # Errors
+/// `ValueError` for an unknown keyword, a value of the wrong type or out of its choices, or a
+/// setting the row needs and nobody gave.
+pub fn settings(
+    py: Python<'_>,
+    entry: &'static EstimatorEntry,
+    dims: Dims,
+    given: Option<&Bound<'_, PyDict>>,
+    file: FileSettings<'_>,
+) -> PyResult<Option<EstimatorSettings>> {
+    let kw = Kwargs::new(py, given)?;
+    let settings = match entry.settings {
+        SettingsKind::None => None,
+        SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(set_membership(&kw)?)),
+        SettingsKind::SetMembershipInputBox => {
+            let smf = set_membership(&kw)?;
+            let (lower, upper) = match (kw.bounds("u_lower", "u_upper", dims.inputs)?, file.input_range) {
+                (Some(b), _) => b,
+                (None, Some(b)) => b.clone(),
+                (None, None) => {
+                    return Err(value_error(format!(
+                        "estimator {} needs the input range: u_lower, u_upper (length p = {})",
+                        entry.name, dims.inputs
+                    )));
+                }
+            };
+            Some(EstimatorSettings::SetMembershipInputBox(smf, InputBox { lower, upper }))
+        }
+        SettingsKind::MovingHorizon => {
+            Some(EstimatorSettings::MovingHorizon(Box::new(moving_horizon(&kw, dims, file.mhe)?)))
+        }
+        SettingsKind::Unscented => Some(EstimatorSettings::Unscented(sigma_points(&kw, UkfParams::default())?)),
+        SettingsKind::NonlinearMovingHorizon => Some(nonlinear_moving_horizon(&kw, dims, entry)?),
+        SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::new(fuzzy_adaptive(&kw)?))),
+        other => {
+            return Err(value_error(format!(
+                "estimator {} takes {}, which this version of the package cannot set",
+                entry.name,
+                other.describe()
+            )));
+        }
+    };
+    kw.finish(entry)?;
+    Ok(settings)
+}
