@@ -1,13 +1,15 @@
 //! One update of the moving-horizon estimators of the car paper on a full window (N = 6), side by
 //! side: RMHE, RMHE-OP, RMHE-OF (coordinate rotation, λv = 10, active-set minimisation step), the
 //! exact saddle solver, plain MHE, and RMHE with Clarabel's QP path as the minimisation step.
+//! Each without the window's data check, and RMHE and plain MHE also with it (`-checked`: the
+//! witness of the published window, the linear programme when the witness fails).
 //! `cargo bench --bench mhe`. Each sample clones an estimator warmed on the digest's double lane
 //! change (outside the timing) and times one `step`.
 //!
 //! Also the supply vessel's nonlinear MHE (N = 10, 66 unknowns) with the UKF and the EKF arrival
 //! cost, beside one UKF step.
 
-use estimators::Setup;
+use estimators::{DataChecks, Setup};
 use std::hint::black_box;
 
 use car_dynamics::{CarModel, CarParams, NoiseBounds, double_lane_change_inputs};
@@ -42,20 +44,25 @@ fn bench(c: &mut Criterion) {
         (DVector::from_element(1, -1.0), DVector::from_element(1, 1.0)),
     );
     let cr = |inner| WindowSolver::CoordinateRotation { max_sweeps: 10, tolerance: 1e-8, inner };
+    let (off, on) = (DataChecks::OFF, DataChecks::default());
+    let min_max = MheCost::MinMax { lambda_v: 10.0 };
     let cases = [
-        ("rmhe", BlockingPreset::Rmhe, MheCost::MinMax { lambda_v: 10.0 }, cr(InnerSolver::ActiveSet)),
-        ("rmhe-op", BlockingPreset::RmheOp, MheCost::MinMax { lambda_v: 10.0 }, cr(InnerSolver::ActiveSet)),
-        ("rmhe-of", BlockingPreset::RmheOf, MheCost::MinMax { lambda_v: 10.0 }, cr(InnerSolver::ActiveSet)),
-        ("exact-saddle", BlockingPreset::Rmhe, MheCost::MinMax { lambda_v: 10.0 }, WindowSolver::exact_saddle()),
-        ("plain-mhe", BlockingPreset::Rmhe, MheCost::LeastSquares, WindowSolver::exact_saddle()),
-        ("rmhe-clarabel-inner", BlockingPreset::Rmhe, MheCost::MinMax { lambda_v: 10.0 }, cr(InnerSolver::Clarabel)),
+        ("rmhe", BlockingPreset::Rmhe, min_max, cr(InnerSolver::ActiveSet), off),
+        ("rmhe-op", BlockingPreset::RmheOp, min_max, cr(InnerSolver::ActiveSet), off),
+        ("rmhe-of", BlockingPreset::RmheOf, min_max, cr(InnerSolver::ActiveSet), off),
+        ("exact-saddle", BlockingPreset::Rmhe, min_max, WindowSolver::exact_saddle(), off),
+        ("plain-mhe", BlockingPreset::Rmhe, MheCost::LeastSquares, WindowSolver::exact_saddle(), off),
+        ("rmhe-clarabel-inner", BlockingPreset::Rmhe, min_max, cr(InnerSolver::Clarabel), off),
+        ("rmhe-checked", BlockingPreset::Rmhe, min_max, cr(InnerSolver::ActiveSet), on),
+        ("plain-mhe-checked", BlockingPreset::Rmhe, MheCost::LeastSquares, WindowSolver::exact_saddle(), on),
     ];
     let mut group = c.benchmark_group("mhe_update");
-    for (name, preset, cost, solver) in cases {
+    for (name, preset, cost, solver, checks) in cases {
         let mut s = base.clone().with_preset(6, preset).unwrap();
         s.cost = cost;
         s.solver = solver;
         let mut warm = MovingHorizonEstimator::new(setup.clone(), s).unwrap();
+        warm.set_data_checks(checks).unwrap();
         // Warm up to k = 20 (a full window in the middle of the manoeuvre).
         for k in 0..20 {
             warm.step(&model, &inputs[k], &ys[k]).unwrap();

@@ -9,11 +9,15 @@
 //!   the default probability `1 − 10⁻¹²` a correct model raises a false alarm once in a trillion
 //!   steps (a terminal's fleet logs hundreds of billions of steps; the gate stands at about 7σ
 //!   for one output, `χ²₃ ≈ 59` for three).
+//! * The moving-horizon estimators of linear models prove a window inconsistent when no
+//!   disturbance sequence in `W` fits its measurements into `V` (a linear programme, after the
+//!   published solution failed to witness consistency; `mhe::consistency`, docs/robust-mhe.md).
+//!   The nonlinear MHE does not check (policy `Off` only).
 //!
 //! What happens to data that fail the check is the [`InconsistencyPolicy`]: an error naming the
 //! step (the default), flag and continue, restart (the set-membership filter inflates its
-//! prediction until the data meet it; a Gaussian filter drops the measurement and publishes its
-//! prediction), or no check at all. Every step says what the check found
+//! prediction until the data meet it; a Gaussian filter or a moving-horizon estimator drops the
+//! measurement and publishes its prediction), or no check at all. Every step says what the check found
 //! ([`DataCheck`](crate::DataCheck) in its status).
 
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -25,7 +29,8 @@ use crate::error::EstimatorError;
 #[non_exhaustive]
 pub enum InconsistencyPolicy {
     /// Refuse the step with an error naming it
-    /// ([`EstimatorError::InconsistentData`](crate::EstimatorError::InconsistentData) for a proof,
+    /// ([`EstimatorError::InconsistentData`](crate::EstimatorError::InconsistentData) or
+    /// [`EstimatorError::InconsistentWindow`](crate::EstimatorError::InconsistentWindow) for a proof,
     /// [`EstimatorError::Outlier`](crate::EstimatorError::Outlier) for a failed gate); the estimator
     /// is unchanged (the default).
     #[default]
@@ -37,7 +42,8 @@ pub enum InconsistencyPolicy {
     /// the prediction (`A P_k Aᵀ`, `Q` and `P_k` alike, by `(1 + excess)²` and then powers of four)
     /// until the measurement strip meets it and updates from there, so the set moves to where the
     /// data are (every later set no longer guaranteed: the inflation is a choice, not a bound); a
-    /// Gaussian filter drops the measurement and publishes its prediction.
+    /// Gaussian filter and a moving-horizon estimator drop the measurement and publish the
+    /// prediction.
     Restart,
     /// No check: the data are used as they come and the status says `NotChecked`.
     Off,

@@ -107,6 +107,22 @@ pub enum EstimatorError {
         /// How far outside, relative to the set's extent in the separating direction.
         excess: f64,
     },
+    /// A moving-horizon window whose measurements no disturbance sequence in the process-noise
+    /// box fits into the measurement-noise box (docs/robust-mhe.md §2.8): the newest measurement,
+    /// or one still in the window, contradicts the model and the boxes. The estimator is
+    /// unchanged.
+    #[error(
+        "data inconsistent with the noise boxes at step {step}: no disturbance sequence within W fits the {samples} \
+         measurements of the window into V (V would have to widen by {excess:.3e} of its widths)"
+    )]
+    InconsistentWindow {
+        /// The step (1 for the first step of the estimator).
+        step: u64,
+        /// The measured samples in the window.
+        samples: usize,
+        /// How much `V` must widen, in widths, for the window to fit.
+        excess: f64,
+    },
     /// A Gaussian filter's measurement fails its innovation gate: the normalised innovation
     /// squared exceeds the χ² quantile at the gate's probability (a statistical test under the
     /// filter's own noise model, not a proof). The filter is unchanged.

@@ -11,7 +11,9 @@ use estimators::mhe::{
     ArrivalRecursion, ArrivalStatus, BlockingPreset, InnerSolver, MheCost, MheSettings, MovingHorizonEstimator,
     PriorMean, WindowSolver, WindowStatus,
 };
-use estimators::{Estimate, Estimator, EstimatorError, KalmanFilter, StepModel};
+use estimators::{
+    DataCheck, DataChecks, Estimate, Estimator, EstimatorError, InconsistencyPolicy, KalmanFilter, StepModel,
+};
 use nalgebra::{DMatrix, DVector};
 
 struct Lcg(u64);
@@ -47,6 +49,14 @@ trait CaseExt: Sized {
 
 fn new_mhe(case: Case, inputs: usize) -> Result<MovingHorizonEstimator, EstimatorError> {
     MovingHorizonEstimator::new(case.setup(inputs), case.settings)
+}
+
+/// An estimator without the data check, for the tests whose data leave `V` on purpose (so that
+/// the clip of the inner maximisation binds): they compare solvers, not data.
+fn unchecked(case: Case, inputs: usize) -> MovingHorizonEstimator {
+    let mut e = new_mhe(case, inputs).unwrap();
+    e.set_data_checks(DataChecks::OFF).unwrap();
+    e
 }
 
 fn settings(n: usize, m: usize, cost: MheCost, horizon: usize, w: f64, v: f64) -> Case {
@@ -189,8 +199,8 @@ fn coordinate_rotation_agrees_with_the_exact_saddle_where_it_converges() {
                 WindowSolver::CoordinateRotation { max_sweeps: 100, tolerance: 1e-12, inner: InnerSolver::ActiveSet };
             let mut ex = base;
             ex.solver = WindowSolver::exact_saddle();
-            let mut e1 = new_mhe(cr, 1).unwrap();
-            let mut e2 = new_mhe(ex, 1).unwrap();
+            let mut e1 = unchecked(cr, 1);
+            let mut e2 = unchecked(ex, 1);
             let model = StepModel::new(&a, &b, &c);
             let (us, ys) = data(&a, &b, &c, 14, 0.03, 0.5, seed);
             for (u, y) in us.iter().zip(&ys) {
@@ -365,7 +375,7 @@ fn exact_saddle_matches_clarabel_on_an_uncondensed_formulation() {
         let mut s = settings(3, m, MheCost::MinMax { lambda_v: 1.5 }, 10, 0.05, 1.0);
         s.solver = WindowSolver::exact_saddle();
         s.r = DMatrix::identity(m, m) * 0.2;
-        let mut mhe = new_mhe(s.clone(), 1).unwrap();
+        let mut mhe = unchecked(s.clone(), 1);
         let model = StepModel::new(&a, &b, &c);
         let (us, ys) = data(&a, &b, &c, 8, 0.05, 1.5, seed);
         for t in 0..us.len() {
@@ -386,8 +396,8 @@ fn clarabel_as_inner_solver_gives_the_active_set_result() {
     s1.solver = WindowSolver::CoordinateRotation { max_sweeps: 10, tolerance: 1e-8, inner: InnerSolver::ActiveSet };
     let mut s2 = base;
     s2.solver = WindowSolver::CoordinateRotation { max_sweeps: 10, tolerance: 1e-8, inner: InnerSolver::Clarabel };
-    let mut e1 = new_mhe(s1, 1).unwrap();
-    let mut e2 = new_mhe(s2, 1).unwrap();
+    let mut e1 = unchecked(s1, 1);
+    let mut e2 = unchecked(s2, 1);
     let model = StepModel::new(&a, &b, &c);
     let (us, ys) = data(&a, &b, &c, 12, 0.03, 0.3, 1);
     for (u, y) in us.iter().zip(&ys) {
@@ -597,12 +607,16 @@ fn output_constraints_match_clarabel_and_infeasibility_is_an_outcome() {
     s.output_constraint = true;
     s.solver = WindowSolver::exact_saddle();
     let mut mhe = new_mhe(s, 1).unwrap();
+    // The data check would refuse the outlier's step (the default): publish it, marked.
+    mhe.set_data_checks(DataChecks::with_policy(InconsistencyPolicy::FlagAndContinue)).unwrap();
     let u = DVector::zeros(1);
     let mut statuses = Vec::new();
     for k in 0..6 {
         let y = DVector::from_element(1, if k == 3 { 50.0 } else { 0.0 });
         let e = mhe.step(&model, &u, &y).unwrap();
         assert!(e.center.iter().all(|v| v.is_finite()));
+        let expected = if k >= 3 { DataCheck::Inconsistent } else { DataCheck::Consistent };
+        assert_eq!(e.status().data, expected, "step {}", k + 1);
         statuses.push(e.report.unwrap().solve.status);
     }
     assert!(statuses.contains(&WindowStatus::Infeasible), "{statuses:?}");

@@ -106,8 +106,8 @@ fn status_policy(strict: bool) -> crate::StatusPolicy {
 pub struct CheckArgs {
     /// What a step whose data contradict the noise description does: `error` (the default) stops
     /// at its row; `flag` uses the data and marks the row inconsistent; `restart` does not trust
-    /// them (a set-membership filter inflates its prediction to meet them, a Gaussian filter drops
-    /// the measurement) and marks the row; `off` checks nothing
+    /// them (a set-membership filter inflates its prediction to meet them, a Gaussian filter or a
+    /// moving-horizon estimator drops the measurement) and marks the row; `off` checks nothing
     #[arg(long, value_name = "POLICY", value_parser = ["error", "flag", "restart", "off"])]
     pub on_inconsistent: Option<String>,
     /// The Gaussian filters' innovation gate: the probability that a measurement of a correct model

@@ -94,3 +94,49 @@ fn bad_settings_point_at_their_key() {
         assert!(e.contains(&at) && e.contains(words), "case {i}: {e}");
     }
 }
+
+#[test]
+fn a_measurement_outside_the_boxes_stops_the_run_at_its_line_or_is_flagged() {
+    // 2 500 times V's half-width on line 22 (k = 20): no disturbance inside W explains it.
+    let d = dir();
+    let clean =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter/data.csv")).unwrap();
+    let text: String =
+        clean
+            .lines()
+            .map(|l| {
+                if l.starts_with("20,") {
+                    format!("{},50.0\n", l.rsplit_once(',').unwrap().0)
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect();
+    let input = d.join("outlier.csv");
+    std::fs::write(&input, text).unwrap();
+    let model = d.join("outlier.toml");
+    std::fs::write(&model, format!("{MODEL}{TABLE}")).unwrap();
+    let options = |estimator: &str, checks: Option<estimators::DataChecks>| FilterOptions {
+        model: model.clone(),
+        input: input.clone(),
+        output: d.join(format!("outlier-{estimator}.csv")),
+        estimator: estimator.into(),
+        solver: None,
+        gaps: GapPolicy::Error,
+        status: port_est::StatusPolicy::Warn,
+        checks,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
+    };
+    for estimator in ["rmhe", "mhe"] {
+        let e = filter(&options(estimator, None)).unwrap_err().to_string();
+        assert!(e.contains("outlier.csv:22:"), "{estimator}: {e}");
+        assert!(e.contains("inconsistent with the noise boxes at step 21"), "{estimator}: {e}");
+        let flag = estimators::DataChecks::with_policy(estimators::InconsistencyPolicy::FlagAndContinue);
+        let summary = filter(&options(estimator, Some(flag))).unwrap();
+        assert_eq!(summary.tally.steps, 40, "{estimator}");
+        let written = std::fs::read_to_string(d.join(format!("outlier-{estimator}.csv"))).unwrap();
+        let flagged = written.lines().filter(|l| l.contains("inconsistent")).count();
+        assert_eq!(flagged, 7, "{estimator}: the 7 windows (N = 6) holding line 22\n{written}");
+    }
+}

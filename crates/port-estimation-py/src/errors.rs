@@ -87,6 +87,14 @@ pub fn estimator_error(py: Python<'_>, e: &EstimatorError, row: Option<usize>) -
             let _ = value.setattr("excess", *excess);
             err
         }
+        EstimatorError::InconsistentWindow { step, samples, excess } => {
+            let err = InconsistentDataError::new_err(message);
+            let value = err.value(py);
+            let _ = value.setattr("step", *step);
+            let _ = value.setattr("excess", *excess);
+            let _ = value.setattr("samples", *samples);
+            err
+        }
         EstimatorError::Outlier { step, nis, threshold, probability } => {
             let err = InconsistentDataError::new_err(message);
             let value = err.value(py);

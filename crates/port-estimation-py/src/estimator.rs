@@ -345,7 +345,8 @@ impl Estimator {
     /// set-membership filter: move the set to the data), ``"off"`` (check nothing).
     /// ``gate_probability`` is the Gaussian filters' innovation gate: a measurement whose normalised
     /// innovation squared exceeds the chi-squared quantile of this probability is inconsistent
-    /// (default ``1 - 1e-12``). The moving-horizon estimators accept ``"off"`` only.
+    /// (default ``1 - 1e-12``). The moving-horizon estimators of linear models check each window
+    /// against their boxes ``W`` and ``V``; the nonlinear MHE accepts ``"off"`` only.
     #[pyo3(signature = (policy = "error", *, gate_probability = None))]
     fn set_data_checks(&self, py: Python<'_>, policy: &str, gate_probability: Option<f64>) -> PyResult<()> {
         no_panic(|| {

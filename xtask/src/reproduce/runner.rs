@@ -21,9 +21,10 @@ impl Filter {
     /// `None`), labelled `label`.
     pub fn new(label: &str, name: &str, setup: Setup, settings: Option<EstimatorSettings>) -> Result<Self, String> {
         let mut estimator = registry::build(name, setup, settings).map_err(|e| format!("{label}: {e}"))?;
-        if estimator.entry().kind == EstimateKind::Gaussian {
-            // The papers' Gaussian filters have no innovation gate; the set-membership filters keep
-            // their proof of inconsistency (data on the boundary of their sets never fail it).
+        if estimator.entry().kind != EstimateKind::GuaranteedEllipsoid {
+            // The papers' Gaussian filters have no innovation gate and their MHE no window check;
+            // the set-membership filters keep their proof of inconsistency (data on the boundary
+            // of their sets never fail it).
             estimator.set_data_checks(DataChecks::OFF).map_err(|e| format!("{label}: {e}"))?;
         }
         Ok(Self { label: label.to_owned(), estimator })

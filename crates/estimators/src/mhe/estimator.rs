@@ -7,12 +7,15 @@ use nalgebra::{DMatrix, DVector};
 
 use models::{Dims, LinearModel};
 
+use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
+use crate::mhe::consistency::{Sample, WindowCheck, WindowData, check_window, witnesses};
 use crate::mhe::settings::{ArrivalRecursion, BlockWeighting, MheSettings, PriorMean, WindowSolver};
 use crate::mhe::solve::{
     NoiseData, SolveCounters, SolverScratch, WindowStatus, coordinate_rotation, exact_saddle, saddle_value,
 };
 use crate::mhe::window::WindowProblem;
+use crate::status::{DataCheck, Guarantee};
 use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{check_model, check_vec};
 
@@ -46,8 +49,11 @@ pub struct MheReport {
     pub objective: f64,
     /// Wall time of the update (recursion, window build and solve).
     pub elapsed: Duration,
-    /// Whether the newest sample had a measurement (`false` after a prediction).
+    /// Whether the newest sample had a measurement (`false` after a prediction, or when the
+    /// policy [`InconsistencyPolicy::Restart`] dropped it).
     pub measured: bool,
+    /// What the window's data check found (docs/robust-mhe.md §2.8).
+    pub data: DataCheck,
 }
 
 /// The estimate of a moving-horizon estimator: the last state of the window's optimal trajectory
@@ -87,10 +93,14 @@ impl Estimate for MheEstimate {
         &self.weight
     }
     fn status(&self) -> StepStatus {
-        StepStatus::unchecked(match &self.report {
-            None => SolveOutcome::Initial,
-            Some(r) => window_outcome(r.solve.status, r.measured),
-        })
+        match &self.report {
+            None => StepStatus::unchecked(SolveOutcome::Initial),
+            Some(r) => StepStatus {
+                outcome: window_outcome(r.solve.status, r.measured),
+                data: r.data,
+                guarantee: Guarantee::NotApplicable,
+            },
+        }
     }
     fn details(&self) -> StepDetails {
         StepDetails::MovingHorizon(self.report)
@@ -153,6 +163,7 @@ pub struct MovingHorizonEstimator {
     vec_a: Vec<f64>,
     buf_c: Vec<f64>,
     buf_y: Vec<f64>,
+    checks: DataChecks,
     est: MheEstimate,
 }
 
@@ -232,6 +243,7 @@ impl MovingHorizonEstimator {
             vec_a: vec![0.0; n],
             buf_c: vec![0.0; m * n],
             buf_y: vec![0.0; m],
+            checks: DataChecks::default(),
             est,
             settings,
         })
@@ -253,6 +265,17 @@ impl MovingHorizonEstimator {
     #[must_use]
     pub fn estimate(&self) -> &MheEstimate {
         &self.est
+    }
+
+    /// The window check of docs/robust-mhe.md §2.8 with `checks.policy` (the gate probability is
+    /// not used: the check is a proof, not a statistical test). As
+    /// [`Estimator::set_data_checks`], without naming the model type.
+    ///
+    /// # Errors
+    /// None: every policy is supported.
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.checks = checks;
+        Ok(())
     }
 
     /// The report of the last update.
@@ -283,7 +306,8 @@ impl MovingHorizonEstimator {
         self.c_ring[..m * n].copy_from_slice(model.c().as_slice());
         self.y_ring[..m].copy_from_slice(y0.as_slice());
         self.has_y[0] = true;
-        let (counters, objective) = match self.solve_window(0) {
+        let solved = self.solve_window(0).and_then(|r| Ok((r, self.check_data(0, 0)?)));
+        let ((counters, objective), data) = match solved {
             Ok(r) => r,
             Err(e) => {
                 self.has_y[0] = false;
@@ -291,7 +315,7 @@ impl MovingHorizonEstimator {
             }
         };
         self.initial_measured = true;
-        self.commit(0, 0, counters, objective, ArrivalStatus::Kalman, start);
+        self.commit(0, 0, (counters, objective, data), ArrivalStatus::Kalman, start);
         Ok(&self.est)
     }
 
@@ -345,18 +369,67 @@ impl MovingHorizonEstimator {
         }
         // (20): P_{t+1} from P_t, the measurement at t and A_t.
         let arrival = self.riccati(st);
-        let result = self.solve_window(t + 1);
+        let result = self.solve_checked(t + 1);
         match result {
-            Ok((counters, objective)) => {
+            Ok(solved) => {
                 self.p_ring[sn * n * n..(sn + 1) * n * n].copy_from_slice(&self.p_next);
                 self.t = t + 1;
-                self.commit(t + 1, self.window_start(t + 1), counters, objective, arrival, start);
+                self.commit(t + 1, self.window_start(t + 1), solved, arrival, start);
                 Ok(&self.est)
             }
             Err(e) => {
                 self.has_y[sn] = old_has;
                 Err(e)
             }
+        }
+    }
+
+    /// Solves the window ending at `big_t` and checks its data with the policy: an inconsistent
+    /// window is an error, flagged, or solved again without its newest measurement (`Restart`).
+    fn solve_checked(&mut self, big_t: usize) -> Result<(SolveCounters, f64, DataCheck), EstimatorError> {
+        let (counters, objective) = self.solve_window(big_t)?;
+        let data = self.check_data(big_t, self.window_start(big_t))?;
+        if data != DataCheck::Inconsistent || self.checks.policy != InconsistencyPolicy::Restart {
+            return Ok((counters, objective, data));
+        }
+        let sn = big_t % self.cap;
+        self.has_y[sn] = false;
+        let (counters, objective) = self.solve_window(big_t)?;
+        Ok((counters, objective, DataCheck::Inconsistent))
+    }
+
+    /// The data check of the window `s..=big_t` just solved (its trajectory in `traj_work`): the
+    /// solution as a witness, then the linear programme (module `consistency`). `Err` with the
+    /// policy `Error`; `Inconsistent` otherwise. A window whose newest sample has no measurement
+    /// is not checked (a prediction).
+    fn check_data(&self, big_t: usize, s: usize) -> Result<DataCheck, EstimatorError> {
+        let (n, m, cap) = (self.n, self.m, self.cap);
+        if self.checks.policy == InconsistencyPolicy::Off || !self.has_y[big_t % cap] {
+            return Ok(DataCheck::NotChecked);
+        }
+        let len = big_t - s + 1;
+        let sample = |j: usize| {
+            let sl = (s + j) % cap;
+            Sample {
+                a: &self.a_ring[sl * n * n..(sl + 1) * n * n],
+                bu: &self.bu_ring[sl * n..(sl + 1) * n],
+                c: &self.c_ring[sl * m * n..(sl + 1) * m * n],
+                y: &self.y_ring[sl * m..(sl + 1) * m],
+                measured: self.has_y[sl],
+            }
+        };
+        let data = WindowData { n, m, len, sample, w: (&self.w_lo, &self.w_hi), v: (&self.v_lo, &self.v_hi) };
+        if witnesses(&data, &self.traj_work[..len * n]) {
+            return Ok(DataCheck::Consistent);
+        }
+        match check_window(&data) {
+            WindowCheck::Consistent => Ok(DataCheck::Consistent),
+            WindowCheck::Undecided => Ok(DataCheck::NotChecked),
+            WindowCheck::Inconsistent { excess } if self.checks.policy == InconsistencyPolicy::Error => {
+                let samples = (0..len).filter(|&j| self.has_y[(s + j) % cap]).count();
+                Err(EstimatorError::InconsistentWindow { step: big_t as u64, samples, excess })
+            }
+            WindowCheck::Inconsistent { .. } => Ok(DataCheck::Inconsistent),
         }
     }
 
@@ -577,8 +650,7 @@ impl MovingHorizonEstimator {
         &mut self,
         big_t: usize,
         s: usize,
-        solve: SolveCounters,
-        objective: f64,
+        (solve, objective, data): (SolveCounters, f64, DataCheck),
         arrival: ArrivalStatus,
         start: Instant,
     ) {
@@ -608,6 +680,7 @@ impl MovingHorizonEstimator {
             objective,
             elapsed: start.elapsed(),
             measured: self.has_y[sl],
+            data,
         });
     }
 }
@@ -669,15 +742,7 @@ impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
         Dims::new(self.n, self.p, self.m)
     }
 
-    fn set_data_checks(&mut self, checks: crate::checks::DataChecks) -> Result<(), EstimatorError> {
-        if checks.policy == crate::checks::InconsistencyPolicy::Off {
-            return Ok(());
-        }
-        Err(EstimatorError::Unsupported {
-            estimator: "the moving-horizon estimator",
-            operation: "data checks",
-            reason: "its windows are not yet checked against the noise boxes: its steps say `NotChecked`; only the \
-                     policy `Off` is accepted",
-        })
+    fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        MovingHorizonEstimator::set_data_checks(self, checks)
     }
 }

@@ -22,6 +22,7 @@
 
 pub mod boxqp;
 mod clarabel_inner;
+mod consistency;
 mod estimator;
 mod nonlinear;
 pub mod settings;

@@ -28,8 +28,10 @@ class NumericalError(EstimationError): ...
 
 class InconsistentDataError(EstimationError):
     step: int
-    # The set-membership filter's proof: the separating distance.
+    # The set-membership filter's proof: the separating distance; the moving-horizon window's:
+    # how far V must widen, in widths (with the window's measured samples).
     excess: float
+    samples: int
     # The Gaussian filters' innovation gate: NIS, its chi-squared threshold and probability.
     nis: float
     threshold: float
