@@ -49,6 +49,7 @@ use crate::data::{DataReader, DataRow};
 use crate::error::Error;
 use crate::limits::Limits;
 use crate::output::OutputFile;
+use crate::plausibility::{Limit, check_satellites, defaults};
 use crate::run::{OnError, StatusPolicy, StatusTally, enforce};
 use crate::settings::{self, SettingsFile};
 
@@ -110,6 +111,8 @@ pub(crate) struct ConfigFile {
     accel_white: Option<Spanned<f64>>,
     gyro_white: Option<Spanned<f64>>,
     p0_sigma: Option<Spanned<Vec<f64>>>,
+    max_heading: Option<Spanned<f64>>,
+    max_satellites: Option<Spanned<f64>>,
 }
 
 /// The validated settings.
@@ -119,6 +122,10 @@ pub(crate) struct Settings {
     sigma0: f64,
     r: DMatrix<f64>,
     p0: DMatrix<f64>,
+    /// The plausible headings `|u3|`, `|y3|`.
+    heading: Limit,
+    /// The plausible satellite count `y4`.
+    satellites: Limit,
 }
 
 fn read_config(path: Option<&Path>, limits: &Limits) -> Result<Settings, Error> {
@@ -253,7 +260,19 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
     settings::check_covariance(&p0).map_err(|why| {
         source.derived_error(&[("p0_sigma", p0_span.clone())], format!("the initial covariance P0 {why}"))
     })?;
-    let settings = Settings { model, sigma0, r, p0 };
+    let heading = Limit {
+        key: "max_heading",
+        bound: positive("max_heading", &file.max_heading, defaults::MAX_HEADING)?,
+        unit: "rad",
+        hint: "logged in degrees?",
+    };
+    let satellites = Limit {
+        key: "max_satellites",
+        bound: positive("max_satellites", &file.max_satellites, defaults::MAX_SATELLITES)?,
+        unit: "",
+        hint: "another column's quantity?",
+    };
+    let settings = Settings { model, sigma0, r, p0, heading, satellites };
     // What the filter itself checks, in the file's terms.
     AdaptiveKalmanFilter::new(setup(&settings), ConstantScaling(1.0)).map_err(|e| {
         let keys: &[(&str, Option<std::ops::Range<usize>>)] = match &e {
@@ -545,6 +564,9 @@ impl Runner<'_> {
         // status [N, RTK] of the epoch (RTK 0: no fix, a prediction only).
         let mut y = DVector::zeros(5);
         while data.read_row(&mut row)? {
+            s.heading.check(data, 3, "u3 (INS heading)", row.u[2])?;
+            s.heading.check(data, 6, "y3 (BDS heading)", row.y[2])?;
+            check_satellites(data, SATELLITES_COLUMN, row.y[3], &s.satellites)?;
             let ins = [row.u[0], row.u[1], row.u[2]];
             let code = rtk_code(&row, self.coding, data)?;
             let z = measurement(ins, [row.y[0], row.y[1], row.y[2]]);
@@ -726,7 +748,15 @@ mod tests {
     fn bad_status_cells_are_located() {
         let head = "k,u1,u2,u3,y1,y2,y3,y4,y5\n0,0,0,0,0,0,0,20,3\n";
         let e = run_text(&format!("{head}1,0,0,0,0,0,0,-2,3\n"), true, RtkCoding::Paper).unwrap_err().to_string();
-        assert_eq!(e, "d.csv:3:15: the satellite count must be non-negative, got -2");
+        assert!(e.starts_with("d.csv:3:15: y4 = -2 satellites is not a count"), "{e}");
+        let e = run_text(&format!("{head}1,0,0,0,0,0,0,7.5,3\n"), true, RtkCoding::Paper).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:3:15: y4 = 7.5 satellites is not a count"), "{e}");
+        // Headings in degrees: beyond ±2π rad, at the INS's and the BDS's cells.
+        let e = run_text(&format!("{head}1,0,0,45,0,0,0,20,3\n"), true, RtkCoding::Paper).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:3:7: u3 (INS heading) = 45 rad is beyond the plausible"), "{e}");
+        assert!(e.contains("`max_heading`"), "{e}");
+        let e = run_text(&format!("{head}1,0,0,0,0,0,-90,20,3\n"), true, RtkCoding::Paper).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:3:13: y3 (BDS heading) = -90 rad"), "{e}");
         let e = run_text(&format!("{head}1,0,0,0,0,0,0,20,7\n"), true, RtkCoding::Paper).unwrap_err().to_string();
         assert!(e.starts_with("d.csv:3:18: RTK status code 7 is not one of"), "{e}");
         assert!(e.contains("--gga"), "{e}");

@@ -28,6 +28,7 @@ pub mod limits;
 pub mod mhe_table;
 pub mod model;
 pub mod output;
+mod plausibility;
 pub mod run;
 mod settings;
 pub mod truck;

@@ -33,6 +33,7 @@ use crate::data::{DataReader, DataRow};
 use crate::error::Error;
 use crate::limits::Limits;
 use crate::output::OutputFile;
+use crate::plausibility::{Limit, defaults};
 use crate::run::{OnError, StatusPolicy, StatusTally, enforce};
 use crate::settings::{self, SettingsFile};
 
@@ -65,6 +66,8 @@ pub(crate) struct ConfigFile {
     p0: Option<Spanned<Vec<Vec<f64>>>>,
     q: Option<Spanned<Vec<Vec<f64>>>>,
     r: Option<Spanned<Vec<Vec<f64>>>>,
+    max_steering: Option<Spanned<f64>>,
+    max_wheel_speed: Option<Spanned<f64>>,
 }
 
 /// The validated settings.
@@ -75,6 +78,10 @@ pub(crate) struct Settings {
     p0: DMatrix<f64>,
     q: DMatrix<f64>,
     r: DMatrix<f64>,
+    /// The plausible road-wheel steering angle `|u1|`.
+    steering: Limit,
+    /// The plausible wheel speeds `|u2…u7|`.
+    wheel_speed: Limit,
 }
 
 /// Reads the settings file (`None`: the digest's defaults).
@@ -128,7 +135,23 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
         let span = file.ts.as_ref().map(Spanned::span);
         source.derived_error(&[("ts", span)], format!("truck model: {e}"))
     })?;
-    let settings = Settings { ts, x0, p0, q, r };
+    let limit = |key, v: &Option<Spanned<f64>>, default| match v {
+        Some(v) => settings::positive(source, key, v),
+        None => Ok(default),
+    };
+    let steering = Limit {
+        key: "max_steering",
+        bound: limit("max_steering", &file.max_steering, defaults::MAX_STEERING)?,
+        unit: "rad",
+        hint: "logged in degrees, or the steering-wheel angle instead of the road wheels'?",
+    };
+    let wheel_speed = Limit {
+        key: "max_wheel_speed",
+        bound: limit("max_wheel_speed", &file.max_wheel_speed, defaults::MAX_WHEEL_SPEED)?,
+        unit: "rad/s",
+        hint: "logged in rpm or degrees per second?",
+    };
+    let settings = Settings { ts, x0, p0, q, r, steering, wheel_speed };
     // What the filter itself checks, in the file's terms.
     let probe = setup(&settings, &model, DVector::from_vec(vec![10.0, 0.0, 0.0]));
     registry::build(names::EKF, probe, None).map_err(|e| {
@@ -244,6 +267,10 @@ fn run_truck<R: Read, W: Write>(
     let mut est: Option<AnyEstimator> = None;
     let mut from_row = false;
     while data.read_row(&mut row)? {
+        s.steering.check(data, 1, "u1 (steering angle)", row.u[0])?;
+        for i in 1..7 {
+            s.wheel_speed.check(data, 1 + i, &format!("u{} (wheel speed)", i + 1), row.u[i])?;
+        }
         if est.is_none() {
             from_row = s.x0.is_none();
             let x0 = s.x0.clone().unwrap_or_else(|| DVector::from_vec(vec![row.y[0], 0.0, row.y[2]]));
@@ -340,6 +367,33 @@ mod tests {
         }
         let rmse = (sq / (betas.len() - 1000) as f64).sqrt().to_degrees();
         assert!(rmse < 0.1, "β RMSE {rmse}°");
+    }
+
+    #[test]
+    fn implausible_steering_and_wheel_speeds_are_errors_at_their_cells_and_the_limits_are_settings() {
+        let run = |config: Option<&str>, row: &str| {
+            let text = format!("k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n{row}\n");
+            let mut data = DataReader::from_text(Path::new("t.csv"), &text, 7, 3).unwrap();
+            let config = config.map(|c| (Path::new("c.toml"), c));
+            run_log(config, &mut data, &mut Vec::new(), StatusPolicy::Warn).map(|t| t.steps).map_err(|e| e.to_string())
+        };
+        let ok = "0,0.1,20,20,20,20,20,20,10,0,0";
+        assert_eq!(run(None, ok), Ok(1));
+        // Steering in degrees.
+        let e = run(None, "0,5.7,20,20,20,20,20,20,10,0,0").unwrap_err();
+        assert!(e.starts_with("t.csv:2:3: u1 (steering angle) = 5.7 rad is beyond the plausible ±1 rad"), "{e}");
+        assert!(e.contains("`max_steering`"), "{e}");
+        // A wheel speed in rpm (the fourth wheel).
+        let e = run(None, "0,0.1,20,20,20,1900,20,20,10,0,0").unwrap_err();
+        assert!(e.starts_with("t.csv:2:16: u5 (wheel speed) = 1900 rad/s"), "{e}");
+        assert!(e.contains("`max_wheel_speed`"), "{e}");
+        // Raised in the settings file, accepted; a bad limit is an error at its key.
+        assert_eq!(
+            run(Some("max_steering = 6.0\nmax_wheel_speed = 2000.0\n"), "0,5.7,20,20,20,1900,20,20,10,0,0"),
+            Ok(1)
+        );
+        let e = run(Some("max_steering = -1.0\n"), ok).unwrap_err();
+        assert!(e.starts_with("c.toml:1:16: `max_steering`: must be positive"), "{e}");
     }
 
     #[test]
