@@ -90,24 +90,22 @@ fn noise_on_the_boundary_of_its_boxes_is_consistent_for_every_cost_and_solver() 
     }
 }
 
+/// What each step of a run returned: the centre, the outcome and the data check, or the error.
+type Steps = Vec<Result<(DVector<f64>, SolveOutcome, DataCheck), EstimatorError>>;
+
 /// A random walk measured directly: `|w| ≤ 0.1`, `|v| ≤ 0.5`, `y` constant at 0 until `jump_at`.
-fn walk(
-    policy: InconsistencyPolicy,
-    ys: &[f64],
-) -> (MovingHorizonEstimator, Vec<Result<(DVector<f64>, SolveOutcome, DataCheck), EstimatorError>>) {
+fn walk(policy: InconsistencyPolicy, ys: &[f64]) -> Steps {
     let (a, b, c) = (DMatrix::identity(1, 1), DMatrix::zeros(1, 1), DMatrix::identity(1, 1));
     let model = StepModel::new(&a, &b, &c);
     let mut e = mhe(1, 1, MheCost::MinMax { lambda_v: 10.0 }, WindowSolver::exact_saddle(), 0.1, 0.5);
     e.set_data_checks(DataChecks::with_policy(policy)).unwrap();
     let u = DVector::zeros(1);
-    let out = ys
-        .iter()
+    ys.iter()
         .map(|&y| {
             e.step(&model, &u, &DVector::from_element(1, y))
                 .map(|est| (est.center.clone(), est.status().outcome, est.status().data))
         })
-        .collect();
-    (e, out)
+        .collect()
 }
 
 #[test]
@@ -115,7 +113,7 @@ fn a_measurement_far_outside_v_is_an_error_naming_its_step_and_changes_nothing()
     // 2 500 times the box: an error at step 6, and the estimator continues as if it never came.
     let mut ys = vec![0.0; 12];
     ys[5] = 1250.0;
-    let (_, out) = walk(InconsistencyPolicy::Error, &ys);
+    let out = walk(InconsistencyPolicy::Error, &ys);
     match &out[5] {
         Err(EstimatorError::InconsistentWindow { step: 6, samples: 6, excess }) => {
             // V must widen by about half the jump: the trajectory can meet the outlier halfway.
@@ -125,7 +123,7 @@ fn a_measurement_far_outside_v_is_an_error_naming_its_step_and_changes_nothing()
     }
     let mut clean = ys.clone();
     clean.remove(5);
-    let (_, reference) = walk(InconsistencyPolicy::Error, &clean);
+    let reference = walk(InconsistencyPolicy::Error, &clean);
     let ours: Vec<_> = out.into_iter().filter_map(Result::ok).collect();
     let theirs: Vec<_> = reference.into_iter().map(Result::unwrap).collect();
     assert_eq!(ours, theirs);
@@ -135,9 +133,9 @@ fn a_measurement_far_outside_v_is_an_error_naming_its_step_and_changes_nothing()
 fn a_jump_the_process_box_forbids_is_caught_though_each_measurement_fits_v() {
     // x moves at most 0.1 per step and each measurement is within 0.5 of it: a jump of y from 0
     // to exactly 1.1 in one step fits (both noises on their boundaries), 1.2 does not.
-    let (_, ok) = walk(InconsistencyPolicy::Error, &[0.0, 0.0, 0.0, 1.1]);
+    let ok = walk(InconsistencyPolicy::Error, &[0.0, 0.0, 0.0, 1.1]);
     assert!(ok.iter().all(Result::is_ok), "{ok:?}");
-    let (_, bad) = walk(InconsistencyPolicy::Error, &[0.0, 0.0, 0.0, 1.2]);
+    let bad = walk(InconsistencyPolicy::Error, &[0.0, 0.0, 0.0, 1.2]);
     assert!(matches!(bad[3], Err(EstimatorError::InconsistentWindow { step: 4, .. })), "{:?}", bad[3]);
 }
 
@@ -145,14 +143,14 @@ fn a_jump_the_process_box_forbids_is_caught_though_each_measurement_fits_v() {
 fn flag_publishes_and_marks_every_window_holding_the_sample_and_restart_drops_it() {
     let mut ys = vec![0.0; 14];
     ys[3] = 40.0;
-    let (_, flagged) = walk(InconsistencyPolicy::FlagAndContinue, &ys);
+    let flagged = walk(InconsistencyPolicy::FlagAndContinue, &ys);
     let data: Vec<DataCheck> = flagged.iter().map(|r| r.as_ref().unwrap().2).collect();
     // The window holds the last 7 samples (horizon 6): steps 4 … 10 see the outlier.
     for (k, d) in data.iter().enumerate() {
         let expected = if (3..=9).contains(&k) { DataCheck::Inconsistent } else { DataCheck::Consistent };
         assert_eq!(*d, expected, "step {}", k + 1);
     }
-    let (_, restarted) = walk(InconsistencyPolicy::Restart, &ys);
+    let restarted = walk(InconsistencyPolicy::Restart, &ys);
     let step4 = restarted[3].as_ref().unwrap();
     assert_eq!((step4.1, step4.2), (SolveOutcome::Predicted, DataCheck::Inconsistent));
     assert!(restarted[4..].iter().all(|r| r.as_ref().unwrap().2 == DataCheck::Consistent));
@@ -169,7 +167,7 @@ fn flag_publishes_and_marks_every_window_holding_the_sample_and_restart_drops_it
         };
         assert_eq!(est.unwrap().center, restarted[k].as_ref().unwrap().0, "step {}", k + 1);
     }
-    let (_, off) = walk(InconsistencyPolicy::Off, &ys);
+    let off = walk(InconsistencyPolicy::Off, &ys);
     assert!(off.iter().all(|r| r.as_ref().unwrap().2 == DataCheck::NotChecked));
     assert_eq!(off[3].as_ref().unwrap().0, flagged[3].as_ref().unwrap().0);
 }
