@@ -19,7 +19,7 @@
 //! the solve continues as for any other non-optimal outcome (the unscaled problem is solved too)
 //! and ends `NumericalTrouble` with [`SdpSolution::rejected_certificate`] set, unless that second
 //! solve gives an optimum or an accepted certificate. An accepted certificate of the scaled solve
-//! is the answer (no second solve).
+//! at the strict tolerances is the answer (no second solve).
 //!
 //! **Memory.** `setup` first estimates what Clarabel will need, dominated per PSD block of order
 //! `n` by its dense `s × s` block (`s = n(n+1)/2`) in the scaling matrix, the KKT matrix and its
@@ -315,8 +315,8 @@ impl SdpBackend for ClarabelBackend {
 
 impl ClarabelBackend {
     /// Solves the equilibrated problem; if that ends neither optimal nor with an infeasibility
-    /// certificate that passes the independent check ([`crate::certificate`]) and the scaling was
-    /// not the identity, solves the problem as given too (whose outcome is then reported, its
+    /// (strict tolerances) whose certificate passes the independent check
+    /// ([`crate::certificate`]) and the scaling was not the identity, solves the problem as given too (whose outcome is then reported, its
     /// certificate checked the same way).
     /// Clarabel equilibrates internally as well, and on some moderately scaled problems (the
     /// carrier's LMI (28) with a small `P_k`) the two scalings together end in numerical trouble
@@ -333,9 +333,11 @@ impl ClarabelBackend {
         solution.rejected_certificate = None;
         self.solve_scaled(st, problem, solution, scale)?;
         self.vet(problem, solution);
-        // An accepted certificate is an answer: solving the unscaled problem could only replace
-        // it by an outcome judged on worse-scaled data.
-        let answered = solution.status.is_optimal() || CertificateKind::of(solution.status).is_some();
+        // An accepted certificate at the strict tolerances is an answer: solving the unscaled
+        // problem could only replace it by an outcome judged on worse-scaled data. (A relaxed
+        // "almost infeasible" still gets the second solve, as before.)
+        let answered = solution.status.is_optimal()
+            || matches!(solution.status, SolveStatus::PrimalInfeasible | SolveStatus::DualInfeasible);
         if !answered && !scale.is_identity() {
             self.solve_scaled(st, problem, solution, Equilibration::IDENTITY)?;
             self.vet(problem, solution);
