@@ -14,6 +14,13 @@
 //! "Equilibration" in [`SolverSettings`] (Clarabel's own equilibration then works on a problem of
 //! moderate size); `x`, `Y` and the objectives are mapped back to the caller's problem.
 //!
+//! **Certificates.** An infeasibility Clarabel reports is kept only if its certificate passes
+//! the independent check on the caller's unscaled problem ([`crate::certificate`]); otherwise
+//! the solve continues as for any other non-optimal outcome (the unscaled problem is solved too)
+//! and ends `NumericalTrouble` with [`SdpSolution::rejected_certificate`] set, unless that second
+//! solve gives an optimum or an accepted certificate. An accepted certificate of the scaled solve
+//! at the strict tolerances is the answer (no second solve).
+//!
 //! **Memory.** `setup` first estimates what Clarabel will need, dominated per PSD block of order
 //! `n` by its dense `s × s` block (`s = n(n+1)/2`) in the scaling matrix, the KKT matrix and its
 //! factor (about `24 s²` bytes), and returns [`LmiError::MemoryLimit`] beyond
@@ -36,6 +43,7 @@ use clarabel::solver::{
     SupportedConeT,
 };
 
+use crate::certificate::{self, CertificateChecker, CertificateKind};
 use crate::error::{LmiError, saturate_bytes};
 use crate::problem::{Block, SdpProblem};
 use crate::scaling::Equilibration;
@@ -57,6 +65,8 @@ enum Slot {
 pub struct ClarabelBackend {
     settings: SolverSettings,
     state: Option<State>,
+    /// Scratch of the independent check of infeasibility certificates.
+    checker: Option<CertificateChecker>,
     last_panic: Option<String>,
 }
 
@@ -118,14 +128,20 @@ pub(crate) fn required_bytes(problem: &SdpProblem) -> u64 {
     }
     let nnz = problem.entries().len() as u128;
     let vectors = 8 * 20 * (rows + problem.num_vars() as u128);
-    saturate_bytes(dense + 3 * 16 * nnz + vectors + u128::from(SdpSolution::required_bytes(problem)))
+    saturate_bytes(
+        dense
+            + 3 * 16 * nnz
+            + vectors
+            + u128::from(SdpSolution::required_bytes(problem))
+            + u128::from(CertificateChecker::required_bytes(problem)),
+    )
 }
 
 impl ClarabelBackend {
     /// A backend with validated settings.
     pub fn new(settings: SolverSettings) -> Result<Self, LmiError> {
         settings.validate()?;
-        Ok(Self { settings, state: None, last_panic: None })
+        Ok(Self { settings, state: None, checker: None, last_panic: None })
     }
 
     /// The message of the last panic contained in `setup` or `solve`, if any.
@@ -214,6 +230,7 @@ impl SdpBackend for ClarabelBackend {
 
     fn setup(&mut self, problem: &SdpProblem) -> Result<(), LmiError> {
         self.state = None;
+        self.checker = None;
         let required = required_bytes(problem);
         if required > self.settings.memory_limit_bytes {
             return Err(LmiError::MemoryLimit {
@@ -282,6 +299,7 @@ impl SdpBackend for ClarabelBackend {
         })?;
         st.solver = Some(solver);
         self.state = Some(st);
+        self.checker = Some(CertificateChecker::new(problem));
         Ok(())
     }
 
@@ -296,8 +314,10 @@ impl SdpBackend for ClarabelBackend {
 }
 
 impl ClarabelBackend {
-    /// Solves the equilibrated problem; if that does not end optimal and the scaling was not the
-    /// identity, solves the problem as given too and keeps that answer when it is optimal.
+    /// Solves the equilibrated problem; if that ends neither optimal nor with an infeasibility
+    /// (strict tolerances) whose certificate passes the independent check
+    /// ([`crate::certificate`]) and the scaling was not the identity, solves the problem as given too (whose outcome is then reported, its
+    /// certificate checked the same way).
     /// Clarabel equilibrates internally as well, and on some moderately scaled problems (the
     /// carrier's LMI (28) with a small `P_k`) the two scalings together end in numerical trouble
     /// where the unscaled problem is solved.
@@ -310,12 +330,32 @@ impl ClarabelBackend {
         }
         let scale = Equilibration::compute(problem, self.settings.equilibrate);
         let start = Instant::now();
+        solution.rejected_certificate = None;
         self.solve_scaled(st, problem, solution, scale)?;
-        if !solution.status.is_optimal() && !scale.is_identity() {
+        self.vet(problem, solution);
+        // An accepted certificate at the strict tolerances is an answer: solving the unscaled
+        // problem could only replace it by an outcome judged on worse-scaled data. (A relaxed
+        // "almost infeasible" still gets the second solve, as before.)
+        let answered = solution.status.is_optimal()
+            || matches!(solution.status, SolveStatus::PrimalInfeasible | SolveStatus::DualInfeasible);
+        if !answered && !scale.is_identity() {
             self.solve_scaled(st, problem, solution, Equilibration::IDENTITY)?;
+            self.vet(problem, solution);
             solution.solve_time = start.elapsed();
         }
+        if solution.status.is_optimal() || CertificateKind::of(solution.status).is_some() {
+            // Optimal or an accepted certificate: an earlier rejection is not the outcome.
+            solution.rejected_certificate = None;
+        }
         Ok(())
+    }
+
+    /// An infeasibility is reported only with a certificate that holds for the caller's data
+    /// (checked on `problem`, unscaled).
+    fn vet(&mut self, problem: &SdpProblem, solution: &mut SdpSolution) {
+        if let Some(checker) = self.checker.as_mut() {
+            certificate::vet(checker, problem, &self.settings, solution);
+        }
     }
 
     fn solve_scaled(

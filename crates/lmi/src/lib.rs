@@ -8,6 +8,7 @@
 //! This crate knows nothing about vehicles: it states semidefinite programs and solves them.
 
 pub mod builder;
+pub mod certificate;
 pub mod error;
 pub mod ipm;
 pub mod problem;
@@ -23,6 +24,7 @@ pub mod clarabel_backend;
 #[cfg(feature = "clarabel")]
 pub use clarabel_backend::ClarabelBackend;
 
+pub use certificate::{CertificateFailure, RejectedCertificate, check_certificate};
 pub use error::LmiError;
 pub use ipm::{FaerIpm, SearchDirection};
 pub use problem::{Block, Entry, SdpProblem};

@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use nalgebra::DMatrix;
 
+use crate::certificate::RejectedCertificate;
 use crate::error::LmiError;
 use crate::problem::{Block, SdpProblem};
 
@@ -105,6 +106,12 @@ pub struct SdpSolution {
     pub dual_residual: f64,
     /// Wall-clock time of the numeric solve (not of the setup).
     pub solve_time: Duration,
+    /// An infeasibility the backend claimed during this solve whose certificate failed the
+    /// independent check on the caller's (unscaled) problem ([`crate::certificate`]); the status
+    /// is then [`SolveStatus::NumericalTrouble`] (or the outcome of a later attempt within the
+    /// same solve that is not optimal either). `None` after an optimal solve or an accepted
+    /// certificate.
+    pub rejected_certificate: Option<RejectedCertificate>,
 }
 
 impl SdpSolution {
@@ -121,6 +128,7 @@ impl SdpSolution {
             primal_residual: f64::NAN,
             dual_residual: f64::NAN,
             solve_time: Duration::ZERO,
+            rejected_certificate: None,
         }
     }
 

@@ -102,3 +102,49 @@ fn warm_started_solves_do_not_allocate() {
         assert!(sol.status.is_optimal(), "{}", sol.status);
     }
 }
+
+/// The independent check of infeasibility certificates runs in the solve without allocating,
+/// whether the certificate passes (an infeasible problem) or is rejected (a feasible problem with
+/// the bound `x₁ ≥ 1e308`, which `faer-ipm` claims primal infeasible: numerical trouble).
+#[test]
+fn certificate_checks_do_not_allocate() {
+    let e = |mat, block, row, col, value| Entry { mat, block, row, col, value };
+    let infeasible = SdpProblem::new(
+        vec![Block::Nonneg(2)],
+        vec![1.0],
+        vec![e(1, 0, 0, 0, 1.0), e(0, 0, 0, 0, 1.0), e(1, 0, 1, 1, -1.0)],
+    )
+    .unwrap();
+    let bogus = SdpProblem::new(
+        vec![Block::Psd(2), Block::Nonneg(2)],
+        vec![0.5, 0.5],
+        vec![
+            e(1, 0, 0, 0, 1.0),
+            e(2, 0, 1, 1, 1.0),
+            e(0, 0, 0, 1, -1.0),
+            e(1, 1, 0, 0, 1.0),
+            e(0, 1, 0, 0, 1e308),
+            e(2, 1, 1, 1, 1.0),
+        ],
+    )
+    .unwrap();
+    for p in [&infeasible, &bogus] {
+        let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();
+        ipm.setup(p).unwrap();
+        let mut sol = SdpSolution::new(p);
+        ipm.solve(p, &mut sol).unwrap();
+        let (status, rejected) = (sol.status, sol.rejected_certificate);
+        let ((), allocations) = count(|| {
+            for _ in 0..10 {
+                ipm.solve(p, &mut sol).unwrap();
+            }
+        });
+        assert_eq!(allocations, 0, "solve allocated {allocations} times in 10 solves ({status})");
+        assert_eq!((sol.status, sol.rejected_certificate), (status, rejected));
+    }
+    let mut ipm = FaerIpm::new(SolverSettings::default()).unwrap();
+    assert_eq!(ipm.setup_and_solve(&infeasible).unwrap().status, lmi::SolveStatus::PrimalInfeasible);
+    let sol = ipm.setup_and_solve(&bogus).unwrap();
+    assert_eq!(sol.status, lmi::SolveStatus::NumericalTrouble);
+    assert_eq!(sol.rejected_certificate.map(|r| r.claimed), Some(lmi::SolveStatus::PrimalInfeasible));
+}

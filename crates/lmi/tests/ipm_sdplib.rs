@@ -116,6 +116,9 @@ fn conformance(direction: SearchDirection) {
             (t[0] - 1.0).abs() < 1e-9 && aty < 1e-7 && ymin > -1e-9 * ymax.max(1.0),
             "bad certificate: {t:?} {ymin}"
         );
+        // The backend-independent check the backends apply, at a tolerance 10x tighter.
+        let m = lmi::check_certificate(&p, &s, 1e-6).unwrap();
+        println!("infp1 certificate: {m:?}");
     } else {
         failures.push(format!("infp1: {}", s.status));
     }
@@ -136,6 +139,8 @@ fn conformance(direction: SearchDirection) {
         let amin = ax.iter().map(min_eig).fold(f64::INFINITY, f64::min);
         let scale = ax.iter().map(|a| a.norm()).fold(0.0, f64::max);
         assert!((cx + 1.0).abs() < 1e-9 && amin > -1e-7 * scale.max(1.0), "bad certificate: {cx} {amin}");
+        let m = lmi::check_certificate(&p, &s, 1e-6).unwrap();
+        println!("infd1 certificate: {m:?}");
     } else {
         failures.push(format!("infd1: {}", s.status));
     }

@@ -224,53 +224,14 @@ fn at_most(a: f64, b: f64) -> bool {
 }
 
 /// Checks an infeasibility certificate independently of the solver, returning a description
-/// of what is wrong, if anything. For [`SolveStatus::PrimalInfeasible`]: `Y ⪰ 0`,
-/// `tr(FᵢY) ≈ 0`, `tr(F₀Y) > 0`; for [`SolveStatus::DualInfeasible`]: `Σ xᵢFᵢ ⪰ 0`, `cᵀx < 0`
-/// (both up to relative tolerance `tol`).
+/// of what is wrong, if anything: the backend-independent check of [`lmi::certificate`] (the one
+/// the backends apply before reporting an infeasibility), with tolerance `tol`. For
+/// [`SolveStatus::PrimalInfeasible`]: `Y ⪰ 0`, `tr(FᵢY) ≈ 0`, `tr(F₀Y) > 0`; for
+/// [`SolveStatus::DualInfeasible`]: `Σ xᵢFᵢ ⪰ 0`, `cᵀx < 0` — each measured relative to the norms
+/// of the data and of the certificate, so that a rescaling of the problem cannot make a bogus
+/// certificate pass.
 pub fn check_certificate(problem: &SdpProblem, solution: &SdpSolution, tol: f64) -> Result<(), String> {
-    // Every comparison below is false for NaN: reject non-finite certificates first.
-    if solution.x.iter().chain(solution.dual.iter().flat_map(|y| y.iter())).any(|v| !v.is_finite()) {
-        return Err("the certificate has non-finite entries".into());
-    }
-    match solution.status {
-        SolveStatus::PrimalInfeasible | SolveStatus::AlmostPrimalInfeasible => {
-            let t = problem.traces(&solution.dual).map_err(|e| e.to_string())?;
-            let scale = t[0];
-            if !(scale > 0.0 && scale.is_finite()) {
-                return Err(format!("tr(F0 Y) = {scale} is not positive and finite"));
-            }
-            let worst = t[1..].iter().fold(0.0f64, |m, v| m.max(v.abs())) / scale;
-            if !at_most(worst, tol) {
-                return Err(format!("max |tr(Fi Y)| / tr(F0 Y) = {worst:e}"));
-            }
-            let min_eig =
-                solution.dual.iter().map(|y| y.clone().symmetric_eigenvalues().min()).fold(f64::INFINITY, f64::min);
-            let ynorm = solution.dual.iter().map(|y| y.norm()).fold(0.0, f64::max);
-            if !at_most(-tol * ynorm, min_eig) {
-                return Err(format!("Y has eigenvalue {min_eig:e}"));
-            }
-            Ok(())
-        }
-        SolveStatus::DualInfeasible | SolveStatus::AlmostDualInfeasible => {
-            let cx: f64 = problem.c().iter().zip(&solution.x).map(|(c, x)| c * x).sum();
-            if !(cx < 0.0 && cx.is_finite()) {
-                return Err(format!("c'x = {cx} is not negative and finite"));
-            }
-            // Σ xᵢFᵢ = slack(x) + F₀; scale by |cᵀx|.
-            let zero = vec![0.0; problem.num_vars()];
-            let f0 = problem.slack(&zero).map_err(|e| e.to_string())?;
-            let s = problem.slack(&solution.x).map_err(|e| e.to_string())?;
-            for (sb, f0b) in s.iter().zip(&f0) {
-                let ray = sb - f0b; // Σ xᵢFᵢ (slack(0) = −F₀)
-                let min_eig = ray.symmetric_eigenvalues().min();
-                if !at_most(-tol * cx.abs(), min_eig) {
-                    return Err(format!("sum x_i F_i has eigenvalue {min_eig:e} (c'x = {cx:e})"));
-                }
-            }
-            Ok(())
-        }
-        s => Err(format!("status {s} is not an infeasibility status")),
-    }
+    lmi::check_certificate(problem, solution, tol).map(|_| ()).map_err(|e| e.to_string())
 }
 
 /// Objective tolerance of an optimal `solution` against `expected`: the reference's own

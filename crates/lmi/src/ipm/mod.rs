@@ -157,6 +157,9 @@
 //!   certificate is returned normalised (`tr(F₀Y) = 1` in `dual`, resp. `cᵀx = −1` in `x`); the
 //!   other part of the solution is zero (every entry stays finite), both objectives are `+∞` (primal infeasible: the dual is
 //!   unbounded) resp. `−∞`, and the residual field of the certificate holds its residual.
+//!   The certificate is then checked independently on the caller's unscaled problem
+//!   ([`crate::certificate`]); if it fails, the status is `NumericalTrouble`, the objectives
+//!   NaN, and [`SdpSolution::rejected_certificate`] holds the claim and the reason.
 //! * When the iteration limit, the time limit or a numerical breakdown (an iterate that is no
 //!   longer numerically positive definite, a failed factorisation, a step below `10⁻¹⁰`, or no
 //!   improvement of the best iterate for 5 iterations once it meets the relaxed tolerances, or
@@ -166,7 +169,7 @@
 //!   `IterationLimit`, `TimeLimit` or `NumericalTrouble`, with that iterate in the solution.
 
 mod dense;
-mod eig;
+pub(crate) mod eig;
 mod engine;
 mod workspace;
 
@@ -174,6 +177,7 @@ use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 
+use crate::certificate::{self, CertificateChecker};
 use crate::error::{LmiError, saturate_bytes};
 use crate::problem::SdpProblem;
 use crate::scaling::Equilibration;
@@ -222,6 +226,8 @@ pub struct FaerIpm {
     direction: SearchDirection,
     /// The scaling of the solve whose solution is stored for a warm start.
     warm_scale: Option<Equilibration>,
+    /// Scratch of the independent check of infeasibility certificates.
+    checker: Option<CertificateChecker>,
 }
 
 impl std::fmt::Debug for FaerIpm {
@@ -237,7 +243,14 @@ impl FaerIpm {
     /// A backend with validated `settings`; call [`SdpBackend::setup`] before solving.
     pub fn new(settings: SolverSettings) -> Result<Self, LmiError> {
         settings.validate()?;
-        Ok(Self { settings, ws: None, buf: None, direction: SearchDirection::NesterovTodd, warm_scale: None })
+        Ok(Self {
+            settings,
+            ws: None,
+            buf: None,
+            direction: SearchDirection::NesterovTodd,
+            warm_scale: None,
+            checker: None,
+        })
     }
 
     /// The settings in use.
@@ -275,6 +288,7 @@ impl SdpBackend for FaerIpm {
         self.ws = None;
         self.buf = None;
         self.warm_scale = None;
+        self.checker = None;
         let limit = self.settings.memory_limit_bytes;
         let too_large = |required: u128| LmiError::MemoryLimit {
             backend: "faer-ipm",
@@ -283,7 +297,9 @@ impl SdpBackend for FaerIpm {
         };
         // Sizes first (nothing allocated), then faer's scratch (only computed for moderate sizes),
         // then the grouping-dependent buffers inside `Workspace::new`.
-        let mut required = workspace::base_bytes(problem) + u128::from(SdpSolution::required_bytes(problem));
+        let mut required = workspace::base_bytes(problem)
+            + u128::from(SdpSolution::required_bytes(problem))
+            + u128::from(CertificateChecker::required_bytes(problem));
         if required > u128::from(limit) {
             return Err(too_large(required));
         }
@@ -295,12 +311,13 @@ impl SdpBackend for FaerIpm {
         let req: StackReq = workspace::scratch(problem);
         self.buf = Some(MemBuffer::new(req));
         self.ws = Some(ws);
+        self.checker = Some(CertificateChecker::new(problem));
         Ok(())
     }
 
     fn solve(&mut self, problem: &SdpProblem, solution: &mut SdpSolution) -> Result<(), LmiError> {
         let start = Instant::now();
-        let (Some(ws), Some(buf)) = (self.ws.as_mut(), self.buf.as_mut()) else {
+        let (Some(ws), Some(buf), Some(checker)) = (self.ws.as_mut(), self.buf.as_mut(), self.checker.as_mut()) else {
             return Err(LmiError::StructureMismatch("faer-ipm: solve called before setup".into()));
         };
         if !ws.structure.same_structure(problem) {
@@ -331,6 +348,9 @@ impl SdpBackend for FaerIpm {
         let f = scale.objective_factor();
         solution.primal_objective *= f;
         solution.dual_objective *= f;
+        // An infeasibility is reported only with a certificate that holds for the caller's data.
+        solution.rejected_certificate = None;
+        certificate::vet(checker, problem, settings, solution);
         solution.solve_time = start.elapsed();
         Ok(())
     }
