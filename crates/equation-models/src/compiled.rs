@@ -47,13 +47,13 @@ fn slot_of(name: &str) -> Option<usize> {
 }
 
 impl Compiled {
-    /// Parses `text` (already expanded: internal variable names only).
-    pub(crate) fn parse(text: &str) -> Result<Self, String> {
+    /// Parses `text` (already expanded: internal variable names of slots below `n_slots` only).
+    pub(crate) fn parse(text: &str, n_slots: usize) -> Result<Self, String> {
         let expr = guarded(|| FlatEx::<f64>::parse(text).map_err(|e| e.to_string()))?;
         let slots = expr
             .var_names()
             .iter()
-            .map(|n| slot_of(n).ok_or_else(|| format!("unexpected variable `{n}`")))
+            .map(|n| slot_of(n).filter(|&s| s < n_slots).ok_or_else(|| format!("unexpected variable `{n}`")))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self { expr, slots })
     }

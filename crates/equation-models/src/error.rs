@@ -177,6 +177,18 @@ pub enum EquationError {
         /// The limit.
         limit: usize,
     },
+    /// Parsing and differentiating the equations took longer than
+    /// [`crate::limits::MAX_COMPILE_SECONDS`] (expressions too large for the expression
+    /// library's symbolic differentiation).
+    #[error(
+        "{location}: parsing and differentiating the equations took more than {seconds} s (simplify the equations)"
+    )]
+    TooSlow {
+        /// The first equation of the model.
+        location: Location,
+        /// The budget.
+        seconds: u64,
+    },
     /// The expression library panicked on an equation (a defect caught, not a crash).
     #[error("{location}: equation `{equation}`: the expression library failed: {message}")]
     Internal {

@@ -91,6 +91,10 @@ pub(crate) fn expand<'a>(text: &str, lookup: impl Fn(&str) -> Option<Meaning<'a>
     while i < bytes.len() {
         let c = bytes[i];
         if c.is_ascii_whitespace() {
+            // Kept (one space) so that tokens never merge.
+            if !out.ends_with(' ') {
+                out.push(' ');
+            }
             i += 1;
         } else if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(u8::is_ascii_digit)) {
             let start = i;
@@ -161,7 +165,7 @@ pub(crate) fn expand<'a>(text: &str, lookup: impl Fn(&str) -> Option<Meaning<'a>
             return Err(ExpandError::Limit { what: "the number of operators", size: operators, limit: MAX_OPERATORS });
         }
     }
-    if out.is_empty() {
+    if out.trim().is_empty() {
         return Err(ExpandError::Syntax("the expression is empty".to_owned()));
     }
     check_depth(&out)?;
@@ -209,7 +213,7 @@ mod tests {
     #[test]
     fn names_numbers_and_definitions_are_rewritten() {
         let s = expand("sin(x) + k*u^2.5e1 - d / pi", lookup).unwrap();
-        assert_eq!(s, format!("sin(v0000)+(-0.001)*v0003^25-(v0000*2)/{}", std::f64::consts::PI));
+        assert_eq!(s, format!("sin(v0000) + (-0.001)*v0003^25 - (v0000*2) / {}", std::f64::consts::PI));
         assert!(matches!(expand("y + 1", lookup), Err(ExpandError::UnknownSymbol(n)) if n == "y"));
         assert!(matches!(expand("foo(x)", lookup), Err(ExpandError::UnknownFunction(n)) if n == "foo"));
         assert!(matches!(expand("x $ 1", lookup), Err(ExpandError::Syntax(_))));

@@ -12,4 +12,14 @@ pub const MAX_SYMBOLS: usize = 4096;
 /// Deepest nesting of parentheses in an expression after substitution.
 pub const MAX_DEPTH: usize = 256;
 /// Most operators (`+ - * / ^ ,` and function calls) in one expression after substitution.
-pub const MAX_OPERATORS: usize = 4096;
+/// The expression library's symbolic differentiation grows faster than linearly with the size
+/// of an expression (a sum of 256 terms takes about half a second), hence this modest bound.
+pub const MAX_OPERATORS: usize = 256;
+/// Wall-clock budget, in seconds, for parsing and differentiating all the equations of a
+/// model. The work runs on a worker thread with its own large stack
+/// ([`COMPILE_STACK_BYTES`]); past the budget the model is refused and the worker is left to
+/// finish in the background (its result is discarded).
+pub const MAX_COMPILE_SECONDS: u64 = 10;
+/// Stack of the worker thread that parses and differentiates (the expression library recurses
+/// over the expression's structure).
+pub const COMPILE_STACK_BYTES: usize = 256 << 20;

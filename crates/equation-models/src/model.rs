@@ -8,7 +8,9 @@ use nalgebra::{DMatrix, DVector};
 use crate::compiled::{Compiled, EvalFailure};
 use crate::error::EquationError;
 use crate::file::{Discretization, Equation, Spec, TimeModel, read};
-use crate::limits::MAX_FILE_BYTES;
+use crate::limits::{COMPILE_STACK_BYTES, MAX_COMPILE_SECONDS, MAX_FILE_BYTES};
+use std::sync::mpsc::RecvTimeoutError;
+use std::time::Duration;
 
 /// One compiled equation and its partial derivatives.
 #[derive(Debug, Clone)]
@@ -40,8 +42,8 @@ pub struct EquationModel {
     linear: Option<ConstantModel>,
 }
 
-fn compile(eq: &Equation) -> Result<Row, EquationError> {
-    let value = Compiled::parse(&eq.text).map_err(|message| {
+fn compile(eq: &Equation, n_slots: usize) -> Result<Row, EquationError> {
+    let value = Compiled::parse(&eq.text, n_slots).map_err(|message| {
         if message.starts_with("panicked") {
             EquationError::Internal { location: eq.location.clone(), equation: eq.label.clone(), message }
         } else {
@@ -50,6 +52,43 @@ fn compile(eq: &Equation) -> Result<Row, EquationError> {
     })?;
     let partials = value.partials().ok();
     Ok(Row { label: eq.label.clone(), value, partials })
+}
+
+type Rows = (Vec<Row>, Vec<Row>);
+
+/// Compiles every equation on a worker thread with a large stack, within the time budget.
+fn compile_all(spec: &Spec) -> Result<Rows, EquationError> {
+    let (rhs, out) = (spec.rhs.clone(), spec.out.clone());
+    let n_slots = spec.states.len() + spec.inputs.len();
+    let first = spec.rhs.first().cloned();
+    let (send, receive) = std::sync::mpsc::channel();
+    let worker = std::thread::Builder::new()
+        .name("equation-models-compile".to_owned())
+        .stack_size(COMPILE_STACK_BYTES)
+        .spawn(move || {
+            let result = (|| {
+                let rhs = rhs.iter().map(|e| compile(e, n_slots)).collect::<Result<Vec<_>, _>>()?;
+                let out = out.iter().map(|e| compile(e, n_slots)).collect::<Result<Vec<_>, _>>()?;
+                Ok::<_, EquationError>((rhs, out))
+            })();
+            // The receiver may have given up (time budget): nothing to do then.
+            let _ = send.send(result);
+        });
+    let internal = |message: String| match &first {
+        Some(eq) => EquationError::Internal { location: eq.location.clone(), equation: eq.label.clone(), message },
+        None => EquationError::Io { file: String::new(), message },
+    };
+    if let Err(e) = worker {
+        return Err(internal(format!("cannot start the compiling thread: {e}")));
+    }
+    match receive.recv_timeout(Duration::from_secs(MAX_COMPILE_SECONDS)) {
+        Ok(result) => result,
+        Err(RecvTimeoutError::Timeout) => Err(EquationError::TooSlow {
+            location: first.map_or_else(|| crate::error::Location::of_offset("", "", 0), |eq| eq.location),
+            seconds: MAX_COMPILE_SECONDS,
+        }),
+        Err(RecvTimeoutError::Disconnected) => Err(internal("the compiling thread stopped".to_owned())),
+    }
 }
 
 impl EquationModel {
@@ -82,8 +121,7 @@ impl EquationModel {
 
     fn from_spec(spec: Spec) -> Result<Self, EquationError> {
         let n = spec.states.len();
-        let rhs = spec.rhs.iter().map(compile).collect::<Result<Vec<_>, _>>()?;
-        let out = spec.out.iter().map(compile).collect::<Result<Vec<_>, _>>()?;
+        let (rhs, out) = compile_all(&spec)?;
         for ((eq, row), name) in spec.out.iter().zip(&out).zip(&spec.outputs) {
             if !row.value.slots().iter().any(|&s| s < n) {
                 return Err(EquationError::Unobservable { location: eq.location.clone(), output: name.clone() });

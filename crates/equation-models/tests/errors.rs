@@ -20,11 +20,17 @@ const HEAD: &str = "[model]\nstates = [\"x\", \"v\"]\ninputs = [\"a\"]\noutputs 
 #[test]
 fn unknown_symbol_names_it_and_the_equation() {
     let e = error(&format!("{HEAD}[f]\nx = \"x + v\"\nv = \"v + a * mass\"\n[h]\ny = \"x\"\n"));
-    assert!(matches!(&e, EquationError::UnknownSymbol { symbol, equation, .. } if symbol == "mass" && equation == "f.v"));
+    assert!(
+        matches!(&e, EquationError::UnknownSymbol { symbol, equation, .. } if symbol == "mass" && equation == "f.v")
+    );
     assert_at(&e, "car.toml:7:1", "`mass`");
     // A definition may use only earlier ones.
-    let e = error(&format!("{HEAD}[definitions]\nd1 = \"d2 * 2\"\nd2 = \"x\"\n[f]\nx = \"d1\"\nv = \"v\"\n[h]\ny = \"x\"\n"));
-    assert!(matches!(&e, EquationError::UnknownSymbol { symbol, equation, .. } if symbol == "d2" && equation == "definitions.d1"));
+    let e = error(&format!(
+        "{HEAD}[definitions]\nd1 = \"d2 * 2\"\nd2 = \"x\"\n[f]\nx = \"d1\"\nv = \"v\"\n[h]\ny = \"x\"\n"
+    ));
+    assert!(
+        matches!(&e, EquationError::UnknownSymbol { symbol, equation, .. } if symbol == "d2" && equation == "definitions.d1")
+    );
     assert_at(&e, "car.toml:6:1", "d2");
 }
 
@@ -57,7 +63,8 @@ fn missing_and_unknown_equations() {
     assert!(matches!(&e, EquationError::MissingEquation { name, section, .. } if name == "y" && section == "h"));
     let e = error(&format!("{HEAD}[h]\ny = \"x\"\n"));
     assert!(matches!(e, EquationError::Format { .. }));
-    let e = error(&format!("{HEAD}ts = 0.1\n[f]\nx = \"x\"\nv = \"v\"\n[dxdt]\nx = \"v\"\nv = \"a\"\n[h]\ny = \"x\"\n"));
+    let e =
+        error(&format!("{HEAD}ts = 0.1\n[f]\nx = \"x\"\nv = \"v\"\n[dxdt]\nx = \"v\"\nv = \"a\"\n[h]\ny = \"x\"\n"));
     assert_at(&e, "car.toml:9:2", "not both");
 }
 
