@@ -8,7 +8,7 @@ pub const MAX_EXPRESSION_BYTES: usize = 64 << 10;
 /// Most states, most inputs, most outputs (each).
 pub const MAX_NAMES: usize = 256;
 /// Most parameters, most definitions (each).
-pub const MAX_SYMBOLS: usize = 4096;
+pub const MAX_SYMBOLS: usize = 1024;
 /// Deepest nesting of parentheses in an expression after substitution.
 pub const MAX_DEPTH: usize = 256;
 /// Most operators (`+ - * / ^ ,` and function calls) in one expression after substitution.

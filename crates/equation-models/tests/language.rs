@@ -43,3 +43,9 @@ fn functions_constants_and_parameters_evaluate_as_written() {
         assert!((v - expected).abs() < 1e-12, "{expr} = {v}, expected {expected}");
     }
 }
+
+#[test]
+fn models_can_be_shared_between_threads() {
+    fn assert_send_sync<T: Send + Sync + Clone>() {}
+    assert_send_sync::<EquationModel>();
+}
