@@ -30,7 +30,7 @@ struct Row {
 /// constant term, `h` free of inputs) also offers its matrices ([`AnyModel::linear`]).
 #[derive(Debug, Clone)]
 pub struct EquationModel {
-    spec_states: Vec<String>,
+    states: Vec<String>,
     inputs: Vec<String>,
     outputs: Vec<String>,
     parameters: Vec<(String, f64)>,
@@ -131,7 +131,7 @@ impl EquationModel {
             format!("equation `{}` uses a function without a derivative (abs, atan2, min, max, ...)", r.label)
         });
         let mut model = Self {
-            spec_states: spec.states,
+            states: spec.states,
             inputs: spec.inputs,
             outputs: spec.outputs,
             parameters: spec.parameters,
@@ -148,7 +148,7 @@ impl EquationModel {
     /// The states' names, in order.
     #[must_use]
     pub fn state_names(&self) -> &[String] {
-        &self.spec_states
+        &self.states
     }
 
     /// The inputs' names, in order.
@@ -188,12 +188,12 @@ impl EquationModel {
     }
 
     fn dims_(&self) -> Dims {
-        Dims::new(self.spec_states.len(), self.inputs.len(), self.outputs.len())
+        Dims::new(self.states.len(), self.inputs.len(), self.outputs.len())
     }
 
     fn failure(&self, label: &str, x: &[f64], u: &[f64], f: EvalFailure) -> ModelError {
         let mut values = String::new();
-        for (name, v) in self.spec_states.iter().zip(x).chain(self.inputs.iter().zip(u)) {
+        for (name, v) in self.states.iter().zip(x).chain(self.inputs.iter().zip(u)) {
             if !values.is_empty() {
                 values.push_str(", ");
             }
@@ -233,7 +233,7 @@ impl EquationModel {
                 if *slot < n {
                     out[(i, *slot)] = d
                         .eval(x, u)
-                        .map_err(|f| self.failure(&format!("d({})/d{}", r.label, self.spec_states[*slot]), x, u, f))?;
+                        .map_err(|f| self.failure(&format!("d({})/d{}", r.label, self.states[*slot]), x, u, f))?;
                 }
             }
         }
@@ -248,7 +248,7 @@ impl EquationModel {
     /// variables' values).
     pub fn rhs(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
         self.check(x, u)?;
-        models::error::check_dims("out", out, self.spec_states.len(), 1)?;
+        models::error::check_dims("out", out, self.states.len(), 1)?;
         self.eval_rows(&self.rhs, x.as_slice(), u.as_slice(), out.as_mut_slice())
     }
 
@@ -393,13 +393,13 @@ impl DiscreteModel for EquationModel {
 
 impl DifferentiableModel for EquationModel {
     fn f_jacobian(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
-        let mut fx = DVector::zeros(self.spec_states.len());
+        let mut fx = DVector::zeros(self.states.len());
         self.step(x, u, &mut fx, Some(out))
     }
 
     fn h_jacobian(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
         self.check(x, u)?;
-        models::error::check_dims("H", out, self.outputs.len(), self.spec_states.len())?;
+        models::error::check_dims("H", out, self.outputs.len(), self.states.len())?;
         self.jac_rows(&self.out, x.as_slice(), u.as_slice(), out)
     }
 
