@@ -1,0 +1,148 @@
+//! Hostile model files: refused with a typed error or evaluated to a typed error, never a panic
+//! or a hang.
+
+use equation_models::{EquationError, EquationModel, limits};
+use models::{DifferentiableModel, DiscreteModel};
+use nalgebra::{DMatrix, DVector};
+
+fn with_f(expr: &str) -> Result<EquationModel, EquationError> {
+    EquationModel::from_toml_str(
+        &format!("[model]\nstates = [\"x\"]\noutputs = [\"y\"]\n[f]\nx = \"{expr}\"\n[h]\ny = \"x\"\n"),
+        "hostile.toml",
+    )
+}
+
+#[test]
+fn deep_nesting_is_refused_before_parsing() {
+    let deep = format!("{}x{}", "(".repeat(100_000), ")".repeat(100_000));
+    let e = with_f(&deep).unwrap_err();
+    assert!(matches!(e, EquationError::LimitExceeded { .. }), "{e}");
+    let deep = format!("{}x{}", "(".repeat(10_000), ")".repeat(10_000));
+    let e = with_f(&deep).unwrap_err();
+    assert!(matches!(e, EquationError::LimitExceeded { limit, .. } if limit == limits::MAX_DEPTH), "{e}");
+    assert!(e.to_string().starts_with("hostile.toml:5:1"), "{e}");
+    let deep = format!("{}x{}", "sin(".repeat(300), ")".repeat(300));
+    assert!(matches!(with_f(&deep), Err(EquationError::LimitExceeded { .. })));
+    // Within the limit it works, derivatives included.
+    let nested = format!("{}x{}", "sin(".repeat(40), ")".repeat(40));
+    let model = with_f(&nested).unwrap();
+    let mut j = DMatrix::zeros(1, 1);
+    model.f_jacobian(&DVector::from_vec(vec![0.1]), &DVector::zeros(0), &mut j).unwrap();
+    assert!(j[(0, 0)] > 0.0 && j[(0, 0)] <= 1.0);
+    let parens = format!("{}x{}", "(".repeat(200), ")".repeat(200));
+    assert!(with_f(&parens).is_ok());
+}
+
+#[test]
+fn huge_sums_are_refused_or_compiled_quickly() {
+    let huge = vec!["x"; 100_000].join(" + ");
+    let e = with_f(&huge).unwrap_err();
+    assert!(matches!(e, EquationError::LimitExceeded { .. }), "{e}");
+    // Definitions that double at each level cannot blow the length up either.
+    let mut text = String::from("[model]\nstates = [\"x\"]\noutputs = [\"y\"]\n[definitions]\nd0 = \"x\"\n");
+    for i in 1..40 {
+        text.push_str(&format!("d{i} = \"d{} + d{}\"\n", i - 1, i - 1));
+    }
+    text.push_str("[f]\nx = \"d39\"\n[h]\ny = \"x\"\n");
+    let e = EquationModel::from_toml_str(&text, "hostile.toml").unwrap_err();
+    assert!(matches!(e, EquationError::LimitExceeded { .. }), "{e}");
+    // The largest sum allowed compiles and differentiates.
+    let big = vec!["x"; limits::MAX_OPERATORS].join("+");
+    let model = with_f(&big).unwrap();
+    let mut j = DMatrix::zeros(1, 1);
+    model.f_jacobian(&DVector::from_vec(vec![0.5]), &DVector::zeros(0), &mut j).unwrap();
+    assert_eq!(j[(0, 0)], limits::MAX_OPERATORS as f64);
+    let too_big = vec!["x"; limits::MAX_OPERATORS + 2].join("+");
+    assert!(matches!(with_f(&too_big), Err(EquationError::LimitExceeded { .. })));
+}
+
+#[test]
+fn expressions_too_slow_to_differentiate_are_refused_in_time() {
+    // The product rule on 256 factors takes the expression library far longer than the budget.
+    let start = std::time::Instant::now();
+    let product = vec!["x"; limits::MAX_OPERATORS].join("*");
+    let e = with_f(&product).unwrap_err();
+    assert!(matches!(e, EquationError::TooSlow { .. }), "{e}");
+    assert!(e.to_string().starts_with("hostile.toml:5:1"), "{e}");
+    assert!(start.elapsed().as_secs() < limits::MAX_COMPILE_SECONDS + 5);
+}
+
+#[test]
+fn huge_exponents_give_typed_errors() {
+    let model = with_f("x^1e308").unwrap();
+    let u = DVector::zeros(0);
+    let mut out = DVector::zeros(1);
+    model.f(&DVector::from_vec(vec![0.5]), &u, &mut out).unwrap();
+    assert_eq!(out[0], 0.0);
+    let e = model.f(&DVector::from_vec(vec![2.0]), &u, &mut out).unwrap_err();
+    assert!(e.to_string().contains("f.x") && e.to_string().contains("inf"), "{e}");
+    let mut j = DMatrix::zeros(1, 1);
+    assert!(model.f_jacobian(&DVector::from_vec(vec![2.0]), &u, &mut j).is_err());
+    assert!(with_f("x^1e999").is_err());
+    // Non-finite inputs are reported as such.
+    assert!(model.f(&DVector::from_vec(vec![f64::NAN]), &u, &mut out).is_err());
+}
+
+#[test]
+fn oversized_files_and_name_lists_are_refused() {
+    let big = format!("# {}\n", "x".repeat(limits::MAX_FILE_BYTES));
+    assert!(matches!(EquationModel::from_toml_str(&big, "big.toml"), Err(EquationError::FileTooLarge { .. })));
+    let dir = std::env::temp_dir().join(format!("equation-models-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("big.toml");
+    std::fs::write(&path, &big).unwrap();
+    assert!(matches!(EquationModel::from_file(&path), Err(EquationError::FileTooLarge { .. })));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(matches!(
+        EquationModel::from_file(std::path::Path::new("/nonexistent/model.toml")),
+        Err(EquationError::Io { .. })
+    ));
+    let names: Vec<String> = (0..=limits::MAX_NAMES).map(|i| format!("\"s{i}\"")).collect();
+    let text = format!("[model]\nstates = [{}]\noutputs = [\"y\"]\n", names.join(", "));
+    let e = EquationModel::from_toml_str(&text, "many.toml").unwrap_err();
+    assert!(matches!(e, EquationError::LimitExceeded { .. }), "{e}");
+    assert!(e.to_string().starts_with("many.toml:2:1"), "{e}");
+    let e = with_f(&"x+".repeat(limits::MAX_EXPRESSION_BYTES)).unwrap_err();
+    assert!(matches!(e, EquationError::LimitExceeded { .. }), "{e}");
+}
+
+#[test]
+fn garbage_expressions_never_panic() {
+    for bad in [
+        "x^^x",
+        "((((",
+        "))))",
+        "sin()",
+        "sin",
+        "atan2(x)",
+        "min(x, x, x)",
+        ",",
+        "x,x",
+        "--x",
+        "x--x",
+        "^x",
+        "x^",
+        "sin(,)",
+        "1..2",
+        ".5.5",
+        "x 1",
+        "x x",
+        "()",
+        "(x)(x)",
+        "e",
+        "E^x",
+        "x/0",
+        "0/0",
+        "1e308*1e308",
+    ] {
+        let result = std::panic::catch_unwind(|| {
+            if let Ok(model) = with_f(bad) {
+                let mut out = DVector::zeros(1);
+                let _ = model.f(&DVector::from_vec(vec![0.3]), &DVector::zeros(0), &mut out);
+                let mut j = DMatrix::zeros(1, 1);
+                let _ = model.f_jacobian(&DVector::from_vec(vec![0.3]), &DVector::zeros(0), &mut j);
+            }
+        });
+        assert!(result.is_ok(), "`{bad}` panicked");
+    }
+}
