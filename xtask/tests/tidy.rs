@@ -25,6 +25,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("atomic-output", &[]),
     ("svg-plot", &[]),
     ("models", &["dense-kernels"]),
+    ("equation-models", &["models"]),
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels"]),
