@@ -46,7 +46,17 @@ const LAYERS: &[(&str, &[&str])] = &[
     ),
     (
         "port-estimation-py",
-        &["estimators", "models", "dense-kernels", "ellipsoid", "lmi", "port-est", "*-dynamics", "fuzzy-inference"],
+        &[
+            "estimators",
+            "models",
+            "dense-kernels",
+            "ellipsoid",
+            "lmi",
+            "port-est",
+            "*-dynamics",
+            "fuzzy-inference",
+            "equation-models",
+        ],
     ),
 ];
 

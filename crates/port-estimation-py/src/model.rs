@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use car_dynamics::{CarModel, CarParams};
 use carrier_dynamics::{CarrierModel, CarrierParams};
+use equation_models::EquationModel;
 use models::{AnyModel, Capability, ConstantModel, Dims, Integrator};
 use nalgebra::{DMatrix, DVector};
 use numpy::{PyArray1, PyArray2};
@@ -25,10 +26,27 @@ pub type SharedModel = Arc<dyn AnyModel + Send + Sync>;
 #[derive(Debug, Clone)]
 enum Recipe {
     Linear(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>),
-    Truck { ts: f64 },
-    Vessel { ts: f64, rk4_substeps: Option<usize> },
-    Carrier { speed: f64, load: usize, ts: f64 },
-    Car { speed: f64, ts: f64 },
+    Truck {
+        ts: f64,
+    },
+    Vessel {
+        ts: f64,
+        rk4_substeps: Option<usize>,
+    },
+    Carrier {
+        speed: f64,
+        load: usize,
+        ts: f64,
+    },
+    Car {
+        speed: f64,
+        ts: f64,
+    },
+    /// A model file of equations (`equation-models`): its text and the name errors give it.
+    Equations {
+        text: String,
+        file: String,
+    },
 }
 
 /// A discrete-time model ``x[k+1] = f(x[k], u[k]) + w[k]``, ``y[k+1] = h(x[k+1], u[k]) + v[k+1]``.
@@ -36,7 +54,10 @@ enum Recipe {
 /// ``Model(A, B, C)`` is the linear time-invariant model ``f = A x + B u``, ``h = C x`` (``A`` is
 /// n×n, ``B`` n×p — ``n × 0`` for no input — and ``C`` m×n). The vehicle models of the workspace are
 /// built by the static methods ``Model.truck``, ``Model.vessel``, ``Model.carrier`` and
-/// ``Model.car``; ``read_model(path)`` reads a ``port-est`` model file.
+/// ``Model.car``; ``read_model(path)`` reads a ``port-est`` model file; ``Model.from_equations(text)``
+/// compiles a nonlinear model written as equations (states, inputs, outputs, parameters, ``[f]`` or
+/// ``[dxdt]`` with Euler or RK4, ``[h]``; exact symbolic Jacobians; a linear one is recognised as
+/// linear — the format is in ``crates/equation-models/README.md``).
 ///
 /// Every estimator runs on the models that offer what it needs (``capability``): the Kalman,
 /// set-membership, moving-horizon and fuzzy-adaptive filters need a linear model, the EKF and the
@@ -132,6 +153,10 @@ impl Model {
                 let m = CarModel::new(params).and_then(|m| m.discretize(*ts)).map_err(|e| err(&e))?;
                 (Arc::new(m), format!("single-track car, {speed} m/s, exact ZOH at {ts} s"))
             }
+            Recipe::Equations { text, file } => {
+                let m = EquationModel::from_toml_str(text, file).map_err(|e| err(&e))?;
+                (Arc::new(m), format!("equations of {file}"))
+            }
         };
         Ok(Self { inner, recipe, description })
     }
@@ -203,6 +228,21 @@ impl Model {
     #[pyo3(signature = (speed = car_dynamics::DIGEST_SPEED, ts = car_dynamics::DIGEST_SAMPLING_PERIOD))]
     fn car(speed: f64, ts: f64) -> PyResult<Self> {
         Self::build(Recipe::Car { speed, ts })
+    }
+
+    /// A model written as equations: ``text`` is a model file of ``equation-models`` (``[model]``
+    /// with ``states``, ``inputs``, ``outputs``; ``[parameters]``, ``[definitions]``; ``[f]`` or
+    /// ``[dxdt]`` with ``ts`` and ``discretization``; ``[h]``), ``file`` the name its errors give.
+    /// Jacobians are exact (symbolic); a linear model is recognised as linear, so every estimator
+    /// that needs a linear model runs on it. A bad file raises ValueError at ``file:line:column``.
+    ///
+    /// >>> m = pe.Model.from_equations(open("pendulum.toml").read(), "pendulum.toml")  # doctest: +SKIP
+    #[staticmethod]
+    #[pyo3(signature = (text, file = "<string>"))]
+    fn from_equations(py: Python<'_>, text: String, file: &str) -> PyResult<Self> {
+        let recipe = Recipe::Equations { text, file: file.to_owned() };
+        // Compiling differentiates every equation: up to a few seconds for a large model.
+        py.detach(|| no_panic(|| Self::build(recipe)))
     }
 
     /// ``(n, p, m)``: states, inputs, outputs.
@@ -333,6 +373,7 @@ impl Model {
             "vessel" => Recipe::Vessel { ts: f(0)?, rk4_substeps: args.get_item(1)?.extract()? },
             "carrier" => Recipe::Carrier { speed: f(0)?, load: args.get_item(1)?.extract()?, ts: f(2)? },
             "car" => Recipe::Car { speed: f(0)?, ts: f(1)? },
+            "equations" => Recipe::Equations { text: args.get_item(0)?.extract()?, file: args.get_item(1)?.extract()? },
             _ => return Err(bad()),
         };
         no_panic(|| Self::build(recipe))
@@ -352,6 +393,7 @@ impl Model {
             Recipe::Vessel { ts, rk4_substeps } => ("vessel", (*ts, *rk4_substeps)).into_pyobject(py)?,
             Recipe::Carrier { speed, load, ts } => ("carrier", (*speed, *load, *ts)).into_pyobject(py)?,
             Recipe::Car { speed, ts } => ("car", (*speed, *ts)).into_pyobject(py)?,
+            Recipe::Equations { text, file } => ("equations", (text.as_str(), file.as_str())).into_pyobject(py)?,
         };
         Ok((restore, args))
     }
