@@ -70,6 +70,16 @@ pub(crate) struct ConfigFile {
     max_wheel_speed: Option<Spanned<f64>>,
 }
 
+/// The wheel-speed columns of the log as errors name them (no formatting per row).
+const WHEEL_SPEED_COLUMNS: [&str; 6] = [
+    "u2 (wheel speed)",
+    "u3 (wheel speed)",
+    "u4 (wheel speed)",
+    "u5 (wheel speed)",
+    "u6 (wheel speed)",
+    "u7 (wheel speed)",
+];
+
 /// The validated settings.
 #[derive(Debug, Clone)]
 pub(crate) struct Settings {
@@ -268,8 +278,8 @@ fn run_truck<R: Read, W: Write>(
     let mut from_row = false;
     while data.read_row(&mut row)? {
         s.steering.check(data, 1, "u1 (steering angle)", row.u[0])?;
-        for i in 1..7 {
-            s.wheel_speed.check(data, 1 + i, &format!("u{} (wheel speed)", i + 1), row.u[i])?;
+        for (i, name) in WHEEL_SPEED_COLUMNS.iter().enumerate() {
+            s.wheel_speed.check(data, 2 + i, name, row.u[1 + i])?;
         }
         if est.is_none() {
             from_row = s.x0.is_none();

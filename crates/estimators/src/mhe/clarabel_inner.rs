@@ -16,6 +16,22 @@ pub(crate) enum QpFailure {
     Failed,
 }
 
+/// The `rows × columns.len()` sparse matrix whose column `c` holds the `(row, value)` entries of
+/// `columns[c]` (rows increasing within a column).
+pub(crate) fn csc_from_columns(rows: usize, columns: &[Vec<(usize, f64)>]) -> CscMatrix<f64> {
+    let mut colptr = Vec::with_capacity(columns.len() + 1);
+    let (mut rowval, mut nzval) = (Vec::new(), Vec::new());
+    colptr.push(0);
+    for col in columns {
+        for &(r, v) in col {
+            rowval.push(r);
+            nzval.push(v);
+        }
+        colptr.push(rowval.len());
+    }
+    CscMatrix::new(rows, columns.len(), colptr, rowval, nzval)
+}
+
 /// Solves `min ½ zᵀ H z − bᵀ z` over the window's box with Clarabel; `Ok(iterations)` with the
 /// solution in `z`, `Err(())` if Clarabel does not report a solution (or panics).
 pub(crate) fn solve_box_qp(w: &WindowProblem, z: &mut [f64]) -> Result<usize, ()> {
@@ -83,18 +99,8 @@ pub(crate) fn solve_qp(
             }
         }
     }
-    let mut colptr = vec![0];
-    let mut rowval = Vec::new();
-    let mut nzval = Vec::new();
-    for col in &a_col {
-        for &(r, v) in col {
-            rowval.push(r);
-            nzval.push(v);
-        }
-        colptr.push(rowval.len());
-    }
     let rows = bb.len();
-    let a = CscMatrix::new(rows, nz, colptr, rowval, nzval);
+    let a = csc_from_columns(rows, &a_col);
     let cones = if rows > 0 { vec![NonnegativeConeT(rows)] } else { Vec::new() };
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)

@@ -23,6 +23,8 @@ use clarabel_qp::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT, ZeroConeT,
 };
 
+use crate::mhe::clarabel_inner::csc_from_columns;
+
 /// The widening of `V` (in box widths) above which a window is inconsistent.
 pub(crate) const EXCESS_TOLERANCE: f64 = 1e-6;
 
@@ -173,15 +175,7 @@ where
     cols[t_at].push((b.len(), -1.0));
     b.push(0.0);
     let rows = b.len();
-    let (mut colptr, mut rowval, mut nzval) = (vec![0], Vec::new(), Vec::new());
-    for col in &cols {
-        for &(r, v) in col {
-            rowval.push(r);
-            nzval.push(v);
-        }
-        colptr.push(rowval.len());
-    }
-    let a = CscMatrix::new(rows, nv, colptr, rowval, nzval);
+    let a = csc_from_columns(rows, &cols);
     let p = CscMatrix::zeros((nv, nv));
     let mut q = vec![0.0; nv];
     q[t_at] = 1.0;
