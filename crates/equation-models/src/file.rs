@@ -184,8 +184,9 @@ fn expand_error(location: Location, equation: &str, e: ExpandError) -> EquationE
     }
 }
 
-/// Reads and checks a model file's text (`file` names it in errors).
-pub(crate) fn read(text: &str, file: &str) -> Result<Spec, EquationError> {
+/// Reads and checks a model file's text (`file` names it in errors); the top-level keys in
+/// `foreign` belong to another reader and are skipped.
+pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, EquationError> {
     if text.len() > MAX_FILE_BYTES {
         return Err(EquationError::FileTooLarge { file: file.to_owned(), size: text.len(), limit: MAX_FILE_BYTES });
     }
@@ -197,7 +198,8 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Spec, EquationError> {
     })?;
     let root = root.get_ref();
     for (k, _) in root.iter() {
-        if !["model", "parameters", "definitions", "f", "dxdt", "h"].contains(&k.get_ref().as_ref()) {
+        let key = k.get_ref().as_ref();
+        if !["model", "parameters", "definitions", "f", "dxdt", "h"].contains(&key) && !foreign.contains(&key) {
             return Err(cx.format(&k.span(), format!("unknown table `{}`", k.get_ref())));
         }
     }

@@ -97,7 +97,17 @@ impl EquationModel {
     /// # Errors
     /// An [`EquationError`] at the `file:line:column` of the offending key.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Self, EquationError> {
-        Self::from_spec(read(text, file)?)
+        Self::from_spec(read(text, file, &[])?)
+    }
+
+    /// As [`EquationModel::from_toml_str`], for a model file shared with another reader: the
+    /// top-level keys and tables named in `foreign` (the noise description and settings that
+    /// `port-est` reads, say) are skipped instead of refused as unknown.
+    ///
+    /// # Errors
+    /// As [`EquationModel::from_toml_str`].
+    pub fn from_toml_str_with_foreign_keys(text: &str, file: &str, foreign: &[&str]) -> Result<Self, EquationError> {
+        Self::from_spec(read(text, file, foreign)?)
     }
 
     /// Reads a model file (at most [`MAX_FILE_BYTES`] bytes).
