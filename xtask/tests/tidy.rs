@@ -42,6 +42,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "*-dynamics",
             "fuzzy-inference",
             "atomic-output",
+            "equation-models",
         ],
     ),
     (

@@ -5,7 +5,7 @@
 use std::io::Read;
 
 use estimators::AnyEstimator;
-use models::StepModel;
+use models::AnyModel;
 use nalgebra::DVector;
 
 use crate::data::{DataReader, DataRow};
@@ -35,7 +35,7 @@ pub(crate) fn numerical_failure<R: Read>(
     what: &str,
     est: &mut AnyEstimator,
     model: &Model,
-    sm: &StepModel<'_>,
+    sm: &dyn AnyModel,
     row: &DataRow,
     last_u: Option<&DVector<f64>>,
     largest: &LargestCell,
@@ -44,20 +44,29 @@ pub(crate) fn numerical_failure<R: Read>(
     let (p, m) = (model.inputs(), model.outputs());
     let k = row.k;
     let x = est.estimate().center().clone_owned();
-    let predict = |u: &DVector<f64>| &model.c * (&model.a * &x + &model.b * u);
-    let mut retry = |u: &DVector<f64>, predicted: &DVector<f64>| {
-        if !predicted.iter().all(|v| v.is_finite()) {
+    // The measurement the estimate predicts, `h(f(x, u))` (`None` where the model fails there).
+    let predict = |u: &DVector<f64>| {
+        let dm = sm.discrete();
+        let mut next = DVector::zeros(model.states());
+        dm.f(&x, u, &mut next).ok()?;
+        let mut y = DVector::zeros(m);
+        dm.h(&next, u, &mut y).ok()?;
+        Some(y)
+    };
+    let mut retry = |u: &DVector<f64>, predicted: &Option<DVector<f64>>| {
+        let Some(predicted) = predicted.as_ref().filter(|p| p.iter().all(|v| v.is_finite())) else {
             return false;
-        }
+        };
         let mut y = row.y.clone();
         y.rows_mut(0, m).copy_from(predicted);
         est.step(sm, u, &y).is_ok()
     };
     let model_error = || {
         let message = format!(
-            "step k = {k}: numerical failure: {what}; the cause is the model in {} (its `a`, `b`, `c`, `q`, `r`, \
-             `p0`), not the data (the step fails with moderate numbers too)",
-            model.path().display()
+            "step k = {k}: numerical failure: {what}; the cause is the model in {} (its {}, `q`, `r`, `p0`), not the \
+             data (the step fails with moderate numbers too)",
+            model.path().display(),
+            if model.column_names().is_some() { "equations" } else { "`a`, `b`, `c`" }
         );
         Error::At { at: data.locate(Some(0)), message }
     };
@@ -65,6 +74,7 @@ pub(crate) fn numerical_failure<R: Read>(
     // The row's measurement replaced by its prediction.
     let predicted = predict(&row.u);
     if retry(&row.u, &predicted) {
+        let Some(predicted) = predicted else { return model_error() };
         let Some(i) =
             (0..m).max_by(|&a, &b| (row.y[a] - predicted[a]).abs().total_cmp(&(row.y[b] - predicted[b]).abs()))
         else {

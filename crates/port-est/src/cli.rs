@@ -53,8 +53,9 @@ pub enum Command {
     Truck(TruckArgs),
     /// Run the BDS/INS paper's fuzzy-adaptive Kalman filter over logged INS and BDS solutions with the receiver status
     BdsIns(BdsInsArgs),
-    /// List the estimators (--estimator) and the solvers of the set-membership filters (--solver)
-    Estimators,
+    /// List the estimators (--estimator) and the solvers of the set-membership filters (--solver);
+    /// with --model, which estimators run on that model and why the others do not
+    Estimators(EstimatorsArgs),
 }
 
 const TRUCK_FORMATS: &str = "\
@@ -304,6 +305,14 @@ pub struct FilterArgs {
     /// blocks: bytes, or with K, M, G
     #[arg(long, value_name = "SIZE", default_value = "256MiB", value_parser = size)]
     pub mhe_memory_limit: u64,
+}
+
+/// The arguments of `port-est estimators`.
+#[derive(Debug, Args)]
+pub struct EstimatorsArgs {
+    /// A model file: list which estimators run on it and why the others do not
+    #[arg(short, long, value_name = "MODEL.toml")]
+    pub model: Option<PathBuf>,
 }
 
 /// The registry's estimators that run on the linear model of a model file, with their summaries

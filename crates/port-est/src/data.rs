@@ -95,8 +95,10 @@ impl DataRow {
 pub struct DataReader<R: Read> {
     csv: csv::Reader<Recording<io::Chain<Cursor<Vec<u8>>, R>>>,
     path: PathBuf,
-    /// `k`, `u1`…, `y1`….
+    /// `k`, `u1`…, `y1`…, or the model's names where the header uses them.
     names: Vec<String>,
+    /// The model's name of each column, where it has one.
+    aliases: Vec<Option<String>>,
     p: usize,
     record: StringRecord,
     /// Start (as `csv` gives it: possibly before skipped blank lines) and end of the last record.
@@ -119,8 +121,18 @@ impl DataReader<File> {
     /// [`Error::Io`] if the file cannot be read; [`Error::At`] for an empty file or a header
     /// that is not `k,u1,…,up,y1,…,ym`.
     pub fn open(path: &Path, p: usize, m: usize) -> Result<Self, Error> {
+        Self::open_named(path, p, m, None)
+    }
+
+    /// As [`DataReader::open`], and the header may name the first inputs and outputs after
+    /// `names` (the model's input and output names, in order) instead of `u1…`, `y1…`; columns
+    /// beyond them (the fuzzy-adaptive filter's receiver status) keep their positional names.
+    ///
+    /// # Errors
+    /// As [`DataReader::open`].
+    pub fn open_named(path: &Path, p: usize, m: usize, names: Option<(&[String], &[String])>) -> Result<Self, Error> {
         let file = File::open(path).map_err(|e| Error::io(path, e))?;
-        Self::from_reader(path, file, p, m)
+        Self::from_reader_named(path, file, p, m, names)
     }
 }
 
@@ -132,6 +144,21 @@ impl<'a> DataReader<&'a [u8]> {
     pub fn from_text(path: &Path, text: &'a str, p: usize, m: usize) -> Result<Self, Error> {
         Self::from_reader(path, text.as_bytes(), p, m)
     }
+
+    /// As [`DataReader::from_text`], with the model's column names (see
+    /// [`DataReader::open_named`]).
+    ///
+    /// # Errors
+    /// As [`DataReader::open`].
+    pub fn from_text_named(
+        path: &Path,
+        text: &'a str,
+        p: usize,
+        m: usize,
+        names: Option<(&[String], &[String])>,
+    ) -> Result<Self, Error> {
+        Self::from_reader_named(path, text.as_bytes(), p, m, names)
+    }
 }
 
 impl<R: Read> DataReader<R> {
@@ -139,7 +166,22 @@ impl<R: Read> DataReader<R> {
     ///
     /// # Errors
     /// As [`DataReader::open`].
-    pub fn from_reader(path: &Path, mut reader: R, p: usize, m: usize) -> Result<Self, Error> {
+    pub fn from_reader(path: &Path, reader: R, p: usize, m: usize) -> Result<Self, Error> {
+        Self::from_reader_named(path, reader, p, m, None)
+    }
+
+    /// As [`DataReader::from_reader`], with the model's column names (see
+    /// [`DataReader::open_named`]).
+    ///
+    /// # Errors
+    /// As [`DataReader::open`].
+    pub fn from_reader_named(
+        path: &Path,
+        mut reader: R,
+        p: usize,
+        m: usize,
+        model_names: Option<(&[String], &[String])>,
+    ) -> Result<Self, Error> {
         // A byte-order mark is dropped before `csv` sees the stream (offsets start after it).
         let mut head = vec![0u8; BOM.len()];
         let mut got = 0;
@@ -161,14 +203,24 @@ impl<R: Read> DataReader<R> {
             .flexible(true) // the field count is checked here too
             .trim(csv::Trim::All)
             .from_reader(source);
-        let names = std::iter::once("k".to_owned())
+        let names: Vec<String> = std::iter::once("k".to_owned())
             .chain((1..=p).map(|i| format!("u{i}")))
             .chain((1..=m).map(|i| format!("y{i}")))
             .collect();
+        let mut aliases: Vec<Option<String>> = vec![None; names.len()];
+        if let Some((inputs, outputs)) = model_names {
+            for (j, name) in inputs.iter().take(p).enumerate() {
+                aliases[1 + j] = Some(name.clone());
+            }
+            for (i, name) in outputs.iter().take(m).enumerate() {
+                aliases[1 + p + i] = Some(name.clone());
+            }
+        }
         let mut r = Self {
             csv,
             path: path.to_owned(),
             names,
+            aliases,
             p,
             record: StringRecord::new(),
             start: csv::Position::new(),
@@ -202,7 +254,7 @@ impl<R: Read> DataReader<R> {
         &self.path
     }
 
-    /// The column names: `k`, `u1`…, `y1`….
+    /// The column names: `k`, `u1`…, `y1`… (or the model's names, where the header uses them).
     #[must_use]
     pub fn columns(&self) -> &[String] {
         &self.names
@@ -250,6 +302,13 @@ impl<R: Read> DataReader<R> {
 
     fn read_header(&mut self) -> Result<(), Error> {
         let expected = self.names.join(",");
+        let named: Vec<&str> =
+            self.names.iter().zip(&self.aliases).map(|(n, a)| a.as_deref().unwrap_or(n.as_str())).collect();
+        let expected = if self.aliases.iter().any(Option::is_some) {
+            format!("{expected}` or `{}", named.join(","))
+        } else {
+            expected
+        };
         if !self.next_record()? {
             let at = Location::new(&self.path, 1, 1);
             return Err(Error::at(at, format!("empty file, expected the header `{expected}`")));
@@ -260,10 +319,15 @@ impl<R: Read> DataReader<R> {
             let want = &self.names[j];
             match self.record.get(j) {
                 Some(got) if got == want => {}
+                Some(got) if self.aliases[j].as_deref() == Some(got) => self.names[j] = got.to_owned(),
                 got => {
                     let got = got.map_or_else(|| "missing".to_owned(), |g| format!("is {}", echo(g)));
+                    let want = match &self.aliases[j] {
+                        Some(alias) => format!("{want:?} or {alias:?}"),
+                        None => format!("{want:?}"),
+                    };
                     let message = format!(
-                        "header column {} {got}, expected {want:?} (model has p = {p} inputs, m = {m} outputs)",
+                        "header column {} {got}, expected {want} (model has p = {p} inputs, m = {m} outputs)",
                         j + 1
                     );
                     return Err(Error::at(self.locate(Some(j)), message));

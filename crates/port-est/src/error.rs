@@ -98,6 +98,10 @@ pub enum Error {
     /// for an estimator without one).
     #[error("{0}")]
     Usage(String),
+    /// A model written as equations is malformed (at its `file:line:column`), or cannot be
+    /// compiled within its limits.
+    #[error("{0}")]
+    Equations(#[from] equation_models::EquationError),
     /// A file read whole is larger than the limit (`--max-file-size`).
     #[error(
         "{}: larger than {}, the limit for a {what} (raise it with --max-file-size)",

@@ -13,7 +13,6 @@ use estimators::registry::{
     self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
 };
 use estimators::{AnyEstimator, DataChecks, EstimatorError, Setup};
-use models::StepModel;
 use nalgebra::DVector;
 
 use crate::blame::{self, LargestCell};
@@ -126,7 +125,8 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let inputs: [(&'static str, &Path); 2] = [("input", &options.input), ("model", &options.model)];
     let mut out = OutputFile::create(&options.output, &inputs)?;
     let model = read_model_with(&options.model, &options.limits)?;
-    let mut data = DataReader::open(&options.input, model.inputs(), entry.measurement_len(model.outputs()))?;
+    let (p, m) = (model.inputs(), entry.measurement_len(model.outputs()));
+    let mut data = DataReader::open_named(&options.input, p, m, model.column_names())?;
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
     data.set_max_gap(options.limits.max_gap);
     let mut tally = StatusTally::default();
@@ -137,6 +137,24 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
             Ok(FilterSummary { estimator: entry.name, tally })
         }
         Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
+    }
+}
+
+/// Why `entry` cannot run on `model` (`None` when it can): a capability the model lacks, or
+/// settings the model file does not give.
+#[must_use]
+pub fn why_not(model: &Model, entry: &EstimatorEntry) -> Option<String> {
+    if let Some(why) = model.lacks(entry.needs) {
+        return Some(why);
+    }
+    match entry.settings {
+        SettingsKind::SetMembershipInputBox if model.input_range.is_none() => {
+            Some("needs the input range `u_lower`, `u_upper` in the model file".into())
+        }
+        SettingsKind::MovingHorizon if model.mhe.is_none() => {
+            Some("needs an `[mhe]` table (at least the noise boxes `w_lower`, `w_upper`, `v_lower`, `v_upper`)".into())
+        }
+        _ => None,
     }
 }
 
@@ -154,6 +172,7 @@ fn settings(
     let smf = SetMembershipSettings { solver: solver.unwrap_or_default(), ..SetMembershipSettings::default() };
     Ok(match entry.settings {
         SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(smf)),
+        SettingsKind::Unscented => model.ukf.map(EstimatorSettings::Unscented),
         SettingsKind::SetMembershipInputBox => {
             let Some((lower, upper)) = model.input_range.clone() else {
                 return Err(needs("the input range `u_lower`, `u_upper`"));
@@ -174,6 +193,13 @@ fn settings(
 
 /// Builds the estimator `entry` for `model` (the errors in the model file's terms).
 fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver>) -> Result<AnyEstimator, Error> {
+    if let Some(why) = model.lacks(entry.needs) {
+        return Err(Error::Usage(format!(
+            "--estimator {} {why} (`port-est estimators --model {}` lists what runs on it)",
+            entry.name,
+            model.path().display()
+        )));
+    }
     if let Some(SmfSolver::Sdp { backend, .. }) = &solver
         && model.states() > MAX_SDP_STATES
     {
@@ -243,7 +269,7 @@ fn run_filter_into<R: Read, W: Write>(
     let columns = EstimateColumns::of(est.estimate());
     writeln!(out, "k{}", columns.header()).map_err(wio)?;
 
-    let sm = StepModel::new(&model.a, &model.b, &model.c);
+    let sm = model.any();
     let mut row = DataRow::zeros(model.inputs(), entry.measurement_len(model.outputs()));
     let mut last: Option<(u64, DVector<f64>)> = None;
     let mut largest = LargestCell::default();
@@ -251,7 +277,7 @@ fn run_filter_into<R: Read, W: Write>(
         // A gap (only with `--gaps bridge`): prediction-only steps with the last input held.
         if let Some((last_k, last_u)) = &last {
             for missing in last_k + 1..row.k {
-                let e = est.predict(&sm, last_u).map_err(|source| step_error(source, data, missing))?;
+                let e = est.predict(sm, last_u).map_err(|source| step_error(source, data, missing))?;
                 enforce(status, e.status(), || data.locate(Some(0)), missing)?;
                 write!(out, "{}", missing + 1).map_err(wio)?;
                 columns.write(out, e).map_err(wio)?;
@@ -263,11 +289,11 @@ fn run_filter_into<R: Read, W: Write>(
             let message = format!("k = {} is too large (the output row is labelled k + 1)", row.k);
             return Err(Error::at(data.locate(Some(0)), message));
         };
-        let e = match est.step(&sm, &row.u, &row.y) {
+        let e = match est.step(sm, &row.u, &row.y) {
             Ok(e) => e,
             Err(EstimatorError::NumericalFailure(what)) => {
                 let last_u = last.as_ref().map(|(_, u)| u);
-                return Err(blame::numerical_failure(what, &mut est, model, &sm, &row, last_u, &largest, data));
+                return Err(blame::numerical_failure(what, &mut est, model, sm, &row, last_u, &largest, data));
             }
             Err(EstimatorError::Adaptive { index: Some(i), source }) => {
                 // The receiver status columns follow the model's inputs and outputs.

@@ -97,10 +97,20 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
             remove_stale_partial(&options.output, options.on_error, stderr);
             Ok(())
         }
-        Command::Estimators => match write_estimators(stdout) {
-            Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>".as_ref(), e)),
-            _ => Ok(()),
-        },
+        Command::Estimators(args) => {
+            let written = match args.model {
+                None => write_estimators(stdout),
+                Some(path) => {
+                    let limits = Limits { file_bytes, ..Limits::default() };
+                    let model = read_model_with(&path, &limits)?;
+                    write_estimators_for(&model, stdout)
+                }
+            };
+            match written {
+                Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>".as_ref(), e)),
+                _ => Ok(()),
+            }
+        }
     }
 }
 
@@ -131,6 +141,40 @@ fn remove_stale_partial(output: &std::path::Path, on_error: OnError, stderr: &mu
     if partial.is_file() && std::fs::remove_file(&partial).is_ok() {
         let _ = writeln!(stderr, "removed {}, the partial output of an earlier run", partial.display());
     }
+}
+
+/// Writes which estimators of the registry run on `model` and why the others do not.
+///
+/// # Errors
+/// When `w` fails.
+pub fn write_estimators_for(model: &Model, w: &mut dyn Write) -> io::Result<()> {
+    let (n, p, m) = (model.states(), model.inputs(), model.outputs());
+    let kind = match &model.dynamics {
+        model::Dynamics::Matrices(_) => "linear (matrices)".to_owned(),
+        model::Dynamics::Equations(_) => {
+            format!("equations, {}", models::Capability::of(model.any()).label())
+        }
+    };
+    writeln!(w, "{}: {kind}; n = {n} states, p = {p} inputs, m = {m} outputs", model.path().display())?;
+    let width = registry::ESTIMATORS.iter().map(|e| e.name.len()).max().unwrap_or(0);
+    let (runs, not): (Vec<_>, Vec<_>) =
+        registry::ESTIMATORS.iter().map(|e| (e, filter::why_not(model, e))).partition(|(_, why)| why.is_none());
+    writeln!(w, "Runs (--estimator NAME):")?;
+    for (e, _) in &runs {
+        let extra = if e.extra_measurements > 0 {
+            format!(" [{} extra measurement columns after the outputs]", e.extra_measurements)
+        } else {
+            String::new()
+        };
+        writeln!(w, "  {:width$}  {}{extra}", e.name, e.summary)?;
+    }
+    if !not.is_empty() {
+        writeln!(w, "Does not run:")?;
+        for (e, why) in &not {
+            writeln!(w, "  {:width$}  {}", e.name, why.as_deref().unwrap_or_default())?;
+        }
+    }
+    Ok(())
 }
 
 /// Writes the registry: every estimator with its kind, the model it needs and its settings, then

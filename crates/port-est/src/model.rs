@@ -1,26 +1,36 @@
-//! `MODEL.toml`: the discrete-time model `x_{k+1} = a x_k + b u_k + w_k`,
-//! `y_{k+1} = c x_{k+1} + v_{k+1}`, its noise descriptions and initial estimate, read with
-//! `serde` and checked against `a`'s dimension, every complaint at the `file:line:column` of
-//! the key's value.
+//! `MODEL.toml`: either the linear discrete-time model `x_{k+1} = a x_k + b u_k + w_k`,
+//! `y_{k+1} = c x_{k+1} + v_{k+1}` given by its matrices, or a model written as equations (a
+//! `[model]` table, read by `equation-models`), and in both cases its noise descriptions and
+//! initial estimate, read with `serde` and checked against the model's dimensions, every complaint
+//! at the `file:line:column` of the key's value.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
-use estimators::EstimatorError;
+use equation_models::EquationModel;
+use estimators::{EstimatorError, UkfParams};
+use models::{AnyModel, Capability, ConstantModel, DiscreteModel, LinearModel};
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
+use serde::de::IgnoredAny;
 use toml::Spanned;
 
 use crate::error::{Error, Location};
 use crate::limits::Limits;
 
+/// The top-level keys of a model file that `port-est` reads itself; the rest of a model written
+/// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
+/// `equation-models`.
+pub const NOISE_KEYS: [&str; 8] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "mhe", "ukf"];
+
 /// The model file, as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ModelFile {
-    a: Spanned<Vec<Vec<f64>>>,
-    b: Spanned<Vec<Vec<f64>>>,
-    c: Spanned<Vec<Vec<f64>>>,
+    a: Option<Spanned<Vec<Vec<f64>>>>,
+    b: Option<Spanned<Vec<Vec<f64>>>>,
+    c: Option<Spanned<Vec<Vec<f64>>>>,
     q: Spanned<Vec<Vec<f64>>>,
     r: Spanned<Vec<Vec<f64>>>,
     p0: Spanned<Vec<Vec<f64>>>,
@@ -28,17 +38,40 @@ struct ModelFile {
     u_lower: Option<Spanned<Vec<f64>>>,
     u_upper: Option<Spanned<Vec<f64>>>,
     mhe: Option<Spanned<crate::mhe_table::MheTable>>,
+    ukf: Option<Spanned<UkfTable>>,
+    // The equation tables, read by `equation-models`.
+    model: Option<Spanned<IgnoredAny>>,
+    parameters: Option<IgnoredAny>,
+    definitions: Option<IgnoredAny>,
+    f: Option<IgnoredAny>,
+    dxdt: Option<IgnoredAny>,
+    h: Option<IgnoredAny>,
 }
 
-/// A validated model: `n = a.nrows()` states, `p = b.ncols()` inputs, `m = c.nrows()` outputs.
+/// The `[ukf]` table: the unscented filter's sigma-point parameters.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct UkfTable {
+    alpha: Option<f64>,
+    beta: Option<f64>,
+    kappa: Option<f64>,
+}
+
+/// What moves the state: the matrices of a linear model, or equations.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum Dynamics {
+    /// `a`, `b`, `c` given as matrices.
+    Matrices(ConstantModel),
+    /// A `[model]` table of equations (linear or not), compiled by `equation-models`.
+    Equations(Arc<EquationModel>),
+}
+
+/// A validated model: `n` states, `p` inputs, `m` outputs, its noise descriptions and settings.
 #[derive(Debug, Clone)]
 pub struct Model {
-    /// `A` (n×n).
-    pub a: DMatrix<f64>,
-    /// `B` (n×p).
-    pub b: DMatrix<f64>,
-    /// `C` (m×n).
-    pub c: DMatrix<f64>,
+    /// What moves the state.
+    pub dynamics: Dynamics,
     /// `Q` (n×n): process-noise shape (set-membership) or covariance (Kalman).
     pub q: DMatrix<f64>,
     /// `R` (m×m): measurement-noise shape or covariance.
@@ -50,8 +83,10 @@ pub struct Model {
     /// The known input range `(u_lower, u_upper)`, if given.
     pub input_range: Option<(DVector<f64>, DVector<f64>)>,
     /// The moving-horizon settings of the `[mhe]` table, if given (checked structurally; the
-    /// estimator validates them when built, see [`Model::mhe_error`]).
+    /// estimator validates them when built, see [`Model::estimator_error`]).
     pub mhe: Option<estimators::MheSettings>,
+    /// The unscented filter's `[ukf]` table, if given (missing entries: the defaults).
+    pub ukf: Option<UkfParams>,
     /// The file it was read from and where each key's value starts, to report later complaints
     /// (an estimator rejecting `q`, say) at the right place.
     source: Source,
@@ -65,22 +100,70 @@ struct Source {
 }
 
 impl Model {
+    /// The model as the estimators see it: every capability it offers.
+    #[must_use]
+    pub fn any(&self) -> &dyn AnyModel {
+        match &self.dynamics {
+            Dynamics::Matrices(m) => m,
+            Dynamics::Equations(m) => m.as_ref(),
+        }
+    }
+
+    /// The matrices `A`, `B`, `C` when the model is linear (given as matrices, or equations
+    /// recognised as linear).
+    #[must_use]
+    pub fn linear(&self) -> Option<&dyn LinearModel> {
+        self.any().linear()
+    }
+
     /// Number of states `n`.
     #[must_use]
     pub fn states(&self) -> usize {
-        self.a.nrows()
+        self.any().discrete().dims().states
     }
 
     /// Number of inputs `p`.
     #[must_use]
     pub fn inputs(&self) -> usize {
-        self.b.ncols()
+        self.any().discrete().dims().inputs
     }
 
     /// Number of outputs `m`.
     #[must_use]
     pub fn outputs(&self) -> usize {
-        self.c.nrows()
+        self.any().discrete().dims().outputs
+    }
+
+    /// The names of the inputs and outputs, when the model file declares them (equations): the
+    /// data file's header may use them instead of `u1…`, `y1…`.
+    #[must_use]
+    pub fn column_names(&self) -> Option<(&[String], &[String])> {
+        match &self.dynamics {
+            Dynamics::Matrices(_) => None,
+            Dynamics::Equations(m) => Some((m.input_names(), m.output_names())),
+        }
+    }
+
+    /// Why `needs` is not offered by this model, in words (`None` when it is).
+    #[must_use]
+    pub fn lacks(&self, needs: Capability) -> Option<String> {
+        if needs.is_offered_by(self.any()) {
+            return None;
+        }
+        let file = self.path().display();
+        Some(match (&self.dynamics, needs) {
+            (Dynamics::Equations(m), Capability::Differentiable) => format!(
+                "needs {}; in {file}, {}",
+                needs.requirement(),
+                m.not_differentiable().unwrap_or("the equations have no derivatives")
+            ),
+            (Dynamics::Equations(_), _) => format!(
+                "needs {}; the equations of {file} are not linear (or have a constant term, or an output \
+                 depends on an input)",
+                needs.requirement()
+            ),
+            (Dynamics::Matrices(_), _) => format!("needs {}", needs.requirement()),
+        })
     }
 
     /// The file the model was read from.
@@ -229,25 +312,29 @@ pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Mode
     let cx = Ctx { text, path };
     let f: ModelFile = toml::from_str(text).map_err(|e| {
         let message = e.message().trim_end().to_owned();
+        // A key missing because it was written after an equation table (and so read into it).
+        if message.starts_with("missing field")
+            && let Err(Error::At { at, message }) = equations(&cx)
+            && message.contains("belongs at the top of the file")
+        {
+            return Error::At { at, message };
+        }
         match e.span() {
             // (A missing key is reported over the whole document, at 1:1.)
             Some(s) => Error::at(cx.at(s), message),
             None => Error::File { path: path.to_owned(), message },
         }
     })?;
-    let a = cx.matrix("a", &f.a, None, None)?;
-    let n = a.nrows();
-    if a.ncols() != n {
-        return Err(Error::at(cx.at(f.a.span()), format!("`a` must be square, is {n}x{}", a.ncols())));
-    }
-    let b = cx.matrix("b", &f.b, Some(n), None)?;
-    let c = cx.matrix("c", &f.c, None, Some(n))?;
-    let m = c.nrows();
+    let dynamics = dynamics(&cx, &f)?;
+    let dims = match &dynamics {
+        Dynamics::Matrices(m) => DiscreteModel::dims(m),
+        Dynamics::Equations(m) => m.dims(),
+    };
+    let (n, p, m) = (dims.states, dims.inputs, dims.outputs);
     let q = cx.matrix("q", &f.q, Some(n), Some(n))?;
     let r = cx.matrix("r", &f.r, Some(m), Some(m))?;
     let p0 = cx.matrix("p0", &f.p0, Some(n), Some(n))?;
     let x0 = cx.vector("x0", &f.x0, n)?;
-    let p = b.ncols();
     let input_range = match (&f.u_lower, &f.u_upper) {
         (Some(lo), Some(hi)) => {
             let (l, u) = (cx.vector("u_lower", lo, p)?, cx.vector("u_upper", hi, p)?);
@@ -264,11 +351,8 @@ pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Mode
             return Err(Error::at(cx.at(v.span()), "give both `u_lower` and `u_upper`, or neither"));
         }
     };
-    let mut keys = Vec::with_capacity(9);
+    let mut keys = Vec::with_capacity(12);
     for (k, span) in [
-        ("a", f.a.span()),
-        ("b", f.b.span()),
-        ("c", f.c.span()),
         ("q", f.q.span()),
         ("r", f.r.span()),
         ("p0", f.p0.span()),
@@ -277,6 +361,11 @@ pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Mode
     .into_iter()
     .chain(f.u_lower.as_ref().map(|v| ("u_lower", v.span())))
     .chain(f.u_upper.as_ref().map(|v| ("u_upper", v.span())))
+    .chain(f.a.as_ref().map(|v| ("a", v.span())))
+    .chain(f.b.as_ref().map(|v| ("b", v.span())))
+    .chain(f.c.as_ref().map(|v| ("c", v.span())))
+    .chain(f.model.as_ref().map(|v| ("model", v.span())))
+    .chain(f.ukf.as_ref().map(|v| ("ukf", v.span())))
     {
         let (line, column) = line_col(text, span.start);
         keys.push((k, line, column));
@@ -297,7 +386,73 @@ pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Mode
         }
         None => None,
     };
-    Ok(Model { a, b, c, q, r, p0, x0, input_range, mhe, source: Source { path: path.to_owned(), keys } })
+    let ukf = f.ukf.as_ref().map(|t| {
+        let (given, default) = (t.get_ref(), UkfParams::default());
+        UkfParams {
+            alpha: given.alpha.unwrap_or(default.alpha),
+            beta: given.beta.unwrap_or(default.beta),
+            kappa: given.kappa.unwrap_or(default.kappa),
+        }
+    });
+    if let (Some(params), Some(t)) = (&ukf, &f.ukf) {
+        params.weights(n).map_err(|e| Error::at(cx.at(t.span()), format!("`ukf`: {e}")))?;
+    }
+    let source = Source { path: path.to_owned(), keys };
+    Ok(Model { dynamics, q, r, p0, x0, input_range, mhe, ukf, source })
+}
+
+/// The dynamics of a model file: its matrices `a`, `b`, `c`, or its `[model]` of equations.
+fn dynamics(cx: &Ctx<'_>, f: &ModelFile) -> Result<Dynamics, Error> {
+    let matrix_keys = [("a", &f.a), ("b", &f.b), ("c", &f.c)];
+    let tables = [&f.parameters, &f.definitions, &f.f, &f.dxdt, &f.h];
+    if f.model.is_some() || tables.iter().any(|t| t.is_some()) {
+        if let Some((k, v)) = matrix_keys.iter().find_map(|(k, v)| v.as_ref().map(|v| (k, v))) {
+            let message = format!(
+                "`{k}`: a model file gives either the matrices `a`, `b`, `c` of a linear model or equations ([model], \
+                 [f] or [dxdt], [h]), not both"
+            );
+            return Err(Error::at(cx.at(v.span()), message));
+        }
+        return Ok(Dynamics::Equations(Arc::new(equations(cx)?)));
+    }
+    let [(_, Some(fa)), (_, Some(fb)), (_, Some(fc))] = matrix_keys else {
+        let missing: Vec<&str> = matrix_keys.iter().filter(|(_, v)| v.is_none()).map(|(k, _)| *k).collect();
+        let message = format!(
+            "missing {} (a model file gives the matrices `a`, `b`, `c` of a linear model, or a [model] table of \
+             equations)",
+            missing.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ")
+        );
+        return Err(Error::at(Location::new(cx.path, 1, 1), message));
+    };
+    let a = cx.matrix("a", fa, None, None)?;
+    let n = a.nrows();
+    if a.ncols() != n {
+        return Err(Error::at(cx.at(fa.span()), format!("`a` must be square, is {n}x{}", a.ncols())));
+    }
+    let b = cx.matrix("b", fb, Some(n), None)?;
+    let c = cx.matrix("c", fc, None, Some(n))?;
+    // The dimensions and entries are checked above, at their keys.
+    let model = ConstantModel::new(a, b, c).map_err(|e| Error::at(cx.at(fa.span()), e.to_string()))?;
+    Ok(Dynamics::Matrices(model))
+}
+
+/// The model written as equations in the file of `cx` (compiled by `equation-models`, whose own
+/// limits apply: crates/equation-models/README.md).
+fn equations(cx: &Ctx<'_>) -> Result<EquationModel, Error> {
+    let file = cx.path.display().to_string();
+    EquationModel::from_toml_str_with_foreign_keys(cx.text, &file, &NOISE_KEYS).map_err(|e| match e {
+        // TOML puts every key after a table header into that table.
+        equation_models::EquationError::UnknownTarget { location, name, section, .. }
+            if NOISE_KEYS.contains(&name.as_str()) =>
+        {
+            let message = format!(
+                "`{name}` is read as part of [{section}]: `{name}` belongs at the top of the file, before the first \
+                 table"
+            );
+            Error::At { at: Location::new(cx.path, location.line, location.column), message }
+        }
+        e => Error::Equations(e),
+    })
 }
 
 /// Reads and validates `MODEL.toml` (see [`parse_model`]) with the default [`Limits`].

@@ -1,8 +1,9 @@
-//! `port_estimation.read_model`: the model files of `port-est` (`a`, `b`, `c`, `q`, `r`, `p0`,
+//! `port_estimation.read_model`: the model files of `port-est` (`a`, `b`, `c` or equations, `q`, `r`, `p0`,
 //! `x0`, the input range and the `[mhe]` table), read by `port_est::parse_model`, so that a file
 //! means the same in Python as on the command line, with the same `file:line:column` errors.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use estimators::registry;
 use numpy::{PyArray1, PyArray2};
@@ -15,12 +16,12 @@ use crate::estimator::{Estimator, Initial};
 use crate::model::Model;
 use crate::settings::FileSettings;
 
-/// A ``port-est`` model file: the linear model and the estimators' data.
+/// A ``port-est`` model file: the model (matrices or equations) and the estimators' data.
 ///
 /// Attributes
 /// ----------
 /// model : Model
-///     ``Model(a, b, c)``.
+///     ``Model(a, b, c)``, or the model written as equations.
 /// x0, P0, Q, R : ndarray
 ///     The file's ``x0``, ``p0``, ``q``, ``r`` (read-only copies).
 /// u_lower, u_upper : ndarray or None
@@ -42,7 +43,15 @@ pub struct ModelFile {
 impl ModelFile {
     fn parse(py: Python<'_>, path: &Path, text: String) -> PyResult<Self> {
         let file = port_est::parse_model(path, &text).map_err(|e| value_error(e.to_string()))?;
-        let model = Model::from_matrices(file.a.clone(), file.b.clone(), file.c.clone())?;
+        let model = match &file.dynamics {
+            port_est::model::Dynamics::Equations(m) => {
+                Model::from_equation_file(text.clone(), path.display().to_string(), Arc::clone(m))
+            }
+            _ => {
+                let linear = file.linear().ok_or_else(|| value_error("the model file's matrices are missing"))?;
+                Model::from_matrices(linear.a().clone(), linear.b().clone(), linear.c().clone())?
+            }
+        };
         Ok(Self { file, model: Py::new(py, model)?, text })
     }
 }
@@ -65,12 +74,13 @@ impl ModelFile {
         let file = FileSettings {
             input_range: self.file.input_range.as_ref(),
             mhe: self.file.mhe.as_ref(),
+            ukf: self.file.ukf,
             source: Some(&self.file),
         };
         Estimator::create(py, name, self.model.bind(py), initial, settings, file)
     }
 
-    /// The linear model ``(a, b, c)``.
+    /// The model: ``Model(a, b, c)``, or the file's equations.
     #[getter]
     fn model(&self, py: Python<'_>) -> Py<Model> {
         self.model.clone_ref(py)

@@ -47,6 +47,12 @@ enum Recipe {
         text: String,
         file: String,
     },
+    /// A `port-est` model file of equations: as [`Recipe::Equations`], with the noise keys of
+    /// `port-est` (`q`, `r`, `p0`, `x0`, …) beside the equations.
+    EquationFile {
+        text: String,
+        file: String,
+    },
 }
 
 /// A discrete-time model ``x[k+1] = f(x[k], u[k]) + w[k]``, ``y[k+1] = h(x[k+1], u[k]) + v[k+1]``.
@@ -111,6 +117,13 @@ impl Model {
         })
     }
 
+    /// The equations of a `port-est` model file, already compiled (`model`), with the file's text
+    /// to rebuild them when unpickled.
+    pub fn from_equation_file(text: String, file: String, model: Arc<EquationModel>) -> Self {
+        let description = format!("equations of {file}");
+        Self { inner: model, recipe: Recipe::EquationFile { text, file }, description }
+    }
+
     #[allow(non_snake_case)]
     fn from_array_likes(A: &Bound<'_, PyAny>, B: &Bound<'_, PyAny>, C: &Bound<'_, PyAny>) -> PyResult<Self> {
         let a = matrix(A, "A", None, None)?;
@@ -155,6 +168,11 @@ impl Model {
             }
             Recipe::Equations { text, file } => {
                 let m = EquationModel::from_toml_str(text, file).map_err(|e| err(&e))?;
+                (Arc::new(m), format!("equations of {file}"))
+            }
+            Recipe::EquationFile { text, file } => {
+                let m = EquationModel::from_toml_str_with_foreign_keys(text, file, &port_est::model::NOISE_KEYS)
+                    .map_err(|e| err(&e))?;
                 (Arc::new(m), format!("equations of {file}"))
             }
         };
@@ -374,6 +392,9 @@ impl Model {
             "carrier" => Recipe::Carrier { speed: f(0)?, load: args.get_item(1)?.extract()?, ts: f(2)? },
             "car" => Recipe::Car { speed: f(0)?, ts: f(1)? },
             "equations" => Recipe::Equations { text: args.get_item(0)?.extract()?, file: args.get_item(1)?.extract()? },
+            "equation-file" => {
+                Recipe::EquationFile { text: args.get_item(0)?.extract()?, file: args.get_item(1)?.extract()? }
+            }
             _ => return Err(bad()),
         };
         no_panic(|| Self::build(recipe))
@@ -394,6 +415,9 @@ impl Model {
             Recipe::Carrier { speed, load, ts } => ("carrier", (*speed, *load, *ts)).into_pyobject(py)?,
             Recipe::Car { speed, ts } => ("car", (*speed, *ts)).into_pyobject(py)?,
             Recipe::Equations { text, file } => ("equations", (text.as_str(), file.as_str())).into_pyobject(py)?,
+            Recipe::EquationFile { text, file } => {
+                ("equation-file", (text.as_str(), file.as_str())).into_pyobject(py)?
+            }
         };
         Ok((restore, args))
     }

@@ -27,6 +27,8 @@ pub struct FileSettings<'a> {
     pub input_range: Option<&'a (DVector<f64>, DVector<f64>)>,
     /// The `[mhe]` table.
     pub mhe: Option<&'a MheSettings>,
+    /// The `[ukf]` table (keywords override its entries).
+    pub ukf: Option<UkfParams>,
     /// The file, to report an estimator's complaint at the key it is about.
     pub source: Option<&'a port_est::Model>,
 }
@@ -340,7 +342,7 @@ pub fn settings(
         SettingsKind::MovingHorizon => {
             Some(EstimatorSettings::MovingHorizon(Box::new(moving_horizon(&kw, dims, file.mhe)?)))
         }
-        SettingsKind::Unscented => Some(EstimatorSettings::Unscented(sigma_points(&kw, UkfParams::default())?)),
+        SettingsKind::Unscented => Some(EstimatorSettings::Unscented(sigma_points(&kw, file.ukf.unwrap_or_default())?)),
         SettingsKind::NonlinearMovingHorizon => Some(nonlinear_moving_horizon(&kw, dims, entry)?),
         SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::new(fuzzy_adaptive(&kw)?))),
         other => {
