@@ -189,6 +189,26 @@ pub enum EquationError {
         /// The budget.
         seconds: u64,
     },
+    /// `discretization = "zoh"` for `[dxdt]` equations that are not linear in the states and
+    /// inputs.
+    #[error("{location}: `discretization = \"zoh\"` needs linear [dxdt] equations: equation `{equation}` {reason}")]
+    ZohNotLinear {
+        /// The `discretization` key.
+        location: Location,
+        /// The first equation that is not linear (`dxdt.v`).
+        equation: String,
+        /// Why (a partial derivative that is not constant, a constant term, ...).
+        reason: String,
+    },
+    /// The zero-order hold of linear `[dxdt]` equations failed (the matrix exponential
+    /// overflowed).
+    #[error("{location}: the zero-order hold failed: {message}")]
+    ZohFailed {
+        /// The `discretization` key.
+        location: Location,
+        /// The failure.
+        message: String,
+    },
     /// The expression library panicked on an equation (a defect caught, not a crash).
     #[error("{location}: equation `{equation}`: the expression library failed: {message}")]
     Internal {

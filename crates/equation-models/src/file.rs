@@ -34,6 +34,9 @@ pub enum Discretization {
     Euler,
     /// Classical fourth-order Runge–Kutta, `u` held over the step.
     Rk4,
+    /// Exact zero-order hold of linear equations `ẋ = A x + B u`:
+    /// `e^{A ts} x + ∫₀^{ts} e^{Aτ} dτ B u` (only for linear `[dxdt]`).
+    Zoh,
 }
 
 /// One equation: its label (`f.x`), the location of its key and its expanded text.
@@ -56,6 +59,9 @@ pub(crate) struct Spec {
     pub rhs: Vec<Equation>,
     /// One equation per output, in the order of the outputs.
     pub out: Vec<Equation>,
+    /// The `discretization` key of `[model]` (the `[model]` table without it): where a zero-order
+    /// hold of nonlinear equations is refused.
+    pub discretization_at: Location,
 }
 
 type Entry<'t, 'i> = (&'t Spanned<Cow<'i, str>>, &'t Spanned<DeValue<'i>>);
@@ -323,7 +329,8 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
             });
         }
     };
-    Ok(Spec { states, inputs, outputs, parameters, time, rhs, out })
+    let discretization_at = cx.at(&find(model, "discretization").map_or(model_span.clone(), |(k, _)| k.span()));
+    Ok(Spec { states, inputs, outputs, parameters, time, rhs, out, discretization_at })
 }
 
 fn check_count(cx: &Ctx<'_>, entry: Entry<'_, '_>, count: usize) -> Result<(), EquationError> {
@@ -373,7 +380,8 @@ fn time_model(
         Some((k, v)) => match v.get_ref().as_str() {
             Some("euler") => Discretization::Euler,
             Some("rk4") => Discretization::Rk4,
-            _ => return Err(cx.format(&k.span(), "`discretization` must be \"euler\" or \"rk4\"")),
+            Some("zoh") => Discretization::Zoh,
+            _ => return Err(cx.format(&k.span(), "`discretization` must be \"euler\", \"rk4\" or \"zoh\"")),
         },
     };
     Ok(TimeModel::Continuous { ts: value, discretization })

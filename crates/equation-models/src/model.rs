@@ -39,6 +39,8 @@ pub struct EquationModel {
     out: Vec<Row>,
     /// Why the model has no Jacobians (a function the expression library cannot differentiate).
     not_differentiable: Option<String>,
+    /// `(A_d, B_d)` of an exact zero-order hold.
+    zoh: Option<(DMatrix<f64>, DMatrix<f64>)>,
     linear: Option<ConstantModel>,
 }
 
@@ -149,8 +151,19 @@ impl EquationModel {
             rhs,
             out,
             not_differentiable,
+            zoh: None,
             linear: None,
         };
+        if let TimeModel::Continuous { ts, discretization: Discretization::Zoh } = model.time {
+            let (ac, bc) = model.coefficients(&model.rhs).map_err(|(equation, reason)| {
+                EquationError::ZohNotLinear { location: spec.discretization_at.clone(), equation, reason }
+            })?;
+            let d = models::zoh_discretize(&ac, &bc, ts).map_err(|e| EquationError::ZohFailed {
+                location: spec.discretization_at.clone(),
+                message: e.to_string(),
+            })?;
+            model.zoh = Some((d.a_p, d.b_p));
+        }
         model.linear = model.linear_matrices();
         Ok(model)
     }
@@ -296,6 +309,18 @@ impl EquationModel {
                     self.jac_rows(&self.rhs, x.as_slice(), us, j)?;
                 }
             }
+            TimeModel::Continuous { discretization: Discretization::Zoh, .. } => {
+                let (a, b) = self
+                    .zoh
+                    .as_ref()
+                    .ok_or_else(|| ModelError::Evaluation("zero-order hold without its matrices".to_owned()))?;
+                let next = a * x + b * u;
+                models::error::check_finite("f(x, u)", &next)?;
+                out.copy_from(&next);
+                if let Some(j) = jac {
+                    j.copy_from(a);
+                }
+            }
             TimeModel::Continuous { ts, discretization: Discretization::Euler } => {
                 let k = self.g(x, us)?;
                 let next = x + &k * ts;
@@ -331,55 +356,66 @@ impl EquationModel {
         Ok(())
     }
 
+    /// The coefficients of `rows` on the states and on the inputs when every row is linear
+    /// (constant partial derivatives, zero at zero); else the first row that is not and why.
+    fn coefficients(&self, rows: &[Row]) -> Result<(DMatrix<f64>, DMatrix<f64>), (String, String)> {
+        let (n, p) = (self.states.len(), self.inputs.len());
+        let (zx, zu) = (vec![0.0; n], vec![0.0; p]);
+        let (mut mx, mut mu) = (DMatrix::zeros(rows.len(), n), DMatrix::zeros(rows.len(), p));
+        for (i, r) in rows.iter().enumerate() {
+            let fail = |reason: String| (r.label.clone(), reason);
+            match r.value.eval(&zx, &zu) {
+                Ok(v) if v == 0.0 => {}
+                Ok(v) => return Err(fail(format!("has a constant term (it is {v} at zero states and inputs)"))),
+                Err(_) => return Err(fail("cannot be evaluated at zero states and inputs".to_owned())),
+            }
+            let partials =
+                r.partials.as_ref().ok_or_else(|| fail("uses a function without a derivative".to_owned()))?;
+            for (slot, dr) in partials {
+                let name = if *slot < n { &self.states[*slot] } else { &self.inputs[slot - n] };
+                let v = if dr.is_constant() { dr.eval(&zx, &zu).ok() } else { None };
+                let v =
+                    v.ok_or_else(|| fail(format!("is not linear in `{name}` (its derivative is not a constant)")))?;
+                if *slot < n {
+                    mx[(i, *slot)] = v;
+                } else {
+                    mu[(i, slot - n)] = v;
+                }
+            }
+        }
+        Ok((mx, mu))
+    }
+
     /// `A`, `B`, `C` when every partial derivative is a constant, every equation vanishes at
     /// zero (no constant term) and `h` does not depend on the inputs.
     fn linear_matrices(&self) -> Option<ConstantModel> {
-        let d = self.dims_();
-        let (n, p) = (d.states, d.inputs);
-        // (state columns, input columns) of linear rows; `None` if a row is not linear.
-        let matrices = |rows: &[Row]| -> Option<(DMatrix<f64>, DMatrix<f64>)> {
-            let (zx, zu) = (vec![0.0; n], vec![0.0; p]);
-            let (mut mx, mut mu) = (DMatrix::zeros(rows.len(), n), DMatrix::zeros(rows.len(), p));
-            for (i, r) in rows.iter().enumerate() {
-                if r.value.eval(&zx, &zu).ok()? != 0.0 {
-                    return None;
-                }
-                for (slot, dr) in r.partials.as_ref()? {
-                    if !dr.is_constant() {
-                        return None;
+        let (a, b) = match (&self.zoh, self.time) {
+            (Some((a, b)), _) => (a.clone(), b.clone()),
+            (None, TimeModel::Continuous { ts, discretization }) => {
+                let (ac, bc) = self.coefficients(&self.rhs).ok()?;
+                let n = self.states.len();
+                let id = DMatrix::<f64>::identity(n, n);
+                let ah = &ac * ts;
+                let (phi, gamma) = match discretization {
+                    Discretization::Rk4 => {
+                        let ah2 = &ah * &ah;
+                        let ah3 = &ah2 * &ah;
+                        let ah4 = &ah3 * &ah;
+                        (
+                            &id + &ah + &ah2 / 2.0 + &ah3 / 6.0 + &ah4 / 24.0,
+                            (&id + &ah / 2.0 + &ah2 / 6.0 + &ah3 / 24.0) * ts,
+                        )
                     }
-                    let v = dr.eval(&zx, &zu).ok()?;
-                    if *slot < n {
-                        mx[(i, *slot)] = v;
-                    } else {
-                        mu[(i, slot - n)] = v;
-                    }
-                }
+                    // Euler (a zero-order hold has its matrices in `self.zoh`).
+                    _ => (&id + &ah, &id * ts),
+                };
+                (phi, gamma * bc)
             }
-            Some((mx, mu))
+            (None, _) => self.coefficients(&self.rhs).ok()?,
         };
-        let (mut a, mut b) = matrices(&self.rhs)?;
-        let (c, d_out) = matrices(&self.out)?;
+        let (c, d_out) = self.coefficients(&self.out).ok()?;
         if d_out.iter().any(|&v| v != 0.0) {
             return None;
-        }
-        if let TimeModel::Continuous { ts, discretization } = self.time {
-            let id = DMatrix::<f64>::identity(n, n);
-            let ah = &a * ts;
-            let (phi, gamma) = match discretization {
-                Discretization::Euler => (&id + &ah, &id * ts),
-                Discretization::Rk4 => {
-                    let ah2 = &ah * &ah;
-                    let ah3 = &ah2 * &ah;
-                    let ah4 = &ah3 * &ah;
-                    (
-                        &id + &ah + &ah2 / 2.0 + &ah3 / 6.0 + &ah4 / 24.0,
-                        (&id + &ah / 2.0 + &ah2 / 6.0 + &ah3 / 24.0) * ts,
-                    )
-                }
-            };
-            a = phi;
-            b = gamma * b;
         }
         ConstantModel::new(a, b, c).ok()
     }
