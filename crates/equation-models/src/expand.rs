@@ -61,7 +61,7 @@ pub(crate) fn slot_name(slot: usize) -> String {
 }
 
 /// A number as the expression library parses it: plain decimal, negative ones in parentheses.
-fn push_number(out: &mut String, v: f64) {
+pub(crate) fn push_number(out: &mut String, v: f64) {
     if v < 0.0 || (v == 0.0 && v.is_sign_negative()) {
         out.push_str(&format!("(-{})", -v));
     } else {

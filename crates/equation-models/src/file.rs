@@ -7,8 +7,9 @@ use std::ops::Range;
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
+use crate::compiled::Compiled;
 use crate::error::{EquationError, Location};
-use crate::expand::{ExpandError, Meaning, expand, is_identifier, is_reserved};
+use crate::expand::{ExpandError, Meaning, expand, is_identifier, is_reserved, push_number};
 use crate::limits::{MAX_FILE_BYTES, MAX_NAMES, MAX_SYMBOLS};
 
 /// How time advances in a model.
@@ -260,7 +261,7 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
                 }
             })
             .map_err(|e| expand_error(cx.at(&k.span()), &label, e))?;
-            definitions.push((k.get_ref().to_string(), expanded));
+            definitions.push((k.get_ref().to_string(), fold_constant(expanded)));
         }
     }
     let expand_equation = |section: &str, k: &Spanned<Cow<'_, str>>, v: &Spanned<DeValue<'_>>| {
@@ -331,6 +332,29 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
     };
     let discretization_at = cx.at(&find(model, "discretization").map_or(model_span.clone(), |(k, _)| k.span()));
     Ok(Spec { states, inputs, outputs, parameters, time, rhs, out, discretization_at })
+}
+
+/// A definition that mentions no state or input, evaluated once to its number (the same
+/// arithmetic as in place), so that it costs one operand wherever it is used; kept as text if
+/// its value is not a finite number (the equations using it then report the failure).
+fn fold_constant(text: String) -> String {
+    let b = text.as_bytes();
+    let mentions_variable = (0..b.len()).any(|i| {
+        b[i] == b'v'
+            && b.get(i + 1).is_some_and(u8::is_ascii_digit)
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'))
+    });
+    if mentions_variable {
+        return text;
+    }
+    match Compiled::parse(&text, 0).ok().and_then(|c| c.eval(&[], &[]).ok()) {
+        Some(v) => {
+            let mut out = String::new();
+            push_number(&mut out, v);
+            out
+        }
+        None => text,
+    }
 }
 
 fn check_count(cx: &Ctx<'_>, entry: Entry<'_, '_>, count: usize) -> Result<(), EquationError> {

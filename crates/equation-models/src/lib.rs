@@ -3,15 +3,15 @@
 //!
 //! A model file declares states, inputs and outputs, optional parameters and named
 //! intermediate definitions, and either a discrete map `[f]` or a continuous right-hand side
-//! `[dxdt]` (integrated by explicit Euler or RK4 over `ts`), plus the measurements `[h]`. The
-//! crate's `README.md` describes the format.
+//! `[dxdt]` (integrated by explicit Euler or RK4 over `ts`, or by the exact zero-order hold when
+//! linear), plus the measurements `[h]`. The crate's `README.md` describes the format.
 //!
 //! * Each expression is parsed once (by the `exmex` expression library) after the definitions
 //!   and parameters are substituted into it, so the derivatives see through them; evaluation
 //!   fills a stack buffer of the expression's variables (no allocation for up to 32 variables
 //!   per expression; the RK4 and Euler steps allocate their stage vectors).
 //! * The Jacobians are exact: symbolic partial derivatives, and for `[dxdt]` the chain rule
-//!   through the Euler or RK4 step.
+//!   through the Euler or RK4 step (the matrix `e^{A ts}` for the exact zero-order hold).
 //! * [`EquationModel`] implements [`models::DiscreteModel`], [`models::DifferentiableModel`]
 //!   and [`models::AnyModel`] (with `linear()` when the equations are linear).
 //! * Every problem with a file is an [`EquationError`] at the `file:line:column` of the key it

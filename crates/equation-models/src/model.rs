@@ -24,9 +24,9 @@ struct Row {
 
 /// A nonlinear model read from a TOML model file (see the crate documentation for the format).
 ///
-/// `f` is the `[f]` map, or one Euler or RK4 step of `[dxdt]` over `ts`; `h` is `[h]`. The
-/// Jacobians are exact: symbolic partial derivatives, through the chain rule of the integration
-/// scheme for `[dxdt]`. A model whose equations are all linear in the states and inputs (no
+/// `f` is the `[f]` map, or one Euler, RK4 or exact zero-order-hold step of `[dxdt]` over `ts`;
+/// `h` is `[h]`. The Jacobians are exact: symbolic partial derivatives, through the chain rule of
+/// the integration scheme for `[dxdt]`. A model whose equations are all linear in the states and inputs (no
 /// constant term, `h` free of inputs) also offers its matrices ([`AnyModel::linear`]).
 #[derive(Debug, Clone)]
 pub struct EquationModel {
@@ -365,7 +365,7 @@ impl EquationModel {
         for (i, r) in rows.iter().enumerate() {
             let fail = |reason: String| (r.label.clone(), reason);
             match r.value.eval(&zx, &zu) {
-                Ok(v) if v == 0.0 => {}
+                Ok(0.0) => {}
                 Ok(v) => return Err(fail(format!("has a constant term (it is {v} at zero states and inputs)"))),
                 Err(_) => return Err(fail("cannot be evaluated at zero states and inputs".to_owned())),
             }

@@ -129,3 +129,54 @@ fn rk4_converges_at_fourth_order() {
     let ratio = error(20) / error(40);
     assert!((12.0..20.0).contains(&ratio), "error ratio {ratio}");
 }
+
+#[test]
+fn zoh_of_a_linear_dxdt_is_the_workspace_zero_order_hold() {
+    use models::{DifferentiableModel, zoh_discretize};
+    let model = EquationModel::from_toml_str(&OSCILLATOR.replace("DISC", "zoh"), "osc.toml").unwrap();
+    let ac = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -4.0, -0.4]);
+    let bc = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    let zoh = zoh_discretize(&ac, &bc, 0.1).unwrap();
+    let lin = model.linear().expect("linear");
+    assert_eq!(lin.a(), &zoh.a_p);
+    assert_eq!(lin.b(), &zoh.b_p);
+    assert_eq!(lin.c(), &DMatrix::from_row_slice(1, 2, &[1.0, 0.0]));
+    let (x, u) = (DVector::from_vec(vec![1.0, -0.5]), DVector::from_vec(vec![0.7]));
+    let (mut next, mut jac) = (DVector::zeros(2), DMatrix::zeros(2, 2));
+    model.f_with_jacobian(&x, &u, &mut next, &mut jac).unwrap();
+    assert_eq!(next, &zoh.a_p * &x + &zoh.b_p * &u);
+    assert_eq!(jac, zoh.a_p);
+    // rhs is still the continuous right-hand side.
+    let mut g = DVector::zeros(2);
+    model.rhs(&x, &u, &mut g).unwrap();
+    assert_eq!(g, &ac * &x + &bc * &u);
+    // A nonlinear output keeps the exact hold of the dynamics, without matrices.
+    let text = OSCILLATOR.replace("DISC", "zoh").replace("y = \"p\"", "y = \"sin(p)\"");
+    let model = EquationModel::from_toml_str(&text, "osc.toml").unwrap();
+    assert!(model.linear().is_none() && model.differentiable().is_some());
+    model.f(&x, &u, &mut next).unwrap();
+    assert_eq!(next, &zoh.a_p * &x + &zoh.b_p * &u);
+}
+
+#[test]
+fn zoh_of_nonlinear_equations_is_refused_at_the_key() {
+    use equation_models::EquationError;
+    let refused = |v: &str, why: &str| {
+        let text = OSCILLATOR.replace("DISC", "zoh").replace("v = \"-k * p - c * v + u\"", &format!("v = \"{v}\""));
+        let e = EquationModel::from_toml_str(&text, "osc.toml").unwrap_err();
+        assert!(matches!(e, EquationError::ZohNotLinear { .. }), "{e:?}");
+        let m = e.to_string();
+        assert!(
+            m.starts_with("osc.toml:7:1: `discretization = \"zoh\"` needs linear [dxdt] equations: equation `dxdt.v`"),
+            "{m}"
+        );
+        assert!(m.contains(why), "{m}");
+    };
+    refused("-k * sin(p) + u", "is not linear in `p`");
+    refused("v * u", "is not linear in `v`");
+    refused("u + 1", "has a constant term (it is 1 at zero states and inputs)");
+    refused("abs(p)", "uses a function without a derivative");
+    // An unknown value names the three schemes.
+    let e = EquationModel::from_toml_str(&OSCILLATOR.replace("DISC", "exact"), "osc.toml").unwrap_err();
+    assert!(e.to_string().contains("\"euler\", \"rk4\" or \"zoh\""), "{e}");
+}
