@@ -238,7 +238,13 @@ Files:
               rmhe-of) or `blocks`, `lambda_v` or `alpha`, `solver` (coordinate-rotation,
               exact-saddle), `inner`, `max_sweeps`, `tolerance`, `arrival`, `theta`, `prior_mean`,
               `block_weighting`, `output_constraint` (see crates/port-est/README.md).
-  DATA.csv    header `k,u1,…,up,y1,…,ym`; row k holds the input u_k and the measurement y_{k+1}
+              Or the model as equations instead of a, b, c: a [model] table (states, inputs,
+              outputs, ts, discretization), [parameters], [definitions], [f] or [dxdt], [h]
+              (crates/equation-models/README.md), with x0, p0, q, r… and an optional [ukf] table
+              (alpha, beta, kappa) as top-level keys before the first table. Estimators the model
+              cannot serve are refused with the reason (`port-est estimators --model MODEL.toml`).
+  DATA.csv    header `k,u1,…,up,y1,…,ym` (or the model's input and output names, in its order);
+              row k holds the input u_k and the measurement y_{k+1}
               (fkf: two more columns, the satellite count and the RTK code, 0 = no fix).
   OUT.csv     one row per step, labelled k+1: `k,xhat1,…,xhatn`, then by kind of estimate
               `sd1,…,sdn,trace_cov` (Gaussian: one standard deviation per state),
@@ -258,17 +264,19 @@ Limits (each refused with a message naming it): --max-file-size (model file, 16 
 
 Malformed files are reported at their file:line:column.
 
-Example:
-  port-est filter --model examples/filter/model.toml --input examples/filter/data.csv --output out.csv";
+Examples:
+  port-est filter --model examples/filter/model.toml --input examples/filter/data.csv --output out.csv
+  port-est filter --model examples/models/vessel.toml --input examples/vessel/data.csv --output out.csv -e ukf";
 
 /// The arguments of `port-est filter`.
 #[derive(Debug, Args)]
 #[command(after_long_help = FILE_FORMATS)]
 pub struct FilterArgs {
-    /// The model: a, b, c, q, r, p0, x0 and optionally u_lower, u_upper and an [mhe] table (TOML)
+    /// The model: a, b, c (or equations: [model], [f] or [dxdt], [h]), q, r, p0, x0 and optionally
+    /// u_lower, u_upper, an [mhe] and a [ukf] table (TOML)
     #[arg(short, long, value_name = "MODEL.toml")]
     pub model: PathBuf,
-    /// The logged data: header `k,u1,…,up,y1,…,ym` (CSV)
+    /// The logged data: header `k,u1,…,up,y1,…,ym` or the model's names (CSV)
     #[arg(short, long, value_name = "DATA.csv")]
     pub input: PathBuf,
     /// Where to write the estimates (CSV; replaced only if the run succeeds)

@@ -2,13 +2,14 @@
 //!
 //! ```text
 //! port-est filter --model MODEL.toml --input DATA.csv --output OUT.csv [--estimator NAME] [--solver NAME]
-//! port-est estimators
+//! port-est estimators [--model MODEL.toml]
 //! port-est truck --input DATA.csv --output OUT.csv [--config CONFIG.toml]
 //! port-est bds-ins --input DATA.csv --output OUT.csv [--config CONFIG.toml] [--fis SYSTEM.toml] [--scaling none] [--gga]
 //! ```
 //!
 //! `filter` runs any estimator of [`estimators::registry`] (the set-membership filter `smf` by
-//! default, the Kalman filter `kf`, the Yang–Li reconstructions) over a model file ([`model`])
+//! default, the Kalman filter `kf`, the Yang–Li reconstructions, the EKF, UKF and MHEs) over a
+//! model file ([`model`]: matrices, or equations compiled by `equation-models`)
 //! and a CSV log ([`data`]) and writes one estimate per step ([`filter`]) to an output that is
 //! published only when every step succeeded ([`output`]). Malformed files are reported at their
 //! `file:line:column` ([`Error`]). The binary is a thin layer over [`execute`], so that tests

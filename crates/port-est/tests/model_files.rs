@@ -1,0 +1,102 @@
+//! The vehicles' model files of `examples/models/` as `port-est` reads them, and the supply
+//! vessel's example log (`examples/vessel/`, written by `examples/vessel_log.rs` from the compiled
+//! vessel) filtered by the nonlinear estimators through its model file, as the README shows.
+
+use std::path::{Path, PathBuf};
+
+use port_est::{FilterOptions, filter, read_model, write_estimators_for};
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est").join(name);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(str::to_owned).collect();
+    let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
+    (header, rows)
+}
+
+#[test]
+fn every_vehicle_file_is_read_and_says_what_runs_on_it() {
+    // (file, n, p, m, an estimator that runs, one that does not)
+    let cases = [
+        ("carrier", 4, 8, 4, "smf", "rmhe"),
+        ("car", 4, 1, 1, "rmhe", "yang-li"),
+        ("vessel", 6, 3, 3, "mhe-ukf", "kf"),
+        ("bds-ins", 13, 0, 3, "kf", "rmhe"),
+    ];
+    for (name, n, p, m, runs, not) in cases {
+        let path = workspace().join(format!("examples/models/{name}.toml"));
+        let model = read_model(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!((model.states(), model.inputs(), model.outputs()), (n, p, m), "{name}");
+        let mut listing = Vec::new();
+        write_estimators_for(&model, &mut listing).unwrap();
+        let listing = String::from_utf8(listing).unwrap();
+        let (yes, no) = listing.split_once("Does not run:").unwrap_or((&listing, ""));
+        assert!(yes.contains(&format!("\n  {runs} ")), "{name}: {runs} should run:\n{listing}");
+        assert!(no.contains(&format!("\n  {not} ")), "{name}: {not} should not run:\n{listing}");
+    }
+}
+
+#[test]
+fn the_vessel_log_is_tracked_by_the_nonlinear_estimators_of_its_model_file() {
+    let root = workspace();
+    let (_, truth) = csv(&root.join("examples/vessel/truth.csv"));
+    let dir = out_dir("vessel");
+    for estimator in ["ekf", "ukf", "mhe-ukf"] {
+        let output = dir.join(format!("{estimator}.csv"));
+        let summary = filter(&FilterOptions {
+            model: root.join("examples/models/vessel.toml"),
+            input: root.join("examples/vessel/data.csv"),
+            output: output.clone(),
+            estimator: estimator.to_owned(),
+            solver: None,
+            gaps: port_est::GapPolicy::Error,
+            status: port_est::StatusPolicy::Error,
+            checks: None,
+            on_error: port_est::OnError::Discard,
+            limits: port_est::Limits::default(),
+        })
+        .unwrap_or_else(|e| panic!("{estimator}: {e}"));
+        assert_eq!(summary.tally.steps, truth.len() as u64, "{estimator}");
+        let (header, rows) = csv(&output);
+        assert_eq!(header[..7], ["k", "xhat1", "xhat2", "xhat3", "xhat4", "xhat5", "xhat6"]);
+        // After 10 s: the positions within 0.6 m RMS of the truth (the GNSS noise is 1 m), the
+        // heading within 0.25 rad RMS (its sensor's noise: 0.32 rad).
+        let settled = &rows[100..];
+        let rms = |i: usize| {
+            let sum: f64 = settled.iter().zip(&truth[100..]).map(|(r, t)| (r[1 + i] - t[1 + i]).powi(2)).sum();
+            (sum / settled.len() as f64).sqrt()
+        };
+        let (x, y, psi) = (rms(0), rms(1), rms(2));
+        assert!(x < 0.6 && y < 0.6 && psi < 0.25, "{estimator}: RMS errors x {x}, y {y}, ψ {psi}");
+        // The Gaussian filters' standard deviations are honest: fewer than 1 % of the state errors
+        // beyond 3σ (a Gaussian gives 0.27 %).
+        if let Some(sd) = header.iter().position(|h| h == "sd1") {
+            let beyond = rows
+                .iter()
+                .zip(&truth)
+                .flat_map(|(r, t)| (0..6).map(move |i| (r[1 + i] - t[1 + i]).abs() > 3.0 * r[sd + i]))
+                .filter(|&b| b)
+                .count();
+            assert!(beyond * 100 < rows.len() * 6, "{estimator}: {beyond} state errors beyond 3σ");
+        }
+    }
+}
+
+#[test]
+fn the_readmes_show_the_vessel_example() {
+    let command = "port-est filter --model examples/models/vessel.toml --input examples/vessel/data.csv";
+    for readme in ["README.md", "crates/port-est/README.md"] {
+        let text = std::fs::read_to_string(workspace().join(readme)).unwrap();
+        assert!(text.contains(command), "{readme}");
+    }
+}
