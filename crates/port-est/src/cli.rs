@@ -273,7 +273,9 @@ Examples:
 #[command(after_long_help = FILE_FORMATS)]
 pub struct FilterArgs {
     /// The model: a, b, c (or equations: [model], [f] or [dxdt], [h]), q, r, p0, x0 and optionally
-    /// u_lower, u_upper, an [mhe] and a [ukf] table (TOML)
+    /// u_lower, u_upper, an [mhe] and a [ukf] table (TOML); or a built-in vehicle, `builtin:carrier`,
+    /// `builtin:car`, `builtin:truck`, `builtin:vessel`, `builtin:bds-ins` (the compiled model with
+    /// the noise of its file in examples/models/)
     #[arg(short, long, value_name = "MODEL.toml")]
     pub model: PathBuf,
     /// The logged data: header `k,u1,…,up,y1,…,ym` or the model's names (CSV)
@@ -318,7 +320,7 @@ pub struct FilterArgs {
 /// The arguments of `port-est estimators`.
 #[derive(Debug, Args)]
 pub struct EstimatorsArgs {
-    /// A model file: list which estimators run on it and why the others do not
+    /// A model file or `builtin:NAME`: list which estimators run on it and why the others do not
     #[arg(short, long, value_name = "MODEL.toml")]
     pub model: Option<PathBuf>,
 }

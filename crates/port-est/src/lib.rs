@@ -20,6 +20,7 @@
 //! files are removed on SIGINT/SIGTERM, and those of a killed run are named by the next.
 
 pub mod bds_ins;
+pub mod builtin;
 mod blame;
 pub mod cli;
 pub mod data;
@@ -154,6 +155,9 @@ pub fn write_estimators_for(model: &Model, w: &mut dyn Write) -> io::Result<()> 
         model::Dynamics::Matrices(_) => "linear (matrices)".to_owned(),
         model::Dynamics::Equations(_) => {
             format!("equations, {}", models::Capability::of(model.any()).label())
+        }
+        model::Dynamics::Builtin { vehicle, .. } => {
+            format!("{}, {}", vehicle.description, models::Capability::of(model.any()).label())
         }
     };
     writeln!(w, "{}: {kind}; n = {n} states, p = {p} inputs, m = {m} outputs", model.path().display())?;

@@ -16,6 +16,7 @@ use serde::Deserialize;
 use serde::de::IgnoredAny;
 use toml::Spanned;
 
+use crate::builtin::Builtin;
 use crate::error::{Error, Location};
 use crate::limits::Limits;
 
@@ -23,6 +24,26 @@ use crate::limits::Limits;
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
 pub const NOISE_KEYS: [&str; 8] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "mhe", "ukf"];
+
+impl std::fmt::Debug for Dynamics {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Dynamics::Matrices(m) => f.debug_tuple("Matrices").field(m).finish(),
+            Dynamics::Equations(m) => f.debug_tuple("Equations").field(m).finish(),
+            Dynamics::Builtin { vehicle, .. } => f.debug_tuple("Builtin").field(&vehicle.name).finish(),
+        }
+    }
+}
+
+/// The names of a model file's `[model]` table (a built-in vehicle's file is read for its names
+/// and noise only: its model is the compiled one).
+#[derive(Debug, Deserialize)]
+struct Names {
+    #[serde(default)]
+    inputs: Vec<String>,
+    #[serde(default)]
+    outputs: Vec<String>,
+}
 
 /// The model file, as written.
 #[derive(Debug, Deserialize)]
@@ -40,7 +61,7 @@ struct ModelFile {
     mhe: Option<Spanned<crate::mhe_table::MheTable>>,
     ukf: Option<Spanned<UkfTable>>,
     // The equation tables, read by `equation-models`.
-    model: Option<Spanned<IgnoredAny>>,
+    model: Option<Spanned<toml::Value>>,
     parameters: Option<IgnoredAny>,
     definitions: Option<IgnoredAny>,
     f: Option<IgnoredAny>,
@@ -58,14 +79,25 @@ struct UkfTable {
 }
 
 /// What moves the state: the matrices of a linear model, or equations.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 #[non_exhaustive]
 pub enum Dynamics {
     /// `a`, `b`, `c` given as matrices.
     Matrices(ConstantModel),
     /// A `[model]` table of equations (linear or not), compiled by `equation-models`.
     Equations(Arc<EquationModel>),
+    /// A built-in vehicle (`builtin:NAME`): the compiled Rust model, and the names of its
+    /// inputs and outputs from its model file.
+    Builtin {
+        /// The vehicle.
+        vehicle: &'static crate::builtin::Builtin,
+        /// Its compiled model.
+        model: crate::builtin::SharedModel,
+        /// The names of its inputs and outputs.
+        names: (Vec<String>, Vec<String>),
+    },
 }
+
 
 /// A validated model: `n` states, `p` inputs, `m` outputs, its noise descriptions and settings.
 #[derive(Debug, Clone)]
@@ -106,6 +138,7 @@ impl Model {
         match &self.dynamics {
             Dynamics::Matrices(m) => m,
             Dynamics::Equations(m) => m.as_ref(),
+            Dynamics::Builtin { model, .. } => model.as_ref(),
         }
     }
 
@@ -141,6 +174,7 @@ impl Model {
         match &self.dynamics {
             Dynamics::Matrices(_) => None,
             Dynamics::Equations(m) => Some((m.input_names(), m.output_names())),
+            Dynamics::Builtin { names, .. } => Some((&names.0, &names.1)),
         }
     }
 
@@ -162,7 +196,7 @@ impl Model {
                  depends on an input)",
                 needs.requirement()
             ),
-            (Dynamics::Matrices(_), _) => format!("needs {}", needs.requirement()),
+            (Dynamics::Matrices(_) | Dynamics::Builtin { .. }, _) => format!("needs {}", needs.requirement()),
         })
     }
 
@@ -308,6 +342,12 @@ pub fn parse_model(path: &Path, text: &str) -> Result<Model, Error> {
 /// # Errors
 /// As [`parse_model`], and a horizon or blocks beyond the limits at their key.
 pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Model, Error> {
+    parse(path, text, limits, None)
+}
+
+/// [`parse_model_with`], the dynamics being the compiled `builtin` when given (its file then
+/// gives the noise, the settings and the names only).
+fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Builtin>) -> Result<Model, Error> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let cx = Ctx { text, path };
     let f: ModelFile = toml::from_str(text).map_err(|e| {
@@ -325,10 +365,23 @@ pub fn parse_model_with(path: &Path, text: &str, limits: &Limits) -> Result<Mode
             None => Error::File { path: path.to_owned(), message },
         }
     })?;
-    let dynamics = dynamics(&cx, &f)?;
+    let dynamics = match builtin {
+        Some(vehicle) => {
+            let names: Names = match &f.model {
+                Some(table) => table.get_ref().clone().try_into().map_err(|e: toml::de::Error| {
+                    Error::at(cx.at(table.span()), format!("[model]: {}", e.message().trim_end()))
+                })?,
+                None => Names { inputs: Vec::new(), outputs: Vec::new() },
+            };
+            let model = vehicle.compile().map_err(Error::Usage)?;
+            Dynamics::Builtin { vehicle, model, names: (names.inputs, names.outputs) }
+        }
+        None => dynamics(&cx, &f)?,
+    };
     let dims = match &dynamics {
         Dynamics::Matrices(m) => DiscreteModel::dims(m),
         Dynamics::Equations(m) => m.dims(),
+        Dynamics::Builtin { model, .. } => model.discrete().dims(),
     };
     let (n, p, m) = (dims.states, dims.inputs, dims.outputs);
     let q = cx.matrix("q", &f.q, Some(n), Some(n))?;
@@ -469,6 +522,10 @@ pub fn read_model(path: &Path) -> Result<Model, Error> {
 /// [`Error::Io`] if the file cannot be read; [`Error::TooLarge`] beyond `limits.file_bytes`;
 /// [`Error::At`] at the first byte that is not UTF-8; the errors of [`parse_model_with`].
 pub fn read_model_with(path: &Path, limits: &Limits) -> Result<Model, Error> {
+    if let Some(vehicle) = path.to_str().and_then(crate::builtin::lookup) {
+        let vehicle = vehicle.map_err(Error::Usage)?;
+        return parse(path, vehicle.file, limits, Some(vehicle));
+    }
     let text = crate::limits::read_text(path, "model file", limits.file_bytes)?;
     parse_model_with(path, &text, limits)
 }

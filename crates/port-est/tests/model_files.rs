@@ -100,3 +100,42 @@ fn the_readmes_show_the_vessel_example() {
         assert!(text.contains(command), "{readme}");
     }
 }
+
+#[test]
+fn a_builtin_vehicle_is_its_compiled_model_with_its_files_noise() {
+    let root = workspace();
+    let dir = out_dir("builtin");
+    let run = |model: &str, estimator: &str| {
+        let output = dir.join(format!("{}-{estimator}.csv", model.replace(':', "-").replace('/', "-")));
+        filter(&FilterOptions {
+            model: if model.starts_with("builtin:") { model.into() } else { root.join(model) },
+            input: root.join("examples/vessel/data.csv"),
+            output: output.clone(),
+            estimator: estimator.to_owned(),
+            solver: None,
+            gaps: port_est::GapPolicy::Error,
+            status: port_est::StatusPolicy::Error,
+            checks: None,
+            on_error: port_est::OnError::Discard,
+            limits: port_est::Limits::default(),
+        })
+        .unwrap_or_else(|e| panic!("{model} {estimator}: {e}"));
+        csv(&output).1
+    };
+    // The compiled vessel and its equations agree to rounding over the whole log.
+    for estimator in ["ekf", "ukf"] {
+        let (compiled, equations) = (run("builtin:vessel", estimator), run("examples/models/vessel.toml", estimator));
+        assert_eq!(compiled.len(), equations.len());
+        for (a, b) in compiled.iter().zip(&equations) {
+            for (x, y) in a.iter().zip(b).filter(|(x, _)| x.is_finite()) {
+                assert!((x - y).abs() <= 1e-9 * x.abs().max(1.0), "{estimator}: {x} against {y}");
+            }
+        }
+    }
+    for vehicle in port_est::builtin::BUILTINS {
+        let model = read_model(Path::new(&format!("builtin:{}", vehicle.name))).unwrap();
+        assert!(model.column_names().is_some(), "{}", vehicle.name);
+    }
+    let e = read_model(Path::new("builtin:tug")).unwrap_err().to_string();
+    assert!(e.starts_with("unknown built-in model \"tug\" (known: builtin:carrier, builtin:car"), "{e}");
+}
