@@ -22,6 +22,7 @@
 //! assert!(Capability::Discrete.is_offered_by(&m));
 //! ```
 
+use crate::enclosure::SecondOrderModel;
 use crate::model::{ConstantModel, DifferentiableModel, DiscreteModel, LinearModel, StepMatrices, StepModel};
 
 /// What an estimator may ask of a model, weakest first.
@@ -32,6 +33,9 @@ pub enum Capability {
     Discrete,
     /// `f`, `h` and their Jacobians ([`DifferentiableModel`]).
     Differentiable,
+    /// `f`, `h`, their Jacobians and rigorous enclosures of them and of their Hessians over boxes
+    /// ([`SecondOrderModel`]; every linear model offers them, with zero Hessians).
+    SecondOrder,
     /// `A`, `B`, `C` ([`LinearModel`]).
     Linear,
 }
@@ -43,6 +47,7 @@ impl Capability {
         match self {
             Capability::Discrete => "discrete",
             Capability::Differentiable => "differentiable",
+            Capability::SecondOrder => "second-order",
             Capability::Linear => "linear",
         }
     }
@@ -53,6 +58,7 @@ impl Capability {
         match self {
             Capability::Discrete => "f and h",
             Capability::Differentiable => "f, h and their Jacobians",
+            Capability::SecondOrder => "f, h and enclosures of their Jacobians and Hessians over boxes",
             Capability::Linear => "the matrices A, B, C of a linear model",
         }
     }
@@ -62,6 +68,8 @@ impl Capability {
     pub fn of(model: &dyn AnyModel) -> Self {
         if model.linear().is_some() {
             Capability::Linear
+        } else if model.second_order().is_some() {
+            Capability::SecondOrder
         } else if model.differentiable().is_some() {
             Capability::Differentiable
         } else {
@@ -85,6 +93,10 @@ pub trait AnyModel {
     fn differentiable(&self) -> Option<&dyn DifferentiableModel> {
         None
     }
+    /// The model with enclosures of its derivatives over boxes, if it has them.
+    fn second_order(&self) -> Option<&dyn SecondOrderModel> {
+        None
+    }
     /// The model's matrices, if it is linear.
     fn linear(&self) -> Option<&dyn LinearModel> {
         None
@@ -99,6 +111,9 @@ macro_rules! any_linear {
                 self
             }
             fn differentiable(&self) -> Option<&dyn DifferentiableModel> {
+                Some(self)
+            }
+            fn second_order(&self) -> Option<&dyn SecondOrderModel> {
                 Some(self)
             }
             fn linear(&self) -> Option<&dyn LinearModel> {
@@ -139,6 +154,9 @@ impl<M: LinearModel + ?Sized> AnyModel for LinearView<'_, M> {
         self
     }
     fn differentiable(&self) -> Option<&dyn DifferentiableModel> {
+        Some(self)
+    }
+    fn second_order(&self) -> Option<&dyn SecondOrderModel> {
         Some(self)
     }
     fn linear(&self) -> Option<&dyn LinearModel> {

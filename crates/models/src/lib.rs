@@ -6,6 +6,9 @@
 //!   discrete model), and [`LinearTimeVarying`] (the matrices of each step).
 //! * [`capability`]: [`AnyModel`], a model seen through the capabilities it offers (for
 //!   estimators chosen at run time), and [`Capability`].
+//! * [`enclosure`]: [`SecondOrderModel`], rigorous enclosures of `f`, `h` and their first and
+//!   second derivatives over boxes of states (the nonlinear set-membership filter's remainder
+//!   bound); every linear model offers them.
 //! * [`continuous`]: continuous-time models and their discretisation — explicit Euler, RK4,
 //!   exact zero-order hold ([`discretize`]: own Padé matrix exponential), Van Loan's discrete
 //!   process noise.
@@ -46,6 +49,7 @@
 pub mod capability;
 pub mod continuous;
 pub mod discretize;
+pub mod enclosure;
 pub mod error;
 pub mod model;
 pub mod noise;
@@ -58,7 +62,9 @@ pub use continuous::{
     ContinuousModel, DifferentiableContinuousModel, Discretized, Integrator, LinearContinuous, van_loan,
 };
 pub use discretize::{ZohDiscretization, expm, zoh_discretize, zoh_discretize_fixed};
+pub use enclosure::{SecondOrderModel, TaylorEnclosure, check_enclosure_dims};
 pub use error::{ModelError, check_spd};
+pub use intervals::Interval;
 pub use model::{
     ConstantModel, DifferentiableModel, Dims, DiscreteModel, FnModel, JacobianCheck, LinearModel, LinearTimeVarying,
     StepMatrices, StepModel, check_jacobians, numeric_jacobians,

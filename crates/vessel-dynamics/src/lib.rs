@@ -35,6 +35,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod enclosure;
 pub mod error;
 pub mod model;
 pub mod params;

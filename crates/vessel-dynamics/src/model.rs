@@ -230,6 +230,10 @@ impl models::AnyModel for DiscreteVessel {
     fn differentiable(&self) -> Option<&dyn models::DifferentiableModel> {
         Some(self)
     }
+    /// The Euler model's enclosures (crate::enclosure); none for RK4.
+    fn second_order(&self) -> Option<&dyn models::SecondOrderModel> {
+        if self.has_enclosures() { Some(self) } else { None }
+    }
 }
 
 #[cfg(test)]
