@@ -140,6 +140,16 @@ pub enum EstimatorError {
         /// The gate's probability.
         probability: f64,
     },
+    /// The nonlinear set-membership filter cannot bound its linearisation remainder at this step
+    /// (a function undefined somewhere on the set, an overflow, a remainder beyond its limit): it
+    /// publishes no set it cannot certify, and the filter is unchanged.
+    #[error("step {step}: no guaranteed set can be published: {reason}")]
+    GuaranteeLost {
+        /// The step (1 for the first).
+        step: u64,
+        /// Why, naming the function and the bound.
+        reason: String,
+    },
     /// A scalar setting of an estimator is out of range (for example the UKF's `α`).
     #[error("invalid setting {what} = {value}: must be {requirement}")]
     InvalidSetting {

@@ -97,7 +97,8 @@ pub use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel,
 pub use nalgebra;
 pub use registry::{AnyEstimator, EstimatorEntry, EstimatorSettings, SettingsKind, SmfSolver};
 pub use smf::{
-    Consistency, FallbackReason, InconsistencyPolicy, Inflation, InputModel, SdpUpdateSolver, SetEstimate,
+    Consistency, FallbackReason, InconsistencyPolicy, Inflation, InputModel, NonlinearSetMembershipFilter,
+    NonlinearSmfSettings, RemainderBounds, SdpUpdateSolver, SetEstimate,
     SetMembershipFilter, StepReport, TAU_FLOOR, TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver,
     UpdateStatus,
 };

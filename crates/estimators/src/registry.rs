@@ -34,7 +34,7 @@ use nalgebra::DVector;
 
 use fuzzy_inference::FuzzySystem;
 use lmi::SolverSettings;
-use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel};
+use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel, SecondOrderModel};
 
 use crate::adaptive::{AdaptiveKalmanFilter, FuzzyScaling};
 use crate::checks::DataChecks;
@@ -42,7 +42,9 @@ use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
 use crate::mhe::{MheCost, MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
-use crate::smf::{InconsistencyPolicy, SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver};
+use crate::smf::{
+    InconsistencyPolicy, NonlinearSetMembershipFilter, SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver,
+};
 use crate::traits::{DynEstimator, Estimate, EstimateKind, Setup};
 use crate::ukf::{UkfParams, UnscentedKalmanFilter};
 use crate::yang_li;
@@ -340,6 +342,8 @@ pub mod names {
     pub const UKF: &str = "ukf";
     /// The nonlinear moving-horizon estimator with a UKF arrival cost.
     pub const MHE_UKF: &str = "mhe-ukf";
+    /// The nonlinear set-membership filter (certified linearisation remainder).
+    pub const SMF_NL: &str = "smf-nl";
 }
 
 /// The set-membership filter built by `$build` (an expression of the solver `$t`) with the
@@ -476,6 +480,31 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         build: |e, setup, s| {
             let EstimatorSettings::NonlinearMovingHorizon(s) = s else { return Err(wrong_settings(e)) };
             Ok(on_differentiable(e, NonlinearMhe::new(setup, *s)?))
+        },
+    },
+    EstimatorEntry {
+        name: names::SMF_NL,
+        kind: EstimateKind::GuaranteedEllipsoid,
+        summary: "nonlinear set-membership filter: the improved update on the model linearised about the centre, \
+                  its remainder bounded over the set by interval Hessians (docs/nonlinear-smf.md), certified containment",
+        needs: Capability::SecondOrder,
+        settings: SettingsKind::SetMembership,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
+            let checks = DataChecks::with_policy(s.inconsistency);
+            Ok(match solver(s.solver)? {
+                Solver::Two(t) => {
+                    let mut f = NonlinearSetMembershipFilter::with_solver(setup, t)?;
+                    f.set_data_checks(checks)?;
+                    on_second_order(e, f)
+                }
+                Solver::Sdp(t) => {
+                    let mut f = NonlinearSetMembershipFilter::with_solver(setup, t)?;
+                    f.set_data_checks(checks)?;
+                    on_second_order(e, f)
+                }
+            })
         },
     },
 ];
@@ -661,6 +690,13 @@ fn on_differentiable<E: for<'x> DynEstimator<dyn DifferentiableModel + 'x> + Sen
     Box::new(OnDifferentiable { name: e.name, inner })
 }
 
+fn on_second_order<E: for<'x> DynEstimator<dyn SecondOrderModel + 'x> + Send + 'static>(
+    e: &'static EstimatorEntry,
+    inner: E,
+) -> Inner {
+    Box::new(OnSecondOrder { name: e.name, inner })
+}
+
 fn on_discrete<E: for<'x> DynEstimator<dyn DiscreteModel + 'x> + Send + 'static>(
     e: &'static EstimatorEntry,
     inner: E,
@@ -676,6 +712,11 @@ fn linear_of<'a>(m: &'a (dyn AnyModel + '_)) -> Option<&'a dyn LinearModel> {
 /// The model with Jacobians, if it has them.
 fn differentiable_of<'a>(m: &'a (dyn AnyModel + '_)) -> Option<&'a dyn DifferentiableModel> {
     m.differentiable()
+}
+
+/// The model with enclosures of its derivatives, if it has them.
+fn second_order_of<'a>(m: &'a (dyn AnyModel + '_)) -> Option<&'a dyn SecondOrderModel> {
+    m.second_order()
 }
 
 /// The model as `f` and `h`: every model offers them.
@@ -736,6 +777,7 @@ macro_rules! capability_adapter {
 
 capability_adapter!(OnLinear, LinearModel, Capability::Linear, linear_of);
 capability_adapter!(OnDifferentiable, DifferentiableModel, Capability::Differentiable, differentiable_of);
+capability_adapter!(OnSecondOrder, SecondOrderModel, Capability::SecondOrder, second_order_of);
 capability_adapter!(OnDiscrete, DiscreteModel, Capability::Discrete, discrete_of);
 
 #[cfg(test)]

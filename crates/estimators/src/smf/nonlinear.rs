@@ -1,0 +1,478 @@
+//! The nonlinear set-membership filter (`smf-nl`): the improved filter (13)–(29) on the model
+//! linearised about the current centre, its Lagrange remainder bounded rigorously over the set and
+//! added to the noise sets (docs/nonlinear-smf.md, equations (N1)–(N9)).
+//!
+//! One step from `x_k ∈ 𝓔(x̂, P)` with `x_{k+1} = f(x_k, u) + w`, `y = h(x_{k+1}, u) + v`:
+//!
+//! 1. the box `B = x̂ ± s`, `s_j = √P_jj` (rounded up), holds the set (N1);
+//! 2. the model's enclosures ([`SecondOrderModel`]) at the point `x̂` give `f̂ ≈ f(x̂)` and
+//!    `Â ≈ ∂f/∂x(x̂)` with their errors, and over `B` the Hessians; for every `x` of the set
+//!    `|f_i(x) − f̂_i − Â_i (x − x̂)| ≤ ρ_i = |f_i(x̂) − f̂_i| + Σ_j |J_ij − Â_ij| s_j +
+//!    ½ Σ_jk |H_ijk| s_j s_k` (N2), all in outward-rounded interval arithmetic;
+//! 3. so `x_{k+1} = Â x_k + b + e + w` with `b = f̂ − Â x̂` and `e` in the box `|e_i| ≤ ρ_i`
+//!    (plus the rounding of `b`), which lies in `𝓔(0, k·diag ρ²)` (`k` non-zero entries), and
+//!    `e + w ∈ 𝓔(0, Q')`, `Q' = (1 + 1/β) Q + (1 + β) k diag ρ²` (N3);
+//! 4. the same for `h` about the predicted centre `x̄ = Â x̂ + b` over the predicted box `x̄ ± t`,
+//!    `t_i = √(Â P Âᵀ)_ii + ρ_i + √Q_ii` (N4): `y' = y − ĥ + Ĉ x̄ = Ĉ x_{k+1} + v'` with
+//!    `v' ∈ 𝓔(0, R')` (N5);
+//! 5. the linear filter's certified step on `(Â, b, Ĉ)` with `Q'`, `R'` and `y'` (N6).
+//!
+//! The published set is certified as the linear filter's: it contains `x_{k+1}` whenever
+//! `x_k ∈ 𝓔(x̂, P)`, `w ∈ 𝓔(0, Q)` and `v ∈ 𝓔(0, R)`. When an enclosure is unbounded (a function
+//! undefined somewhere on the set, an overflow) or a remainder exceeds the limit
+//! ([`NonlinearSmfSettings::max_remainder`]), the step returns
+//! [`EstimatorError::GuaranteeLost`] and the filter is unchanged. On a linear model every
+//! remainder is zero and the filter is the linear one (to rounding).
+
+use models::{Dims, Interval, SecondOrderModel, StepMatrices, TaylorEnclosure};
+use nalgebra::{DMatrix, DVector};
+
+use super::filter::{SetEstimate, SetMembershipFilter};
+use super::two_multiplier::TwoMultiplierSolver;
+use super::update::UpdateSolver;
+use crate::checks::DataChecks;
+use crate::error::EstimatorError;
+use crate::traits::Setup;
+use crate::validate::check_vec;
+
+/// Unit roundoff of `f64`.
+const U: f64 = f64::EPSILON / 2.0;
+
+/// The settings of the nonlinear set-membership filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NonlinearSmfSettings {
+    /// The largest remainder bound `ρ_i`, `σ_i` accepted (in the state's or the measurement's
+    /// units); beyond it the linearisation no longer describes the model on the set, and the
+    /// step reports [`EstimatorError::GuaranteeLost`] instead of publishing a set that has grown
+    /// without limit. Default `1e6`.
+    pub max_remainder: f64,
+}
+
+impl Default for NonlinearSmfSettings {
+    fn default() -> Self {
+        Self { max_remainder: 1e6 }
+    }
+}
+
+/// The remainder bounds of the last step.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RemainderBounds {
+    /// `ρ` (N2): the bound of the process model's linearisation remainder, per state.
+    pub process: DVector<f64>,
+    /// `σ` (N5): the bound of the measurement model's, per output.
+    pub measurement: DVector<f64>,
+}
+
+#[derive(Debug, Clone)]
+struct Work {
+    point_f: TaylorEnclosure,
+    box_f: TaylorEnclosure,
+    point_h: TaylorEnclosure,
+    box_h: TaylorEnclosure,
+    boxed: Vec<Interval>,
+    radius: DVector<f64>,
+    lin: StepMatrices,
+    one: DVector<f64>,
+    xbar: DVector<f64>,
+    y_lin: DVector<f64>,
+    q_eff: DMatrix<f64>,
+    r_eff: DMatrix<f64>,
+    remainders: RemainderBounds,
+}
+
+/// The nonlinear set-membership filter over any [`SecondOrderModel`], generic over the solver of
+/// (29).
+#[derive(Debug, Clone)]
+pub struct NonlinearSetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
+    inner: SetMembershipFilter<S>,
+    dims: Dims,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    settings: NonlinearSmfSettings,
+    ws: Work,
+    /// The input of the pending prediction (for `h(x, u)` at the update).
+    u_last: DVector<f64>,
+}
+
+impl NonlinearSetMembershipFilter<TwoMultiplierSolver> {
+    /// The filter with the exact two-multiplier solver of (29).
+    ///
+    /// # Errors
+    /// As [`SetMembershipFilter::new`].
+    pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
+        Self::with_solver(setup, TwoMultiplierSolver::new())
+    }
+}
+
+fn guarantee_lost(step: u64, reason: impl Into<String>) -> EstimatorError {
+    EstimatorError::GuaranteeLost { step, reason: reason.into() }
+}
+
+/// The midpoint of a bounded interval.
+fn mid(v: Interval) -> f64 {
+    0.5 * v.lo() + 0.5 * v.hi()
+}
+
+/// `Q' ⪰ Q ⊕ box(ρ)` (N3): `(1 + 1/β) Q + (1 + β) k diag ρ²`, rounding covered. `Q'` is `Q`
+/// itself when `ρ = 0`.
+fn inflate(q: &DMatrix<f64>, rho: &DVector<f64>, out: &mut DMatrix<f64>) {
+    out.copy_from(q);
+    let k = rho.iter().filter(|r| **r > 0.0).count();
+    if k == 0 {
+        return;
+    }
+    let kf = k as f64;
+    let mut trace_d = Interval::ZERO;
+    for r in rho.iter() {
+        trace_d = trace_d + Interval::point(*r).sqr() * kf;
+    }
+    // The trace-optimal weight: tr((1 + 1/β) Q + (1 + β) D) is least at β = √(tr Q / tr D). Any
+    // β > 0 gives an outer bound, so its rounding does not matter; the factors are rounded up.
+    let trace_q = q.trace().max(f64::MIN_POSITIVE);
+    let beta = (trace_q / trace_d.hi().max(f64::MIN_POSITIVE)).sqrt().clamp(1e-150, 1e150);
+    let f1 = (Interval::point(1.0) + Interval::point(1.0) / Interval::point(beta)).hi();
+    let f2 = (Interval::point(1.0) + Interval::point(beta)).hi();
+    let n = q.nrows() as f64;
+    let mut biggest = 0.0f64;
+    for (o, qv) in out.iter_mut().zip(q.iter()) {
+        *o = f1 * qv;
+        biggest = biggest.max(o.abs());
+    }
+    for (i, r) in rho.iter().enumerate() {
+        let box_part = (Interval::point(*r).sqr() * kf * f2).hi();
+        out[(i, i)] += box_part;
+        biggest = biggest.max(out[(i, i)].abs());
+    }
+    // The elementwise roundings form a symmetric error matrix of spectral norm at most
+    // n · 2u · max|entry| (Gershgorin); a diagonal of twice that covers it.
+    let pad = 4.0 * n * U * biggest;
+    for i in 0..q.nrows() {
+        out[(i, i)] += pad;
+    }
+}
+
+impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
+    /// The filter with `solver`; `setup.process_noise`, `setup.measurement_noise` are the shapes
+    /// of the noise ellipsoids, `setup.p0` the initial set's.
+    ///
+    /// # Errors
+    /// As [`SetMembershipFilter::with_solver`].
+    pub fn with_solver(setup: Setup, solver: S) -> Result<Self, EstimatorError> {
+        let (n, p, m) = (setup.x0.len(), setup.inputs, setup.measurement_noise.nrows());
+        let (q, r) = (setup.process_noise.clone(), setup.measurement_noise.clone());
+        let inner = SetMembershipFilter::with_solver(Setup { inputs: 1, ..setup }, solver)?;
+        let ws = Work {
+            point_f: TaylorEnclosure::new(n, n),
+            box_f: TaylorEnclosure::new(n, n),
+            point_h: TaylorEnclosure::new(m, n),
+            box_h: TaylorEnclosure::new(m, n),
+            boxed: vec![Interval::ZERO; n],
+            radius: DVector::zeros(n),
+            lin: StepMatrices { a: DMatrix::zeros(n, n), b: DMatrix::zeros(n, 1), c: DMatrix::zeros(m, n) },
+            one: DVector::from_element(1, 1.0),
+            xbar: DVector::zeros(n),
+            y_lin: DVector::zeros(m),
+            q_eff: q.clone(),
+            r_eff: r.clone(),
+            remainders: RemainderBounds { process: DVector::zeros(n), measurement: DVector::zeros(m) },
+        };
+        Ok(Self { inner, dims: Dims::new(n, p, m), q, r, settings: NonlinearSmfSettings::default(), ws, u_last: DVector::zeros(p) })
+    }
+
+    /// Replaces the settings.
+    ///
+    /// # Errors
+    /// [`EstimatorError::InvalidSetting`] for a `max_remainder` that is not positive.
+    pub fn with_settings(mut self, settings: NonlinearSmfSettings) -> Result<Self, EstimatorError> {
+        if !(settings.max_remainder > 0.0) {
+            return Err(EstimatorError::InvalidSetting {
+                what: "max_remainder",
+                value: settings.max_remainder,
+                requirement: "positive",
+            });
+        }
+        self.settings = settings;
+        Ok(self)
+    }
+
+    /// The current set.
+    #[must_use]
+    pub fn estimate(&self) -> &SetEstimate {
+        self.inner.estimate()
+    }
+
+    /// `(n, p, m)`.
+    #[must_use]
+    pub fn dims(&self) -> Dims {
+        self.dims
+    }
+
+    /// The remainder bounds `ρ`, `σ` of the last step.
+    #[must_use]
+    pub fn remainders(&self) -> &RemainderBounds {
+        &self.ws.remainders
+    }
+
+    /// The data checks (as the linear filter's).
+    ///
+    /// # Errors
+    /// As [`SetMembershipFilter::set_data_checks`].
+    pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
+        self.inner.set_data_checks(checks)
+    }
+
+    fn check<M: SecondOrderModel + ?Sized>(&self, model: &M) -> Result<(), EstimatorError> {
+        let d = model.dims();
+        for (what, expected, found) in [
+            ("model states", self.dims.states, d.states),
+            ("model inputs", self.dims.inputs, d.inputs),
+            ("model outputs", self.dims.outputs, d.outputs),
+        ] {
+            if expected != found {
+                return Err(EstimatorError::DimensionMismatch { what, expected, found });
+            }
+        }
+        Ok(())
+    }
+
+    /// (N1)–(N3): linearises `f` about the centre of the current set: `ws.lin.a`, `ws.lin.b`,
+    /// `ws.remainders.process`, `ws.q_eff`, and the predicted centre `ws.xbar` with the predicted
+    /// box's half-widths in `ws.radius`.
+    fn linearise_f<M: SecondOrderModel + ?Sized>(&mut self, model: &M, u: &DVector<f64>) -> Result<(), EstimatorError> {
+        let step = self.inner.steps() + 1;
+        let n = self.dims.states;
+        let est = self.inner.estimate();
+        let ws = &mut self.ws;
+        for j in 0..n {
+            ws.radius[j] = Interval::point(est.shape[(j, j)].max(0.0)).sqrt().hi();
+            ws.boxed[j] = Interval::point(est.center[j]);
+        }
+        model.f_enclosure(&ws.boxed, u, &mut ws.point_f)?;
+        if !ws.point_f.is_bounded() {
+            return Err(guarantee_lost(step, "f or its Jacobian is undefined or overflows at the set's centre"));
+        }
+        for j in 0..n {
+            ws.boxed[j] = Interval::centered(est.center[j], ws.radius[j]);
+        }
+        model.f_enclosure(&ws.boxed, u, &mut ws.box_f)?;
+        if !ws.box_f.is_bounded() {
+            return Err(guarantee_lost(
+                step,
+                "the Hessian of f is unbounded on the set's bounding box (a function undefined there, or an overflow)",
+            ));
+        }
+        for i in 0..n {
+            let value = ws.point_f.value(i);
+            let f_hat = mid(value);
+            let mut rho = Interval::point((value - f_hat).mag());
+            let mut b = Interval::point(f_hat);
+            for j in 0..n {
+                let jac = ws.point_f.jacobian(i, j);
+                let a = mid(jac);
+                ws.lin.a[(i, j)] = a;
+                rho = rho + Interval::point((jac - a).mag()) * ws.radius[j];
+                b = b - Interval::point(a) * est.center[j];
+                for k in 0..n {
+                    let h = ws.box_f.hessian(i, j, k).mag();
+                    if h != 0.0 {
+                        rho = rho + Interval::point(0.5 * h) * ws.radius[j] * ws.radius[k];
+                    }
+                }
+            }
+            let b_mid = mid(b);
+            ws.lin.b[(i, 0)] = b_mid;
+            rho = rho + (b - b_mid).mag();
+            ws.remainders.process[i] = rho.hi();
+        }
+        let worst = ws.remainders.process.iter().copied().fold(0.0, f64::max);
+        if !(worst <= self.settings.max_remainder) {
+            return Err(guarantee_lost(
+                step,
+                format!(
+                    "the linearisation remainder of f reaches {worst:e}, beyond max_remainder = {:e}: the set has \
+                     outgrown the model's linearisation",
+                    self.settings.max_remainder
+                ),
+            ));
+        }
+        inflate(&self.q, &ws.remainders.process, &mut ws.q_eff);
+        // (N4): the predicted centre and the predicted box.
+        for i in 0..n {
+            let mut xbar = Interval::point(ws.lin.b[(i, 0)]);
+            let mut apa = Interval::ZERO;
+            for j in 0..n {
+                xbar = xbar + Interval::point(ws.lin.a[(i, j)]) * est.center[j];
+                for k in 0..n {
+                    apa = apa + Interval::point(ws.lin.a[(i, j)]) * est.shape[(j, k)] * ws.lin.a[(i, k)];
+                }
+            }
+            let centre = mid(xbar);
+            ws.xbar[i] = centre;
+            let half = Interval::point(apa.hi().max(0.0)).sqrt()
+                + ws.remainders.process[i]
+                + Interval::point(self.q[(i, i)].max(0.0)).sqrt()
+                + (xbar - centre).mag();
+            ws.radius[i] = half.hi();
+        }
+        Ok(())
+    }
+
+    /// (N4)–(N5): linearises `h` about `ws.xbar` over `ws.xbar ± ws.radius`: `ws.lin.c`,
+    /// `ws.y_lin`, `ws.remainders.measurement`, `ws.r_eff`.
+    fn linearise_h<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<(), EstimatorError> {
+        let step = self.inner.steps() + 1;
+        let (n, m) = (self.dims.states, self.dims.outputs);
+        let ws = &mut self.ws;
+        for j in 0..n {
+            ws.boxed[j] = Interval::point(ws.xbar[j]);
+        }
+        model.h_enclosure(&ws.boxed, u, &mut ws.point_h)?;
+        if !ws.point_h.is_bounded() {
+            return Err(guarantee_lost(step, "h or its Jacobian is undefined or overflows at the predicted centre"));
+        }
+        for j in 0..n {
+            ws.boxed[j] = Interval::centered(ws.xbar[j], ws.radius[j]);
+        }
+        model.h_enclosure(&ws.boxed, u, &mut ws.box_h)?;
+        if !ws.box_h.is_bounded() {
+            return Err(guarantee_lost(step, "the Hessian of h is unbounded on the predicted set's bounding box"));
+        }
+        for i in 0..m {
+            let value = ws.point_h.value(i);
+            let h_hat = mid(value);
+            let mut sigma = Interval::point((value - h_hat).mag());
+            let mut y_lin = Interval::point(y[i]) - h_hat;
+            for j in 0..n {
+                let jac = ws.point_h.jacobian(i, j);
+                let c = mid(jac);
+                ws.lin.c[(i, j)] = c;
+                sigma = sigma + Interval::point((jac - c).mag()) * ws.radius[j];
+                y_lin = y_lin + Interval::point(c) * ws.xbar[j];
+                for k in 0..n {
+                    let h = ws.box_h.hessian(i, j, k).mag();
+                    if h != 0.0 {
+                        sigma = sigma + Interval::point(0.5 * h) * ws.radius[j] * ws.radius[k];
+                    }
+                }
+            }
+            let y_mid = mid(y_lin);
+            ws.y_lin[i] = y_mid;
+            sigma = sigma + (y_lin - y_mid).mag();
+            ws.remainders.measurement[i] = sigma.hi();
+        }
+        let worst = ws.remainders.measurement.iter().copied().fold(0.0, f64::max);
+        if !(worst <= self.settings.max_remainder) {
+            return Err(guarantee_lost(
+                step,
+                format!(
+                    "the linearisation remainder of h reaches {worst:e}, beyond max_remainder = {:e}",
+                    self.settings.max_remainder
+                ),
+            ));
+        }
+        inflate(&self.r, &ws.remainders.measurement, &mut ws.r_eff);
+        Ok(())
+    }
+
+    /// One step (N1)–(N6). On error the filter is unchanged. Allocation-free after the first
+    /// step with the two-multiplier solver.
+    ///
+    /// # Errors
+    /// Wrong dimensions, non-finite data; [`EstimatorError::GuaranteeLost`] when a remainder
+    /// cannot be bounded; the linear filter's errors ([`EstimatorError::InconsistentData`] when
+    /// `y` contradicts the predicted set and the inflated noise bounds).
+    pub fn step<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
+        self.check(model)?;
+        check_vec("u", u, self.dims.inputs)?;
+        check_vec("y", y, self.dims.outputs)?;
+        self.linearise_f(model, u)?;
+        self.linearise_h(model, u, y)?;
+        self.apply_noise()?;
+        let Self { inner, ws, .. } = self;
+        if let Err(e) = inner.step(&ws.lin, &ws.one, &ws.y_lin) {
+            self.restore_noise();
+            return Err(e);
+        }
+        self.u_last.copy_from(u);
+        Ok(self.inner.estimate())
+    }
+
+    /// The prediction alone: (N1)–(N3) and the linear filter's prediction with `Q'`.
+    ///
+    /// # Errors
+    /// As [`NonlinearSetMembershipFilter::step`].
+    pub fn predict<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
+        self.check(model)?;
+        check_vec("u", u, self.dims.inputs)?;
+        self.linearise_f(model, u)?;
+        self.inner.set_process_noise(&self.ws.q_eff)?;
+        let Self { inner, ws, .. } = self;
+        if let Err(e) = inner.predict(&ws.lin, &ws.one) {
+            let _ = self.inner.set_process_noise(&self.q);
+            return Err(e);
+        }
+        self.u_last.copy_from(u);
+        Ok(self.inner.estimate())
+    }
+
+    /// The update after [`NonlinearSetMembershipFilter::predict`]: `h` linearised about the
+    /// predicted centre over the predicted set's bounding box (N4)–(N5), then the linear filter's
+    /// joint update.
+    ///
+    /// # Errors
+    /// [`EstimatorError::UpdateWithoutPrediction`] without a pending prediction; as
+    /// [`NonlinearSetMembershipFilter::step`].
+    pub fn update<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
+        self.check(model)?;
+        check_vec("y", y, self.dims.outputs)?;
+        let est = self.inner.estimate();
+        for i in 0..self.dims.states {
+            self.ws.xbar[i] = est.center[i];
+            self.ws.radius[i] = Interval::point(est.shape[(i, i)].max(0.0)).sqrt().hi();
+        }
+        let u = std::mem::take(&mut self.u_last);
+        let linearised = self.linearise_h(model, &u, y);
+        self.u_last = u;
+        linearised?;
+        self.inner.set_measurement_noise(&self.ws.r_eff)?;
+        let Self { inner, ws, .. } = self;
+        if let Err(e) = inner.update(&ws.lin, &ws.y_lin) {
+            let _ = self.inner.set_measurement_noise(&self.r);
+            return Err(e);
+        }
+        Ok(self.inner.estimate())
+    }
+
+    fn apply_noise(&mut self) -> Result<(), EstimatorError> {
+        self.inner.set_noise(&self.ws.q_eff, &self.ws.r_eff)
+    }
+
+    fn restore_noise(&mut self) {
+        // The declared shapes were accepted at construction: restoring them cannot fail.
+        let _ = self.inner.set_noise(&self.q, &self.r);
+    }
+}
+
+crate::traits::forward_estimator!(
+    impl<S: UpdateSolver> for NonlinearSetMembershipFilter<S>,
+    SecondOrderModel,
+    SetEstimate
+);

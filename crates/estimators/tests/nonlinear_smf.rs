@@ -1,0 +1,232 @@
+//! The nonlinear set-membership filter (`smf-nl`): equal to the linear filter on a linear model,
+//! its remainder bound exact on a quadratic map (closed form), containment with every noise on the
+//! boundary of its ellipsoid (the supply vessel and the quadratic map), honest refusals (a Hessian
+//! unbounded on the set, bad data) that leave the filter unchanged.
+
+use estimators::{EstimatorError, NonlinearSetMembershipFilter, SetEstimate, SetMembershipFilter, Setup, registry};
+use models::{
+    AnyModel, ConstantModel, DifferentiableModel, Dims, DiscreteModel, Interval, ModelError, Noise, SecondOrderModel,
+    TaylorEnclosure, Xoshiro256StarStar,
+};
+use nalgebra::{DMatrix, DVector, dvector};
+use vessel_dynamics::{DiscreteVessel, VesselParams};
+
+/// `x⁺ = [x₀ + a x₁² + u, 0.9 x₁]`, `y = [x₀, x₁] (or 1/x₀ with `reciprocal`)`.
+struct Quadratic {
+    a: f64,
+    reciprocal: bool,
+}
+
+impl DiscreteModel for Quadratic {
+    fn dims(&self) -> Dims {
+        Dims::new(2, 1, 2)
+    }
+    fn f(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0] + self.a * x[1] * x[1] + u[0];
+        out[1] = 0.9 * x[1];
+        Ok(())
+    }
+    fn h(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = if self.reciprocal { 1.0 / x[0] } else { x[0] };
+        out[1] = x[1];
+        Ok(())
+    }
+}
+
+impl DifferentiableModel for Quadratic {
+    fn f_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out.copy_from(&DMatrix::from_row_slice(2, 2, &[1.0, 2.0 * self.a * x[1], 0.0, 0.9]));
+        Ok(())
+    }
+    fn h_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        let d = if self.reciprocal { -1.0 / (x[0] * x[0]) } else { 1.0 };
+        out.copy_from(&DMatrix::from_row_slice(2, 2, &[d, 0.0, 0.0, 1.0]));
+        Ok(())
+    }
+}
+
+impl SecondOrderModel for Quadratic {
+    fn f_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        out.clear();
+        let a = Interval::point(self.a);
+        out.set_value(0, x[0] + a * x[1].sqr() + u[0]);
+        out.set_value(1, x[1] * 0.9);
+        out.set_jacobian(0, 0, Interval::point(1.0));
+        out.set_jacobian(0, 1, a * x[1] * 2.0);
+        out.set_jacobian(1, 1, Interval::point(0.9));
+        out.set_hessian(0, 1, 1, a * 2.0);
+        Ok(())
+    }
+    fn h_enclosure(&self, x: &[Interval], _u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        out.clear();
+        let one = Interval::point(1.0);
+        if self.reciprocal {
+            out.set_value(0, one / x[0]);
+            out.set_jacobian(0, 0, -(one / x[0].sqr()));
+            out.set_hessian(0, 0, 0, Interval::point(2.0) / (x[0] * x[0].sqr()));
+        } else {
+            out.set_value(0, x[0]);
+            out.set_jacobian(0, 0, one);
+        }
+        out.set_value(1, x[1]);
+        out.set_jacobian(1, 1, one);
+        Ok(())
+    }
+}
+
+impl AnyModel for Quadratic {
+    fn discrete(&self) -> &dyn DiscreteModel {
+        self
+    }
+    fn differentiable(&self) -> Option<&dyn DifferentiableModel> {
+        Some(self)
+    }
+    fn second_order(&self) -> Option<&dyn SecondOrderModel> {
+        Some(self)
+    }
+}
+
+/// `(x − x̂)ᵀ P⁻¹ (x − x̂)`.
+fn distance(est: &SetEstimate, x: &DVector<f64>) -> f64 {
+    distance_to(&est.center, &est.shape, x)
+}
+
+fn distance_to(center: &DVector<f64>, shape: &DMatrix<f64>, x: &DVector<f64>) -> f64 {
+    let e = x - center;
+    let chol = shape.clone().cholesky().expect("the published shape is positive definite");
+    e.dot(&chol.solve(&e))
+}
+
+fn setup(x0: DVector<f64>, p0: DMatrix<f64>, q: DMatrix<f64>, r: DMatrix<f64>, inputs: usize) -> Setup {
+    Setup { x0, p0, process_noise: q, measurement_noise: r, inputs }
+}
+
+#[test]
+fn on_a_linear_model_it_is_the_linear_filter() {
+    let mut rng = Xoshiro256StarStar::seed_from_u64(3);
+    for _ in 0..4 {
+        let a = DMatrix::from_fn(3, 3, |i, j| if i == j { 0.95 } else { 0.1 * rng.uniform(-1.0, 1.0) });
+        let b = DMatrix::from_fn(3, 1, |_, _| rng.uniform(-1.0, 1.0));
+        let c = DMatrix::from_fn(2, 3, |_, _| rng.uniform(-1.0, 1.0));
+        let model = ConstantModel::new(a, b, c).unwrap();
+        let s = setup(DVector::zeros(3), DMatrix::identity(3, 3), DMatrix::identity(3, 3) * 0.01, DMatrix::identity(2, 2) * 0.1, 1);
+        let mut linear = SetMembershipFilter::new(s.clone()).unwrap();
+        let mut nonlinear = NonlinearSetMembershipFilter::new(s).unwrap();
+        let w = Noise::ellipsoid_boundary(DMatrix::identity(3, 3) * 0.01).unwrap();
+        let v = Noise::ellipsoid_boundary(DMatrix::identity(2, 2) * 0.1).unwrap();
+        let mut x = DVector::from_vec(vec![0.5, -0.5, 0.2]);
+        for k in 0..50 {
+            let u = dvector![(0.1 * f64::from(k)).sin()];
+            let mut next = DVector::zeros(3);
+            model.f(&x, &u, &mut next).unwrap();
+            x = next + w.sample(&mut rng);
+            let mut y = DVector::zeros(2);
+            model.h(&x, &u, &mut y).unwrap();
+            y += v.sample(&mut rng);
+            let l = linear.step(&model, &u, &y).unwrap().clone();
+            let nl = nonlinear.step(&model, &u, &y).unwrap().clone();
+            assert!(nonlinear.remainders().process.iter().all(|r| *r < 1e-12), "{:?}", nonlinear.remainders());
+            let scale = l.shape.norm();
+            assert!((&l.center - &nl.center).norm() <= 1e-12 * (1.0 + l.center.norm()), "step {k}");
+            assert!((&l.shape - &nl.shape).norm() <= 1e-12 * scale, "step {k}");
+            assert!(distance(&nl, &x) <= 1.0, "step {k}");
+        }
+    }
+}
+
+#[test]
+fn the_remainder_bound_of_a_quadratic_map_is_its_exact_worst_case() {
+    // f₀ = x₀ + a x₁² + u: the remainder about x̂ is a (x₁ − x̂₁)², whose largest value over the
+    // set is a P₁₁ exactly; the bound (N2) is ½ · 2a · s₁² = a P₁₁ (to rounding).
+    let model = Quadratic { a: 0.3, reciprocal: false };
+    let p0 = DMatrix::from_row_slice(2, 2, &[0.5, 0.1, 0.1, 0.2]);
+    let s = setup(dvector![1.0, 2.0], p0.clone(), DMatrix::identity(2, 2) * 1e-4, DMatrix::identity(2, 2) * 1e-2, 1);
+    let mut f = NonlinearSetMembershipFilter::new(s).unwrap();
+    f.predict(&model, &dvector![0.0]).unwrap();
+    let rho = f.remainders().process[0];
+    let exact = 0.3 * p0[(1, 1)];
+    assert!(rho >= exact && rho <= exact * (1.0 + 1e-12), "ρ = {rho}, exact {exact}");
+    assert!(f.remainders().process[1] < 1e-15);
+}
+
+#[test]
+fn the_set_contains_the_truth_with_every_noise_on_its_boundary() {
+    // The quadratic map (a strong nonlinearity for its noise) and the supply vessel.
+    let quadratic = Quadratic { a: 0.2, reciprocal: false };
+    let (q, r) = (DMatrix::identity(2, 2) * 1e-3, DMatrix::identity(2, 2) * 1e-2);
+    let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let vq = DMatrix::from_diagonal(&dvector![1e-2, 1e-2, 1e-4, 1e-4, 1e-4, 1e-6]);
+    let vr = DMatrix::from_diagonal(&dvector![1.0, 1.0, 1e-2]);
+    let cases: [(&dyn AnyModel, Setup, usize); 2] = [
+        (&quadratic, setup(dvector![0.0, 1.0], DMatrix::identity(2, 2) * 0.1, q, r, 1), 400),
+        (&vessel, setup(DVector::zeros(6), DMatrix::from_diagonal(&dvector![4.0, 4.0, 0.01, 0.01, 0.01, 1e-4]), vq, vr, 3), 600),
+    ];
+    let mut steps = 0;
+    for (seed, (model, s, horizon)) in cases.into_iter().enumerate() {
+        let (n, p) = (s.x0.len(), s.inputs);
+        let mut rng = Xoshiro256StarStar::seed_from_u64(seed as u64 + 10);
+        let w = Noise::ellipsoid_boundary(s.process_noise.clone()).unwrap();
+        let v = Noise::ellipsoid_boundary(s.measurement_noise.clone()).unwrap();
+        let x0 = Noise::ellipsoid_boundary(s.p0.clone()).unwrap();
+        let mut x = &s.x0 + x0.sample(&mut rng);
+        let mut est = registry::build(registry::names::SMF_NL, s, None).unwrap();
+        for k in 0..horizon {
+            let t = k as f64 * 0.1;
+            let u = DVector::from_fn(p, |i, _| if p == 1 { 0.05 * t.sin() } else { [2e5, 5e4, 1e6][i] * (t / (5.0 + i as f64)).sin() });
+            let mut next = DVector::zeros(n);
+            model.discrete().f(&x, &u, &mut next).unwrap();
+            x = next + w.sample(&mut rng);
+            let mut y = DVector::zeros(model.discrete().dims().outputs);
+            model.discrete().h(&x, &u, &mut y).unwrap();
+            y += v.sample(&mut rng);
+            est.step(model, &u, &y).unwrap_or_else(|e| panic!("case {seed}, step {k}: {e}"));
+            let d = distance_to(est.estimate().center(), est.estimate().shape(), &x);
+            assert!(d <= 1.0, "case {seed}, step {k}: the truth is at distance {d} (> 1)");
+            steps += 1;
+        }
+    }
+    assert_eq!(steps, 1000);
+}
+
+#[test]
+fn a_hessian_unbounded_on_the_set_is_refused_and_the_filter_is_unchanged() {
+    // h = 1/x₀ over a predicted set that holds x₀ = 0: no bound exists.
+    let model = Quadratic { a: 0.0, reciprocal: true };
+    let s = setup(dvector![0.5, 0.0], DMatrix::identity(2, 2), DMatrix::identity(2, 2) * 1e-2, DMatrix::identity(2, 2) * 1e-2, 1);
+    let mut f = NonlinearSetMembershipFilter::new(s).unwrap();
+    let before = f.estimate().clone();
+    let e = f.step(&model, &dvector![0.0], &dvector![2.0, 0.0]).unwrap_err();
+    assert!(matches!(e, EstimatorError::GuaranteeLost { step: 1, .. }), "{e}");
+    assert!(e.to_string().contains("Hessian of h is unbounded"), "{e}");
+    assert_eq!(f.estimate().center, before.center);
+    assert_eq!(f.estimate().shape, before.shape);
+    // Bad data: unchanged too; then a step on a set away from 0 succeeds.
+    assert!(f.step(&model, &dvector![0.0], &dvector![f64::NAN, 0.0]).is_err());
+    assert_eq!(f.estimate().shape, before.shape);
+    let s = setup(dvector![5.0, 0.0], DMatrix::identity(2, 2) * 0.01, DMatrix::identity(2, 2) * 1e-4, DMatrix::identity(2, 2) * 1e-4, 1);
+    let mut f = NonlinearSetMembershipFilter::new(s).unwrap();
+    f.step(&model, &dvector![0.0], &dvector![0.2, 0.0]).unwrap();
+    assert!(f.remainders().measurement[0] > 0.0);
+}
+
+#[test]
+fn predict_then_update_is_the_step_when_h_is_linear() {
+    let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let s = setup(
+        DVector::zeros(6),
+        DMatrix::identity(6, 6),
+        DMatrix::identity(6, 6) * 1e-2,
+        DMatrix::from_diagonal(&dvector![1.0, 1.0, 0.1]),
+        3,
+    );
+    let (mut a, mut b) = (NonlinearSetMembershipFilter::new(s.clone()).unwrap(), NonlinearSetMembershipFilter::new(s).unwrap());
+    let u = dvector![1e5, 0.0, 1e5];
+    for k in 0..20 {
+        let y = dvector![0.01 * f64::from(k), 0.0, 0.001];
+        let one = a.step(&vessel, &u, &y).unwrap().clone();
+        b.predict(&vessel, &u).unwrap();
+        let two = b.update(&vessel, &y).unwrap();
+        assert_eq!(one.center, two.center, "step {k}");
+        assert_eq!(one.shape, two.shape, "step {k}");
+    }
+}
