@@ -23,6 +23,7 @@ pub struct TaylorEnclosure {
     value: Vec<Interval>,
     jacobian: Vec<Interval>,
     hessian: Vec<Interval>,
+    hessian_valid: bool,
 }
 
 impl TaylorEnclosure {
@@ -31,7 +32,14 @@ impl TaylorEnclosure {
     #[must_use]
     pub fn new(rows: usize, n: usize) -> Self {
         let zero = Interval::ZERO;
-        Self { rows, n, value: vec![zero; rows], jacobian: vec![zero; rows * n], hessian: vec![zero; rows * n * n] }
+        Self {
+            rows,
+            n,
+            value: vec![zero; rows],
+            jacobian: vec![zero; rows * n],
+            hessian: vec![zero; rows * n * n],
+            hessian_valid: true,
+        }
     }
 
     /// `(rows, n)`.
@@ -40,11 +48,27 @@ impl TaylorEnclosure {
         (self.rows, self.n)
     }
 
-    /// Sets every enclosure to `[0, 0]`.
+    /// Sets every enclosure to `[0, 0]` and marks the Hessians valid.
     pub fn clear(&mut self) {
         for v in self.value.iter_mut().chain(&mut self.jacobian).chain(&mut self.hessian) {
             *v = Interval::ZERO;
         }
+        self.hessian_valid = true;
+    }
+
+    /// Declares that the function is not twice differentiable on the box (a kink of `abs` or
+    /// `max` inside it, say): the Hessian enclosures say nothing, and a user of the enclosure
+    /// bounds the remainder by the mean-value form with the Jacobian's enclosure over the box,
+    /// valid for any Lipschitz function whose Jacobian enclosure holds its generalised (Clarke)
+    /// Jacobian.
+    pub fn set_hessian_invalid(&mut self) {
+        self.hessian_valid = false;
+    }
+
+    /// Whether the Hessian enclosures hold (see [`TaylorEnclosure::set_hessian_invalid`]).
+    #[must_use]
+    pub fn hessian_valid(&self) -> bool {
+        self.hessian_valid
     }
 
     /// The value of entry `i`.
@@ -93,7 +117,10 @@ impl TaylorEnclosure {
 /// A model that encloses `f` and `h` with their Jacobians and Hessians over boxes of states.
 pub trait SecondOrderModel: DifferentiableModel {
     /// Encloses `f(x, u)`, `∂f/∂x` and the Hessians `∂²f_i/∂x²` for every `x` in the box `x`
-    /// (one interval per state); `out` has `n` rows.
+    /// (one interval per state); `out` has `n` rows. Where `f` is not differentiable on the box
+    /// (a kink of `abs`, `max`), the Jacobian enclosure must hold its generalised (Clarke)
+    /// Jacobian, and where it is not twice differentiable the model calls
+    /// [`TaylorEnclosure::set_hessian_invalid`].
     ///
     /// # Errors
     /// [`ModelError`] for wrong dimensions or a non-finite input. An operation undefined on the

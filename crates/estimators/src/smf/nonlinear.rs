@@ -113,6 +113,37 @@ fn mid(v: Interval) -> f64 {
     0.5 * v.lo() + 0.5 * v.hi()
 }
 
+/// The bound (N2) of row `i`'s linearisation remainder `|g_i(x) − ĝ_i − ℓ·(x − x̂)|` over the box
+/// `x̂ ± radius` (`ĝ_i` the value used, `ℓ` the row of the linearisation): the smaller of the
+/// second-order (Lagrange) bound, when the Hessians hold on the box, and the mean-value bound
+/// `|g_i(x̂) − ĝ_i| + Σ_j |[J]_ij(box) − ℓ_j| s_j` (N2'), valid for every Lipschitz function —
+/// both are bounds, so their minimum is one.
+fn remainder(
+    point: &TaylorEnclosure,
+    boxed: &TaylorEnclosure,
+    i: usize,
+    row: impl Iterator<Item = f64>,
+    radius: &DVector<f64>,
+    value_used: f64,
+) -> Interval {
+    let at_centre = Interval::point((point.value(i) - value_used).mag());
+    let (mut second, mut mean_value) = (at_centre, at_centre);
+    let n = radius.len();
+    for (j, l) in row.enumerate() {
+        second = second + Interval::point((point.jacobian(i, j) - l).mag()) * radius[j];
+        mean_value = mean_value + Interval::point((boxed.jacobian(i, j) - l).mag()) * radius[j];
+        if boxed.hessian_valid() {
+            for k in 0..n {
+                let h = boxed.hessian(i, j, k).mag();
+                if h != 0.0 {
+                    second = second + Interval::point(0.5 * h) * radius[j] * radius[k];
+                }
+            }
+        }
+    }
+    if boxed.hessian_valid() && second.hi() < mean_value.hi() { second } else { mean_value }
+}
+
 /// `Q' ⪰ Q ⊕ box(ρ)` (N3): `(1 + 1/β) Q + (1 + β) k diag ρ²`, rounding covered. `Q'` is `Q`
 /// itself when `ρ = 0`.
 fn inflate(q: &DMatrix<f64>, rho: &DVector<f64>, out: &mut DMatrix<f64>) {
@@ -264,25 +295,16 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         for i in 0..n {
             let value = ws.point_f.value(i);
             let f_hat = mid(value);
-            let mut rho = Interval::point((value - f_hat).mag());
             let mut b = Interval::point(f_hat);
             for j in 0..n {
-                let jac = ws.point_f.jacobian(i, j);
-                let a = mid(jac);
+                let a = mid(ws.point_f.jacobian(i, j));
                 ws.lin.a[(i, j)] = a;
-                rho = rho + Interval::point((jac - a).mag()) * ws.radius[j];
                 b = b - Interval::point(a) * est.center[j];
-                for k in 0..n {
-                    let h = ws.box_f.hessian(i, j, k).mag();
-                    if h != 0.0 {
-                        rho = rho + Interval::point(0.5 * h) * ws.radius[j] * ws.radius[k];
-                    }
-                }
             }
             let b_mid = mid(b);
             ws.lin.b[(i, 0)] = b_mid;
-            rho = rho + (b - b_mid).mag();
-            ws.remainders.process[i] = rho.hi();
+            let rho = remainder(&ws.point_f, &ws.box_f, i, ws.lin.a.row(i).iter().copied(), &ws.radius, f_hat);
+            ws.remainders.process[i] = (rho + (b - b_mid).mag()).hi();
         }
         let worst = ws.remainders.process.iter().copied().fold(0.0, f64::max);
         if !(worst <= self.settings.max_remainder) {
@@ -345,25 +367,16 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         for i in 0..m {
             let value = ws.point_h.value(i);
             let h_hat = mid(value);
-            let mut sigma = Interval::point((value - h_hat).mag());
             let mut y_lin = Interval::point(y[i]) - h_hat;
             for j in 0..n {
-                let jac = ws.point_h.jacobian(i, j);
-                let c = mid(jac);
+                let c = mid(ws.point_h.jacobian(i, j));
                 ws.lin.c[(i, j)] = c;
-                sigma = sigma + Interval::point((jac - c).mag()) * ws.radius[j];
                 y_lin = y_lin + Interval::point(c) * ws.xbar[j];
-                for k in 0..n {
-                    let h = ws.box_h.hessian(i, j, k).mag();
-                    if h != 0.0 {
-                        sigma = sigma + Interval::point(0.5 * h) * ws.radius[j] * ws.radius[k];
-                    }
-                }
             }
             let y_mid = mid(y_lin);
             ws.y_lin[i] = y_mid;
-            sigma = sigma + (y_lin - y_mid).mag();
-            ws.remainders.measurement[i] = sigma.hi();
+            let sigma = remainder(&ws.point_h, &ws.box_h, i, ws.lin.c.row(i).iter().copied(), &ws.radius, h_hat);
+            ws.remainders.measurement[i] = (sigma + (y_lin - y_mid).mag()).hi();
         }
         let worst = ws.remainders.measurement.iter().copied().fold(0.0, f64::max);
         if !(worst <= self.settings.max_remainder) {
