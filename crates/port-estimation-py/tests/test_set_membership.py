@@ -93,3 +93,29 @@ def test_a_prediction_alone_grows_the_set_and_keeps_the_state():
     e = smf.update(ys[10])
     np.testing.assert_array_equal(e.center, last.center)
     np.testing.assert_array_equal(e.shape, last.shape)
+
+
+def test_the_nonlinear_filter_holds_the_vessels_state_with_noise_on_the_boundary():
+    # smf-nl on the compiled vessel (Euler, enclosures of its Hessians): the truth stays inside.
+    vessel = pe.Model.vessel()
+    assert vessel.capability == "second-order"
+    rng = np.random.default_rng(5)
+    q = np.diag([1e-2, 1e-2, 1e-4, 1e-4, 1e-4, 1e-6])
+    r = np.diag([1.0, 1.0, 1e-2])
+    p0 = np.diag([4.0, 4.0, 0.01, 0.01, 0.01, 1e-4])
+    est = pe.Estimator("smf-nl", vessel, x0=np.zeros(6), P0=p0, Q=q, R=r)
+    x = on_boundary(rng, p0)
+    for k in range(200):
+        u = np.array([2e5, 5e4, 1e6]) * np.sin(0.1 * k / np.array([5.0, 6.0, 7.0]))
+        x = vessel.f(x, u) + on_boundary(rng, q)
+        y = vessel.h(x, u) + on_boundary(rng, r)
+        e = est.step(u, y)
+        assert e.kind == "guaranteed ellipsoid"
+        assert _contained(e.center, e.shape, x) <= 1.0, k
+    # A linear model is the linear filter's (to rounding).
+    lin = pe.Model(np.array([[1.0, 0.1], [0.0, 0.9]]), np.array([[0.0], [0.1]]), np.array([[1.0, 0.0]]))
+    kw = dict(x0=np.zeros(2), P0=np.eye(2), Q=np.eye(2) * 0.01, R=np.eye(1) * 0.1)
+    us, ys = np.ones((30, 1)), np.linspace(0, 1, 30)[:, None]
+    a = pe.Estimator("smf", lin, **kw).run(us, ys).center
+    b = pe.Estimator("smf-nl", lin, **kw).run(us, ys).center
+    np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)

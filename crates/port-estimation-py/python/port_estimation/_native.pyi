@@ -16,7 +16,7 @@ FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 PathLike = Union[str, os.PathLike[str]]
 Kind = Literal["gaussian", "guaranteed ellipsoid", "point"]
-Capability = Literal["linear", "differentiable", "discrete"]
+Capability = Literal["linear", "second-order", "differentiable", "discrete"]
 
 MAX_RUN_VALUES: Final[int]
 __version__: Final[str]
