@@ -116,11 +116,17 @@ fn vessel(c: &mut Criterion) {
     let q = DMatrix::identity(6, 6) * 1e-2;
     let r = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1]));
     let mut group = c.benchmark_group("vessel_mhe");
-    for (name, arrival) in
-        [("mhe-ukf-arrival", NonlinearArrival::Ukf(UkfParams::paper())), ("mhe-ekf-arrival", NonlinearArrival::Ekf)]
-    {
+    // The default stopping rule (the estimate within 1e-9 of the converged one by the observed
+    // contraction), and iterating to the 1e-10 step tolerance, side by side.
+    let paper = NonlinearMheSettings::paper().estimate_tolerance;
+    for (name, arrival, estimate_tolerance) in [
+        ("mhe-ukf-arrival", NonlinearArrival::Ukf(UkfParams::paper()), paper),
+        ("mhe-ukf-arrival-full", NonlinearArrival::Ukf(UkfParams::paper()), None),
+        ("mhe-ekf-arrival", NonlinearArrival::Ekf, paper),
+    ] {
         let mut s = NonlinearMheSettings::paper();
         s.arrival = arrival;
+        s.estimate_tolerance = estimate_tolerance;
         let setup =
             Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 };
         let mut warm = NonlinearMhe::new(setup, s).unwrap();

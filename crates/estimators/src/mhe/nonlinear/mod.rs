@@ -340,6 +340,8 @@ impl NonlinearMhe {
         let mut factor_current = false;
         let mut constrained = w_box.is_some() || v_box.is_some();
         let mut infeasible = false;
+        // The relative size of the last accepted step (the contraction estimate).
+        let mut last_ratio: Option<f64> = None;
         while iterations < self.settings.max_iterations {
             iterations += 1;
             win.linearise(model, rings, &wts, start, len)?;
@@ -380,11 +382,21 @@ impl NonlinearMhe {
                     factor_current = mu == 0.0;
                     break;
                 }
+                let ratio = win.step_ratio(len);
                 win.set_trial(len);
                 let trial = win.cost(model, rings, &wts, start, len, true)?;
                 if trial.is_finite() && trial <= cost + 1e-13 * cost.abs() {
                     win.accept_trial(len);
                     cost = trial;
+                    // Linear convergence at the observed rate c: the iterate is within
+                    // ‖Δ‖ c/(1 − c) of the limit.
+                    if let (Some(limit), Some(last)) = (self.settings.estimate_tolerance, last_ratio) {
+                        let c = ratio / last;
+                        if c < 0.5 && ratio * c / (1.0 - c) <= limit {
+                            status = WindowStatus::Converged;
+                        }
+                    }
+                    last_ratio = Some(ratio);
                     mu *= 0.1;
                     if mu < 1e-300 {
                         mu = 0.0;

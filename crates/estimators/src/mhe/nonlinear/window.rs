@@ -294,6 +294,11 @@ impl Window {
         self.d[..len].iter().fold(1e-12_f64, |a, d| (0..self.n).fold(a, |a, i| a.max(d[(i, i)].abs())))
     }
 
+    /// The step's relative size `‖Δ‖∞ / max(1, ‖x‖∞)`.
+    pub(super) fn step_ratio(&self, len: usize) -> f64 {
+        max_abs(&self.step[..len], 0.0) / max_abs(&self.x[..len], 1.0)
+    }
+
     /// Whether the step is negligible: `‖Δ‖∞ ≤ tolerance · max(1, ‖x‖∞)`.
     pub(super) fn step_is_negligible(&self, len: usize, tolerance: f64) -> bool {
         max_abs(&self.step[..len], 0.0) <= tolerance * max_abs(&self.x[..len], 1.0)
