@@ -26,19 +26,22 @@ static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
 
 thread_local! {
     static COUNTING: Cell<bool> = const { Cell::new(false) };
+    /// The largest request (bytes) this thread made while counting, since its last [`measure`].
+    static LARGEST: Cell<usize> = const { Cell::new(0) };
 }
 
-fn note() {
+fn note(size: usize) {
     // `try_with`: the thread-local may be gone while a thread shuts down.
     if COUNTING.try_with(|c| c.get()).unwrap_or(false) {
         ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        let _ = LARGEST.try_with(|l| l.set(l.get().max(size)));
     }
 }
 
 // SAFETY: forwards every call to the system allocator unchanged; only counts.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
+        note(layout.size());
         // SAFETY: same contract as ours.
         unsafe { System.alloc(layout) }
     }
@@ -47,12 +50,12 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note();
+        note(layout.size());
         // SAFETY: same contract as ours.
         unsafe { System.alloc_zeroed(layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
+        note(new_size);
         // SAFETY: same contract as ours.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -66,6 +69,23 @@ pub fn count<R>(f: impl FnOnce() -> R) -> (R, usize) {
     let r = f();
     COUNTING.with(|c| c.set(false));
     (r, ALLOCATIONS.load(Ordering::Relaxed) - before)
+}
+
+/// What [`measure`] saw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Usage {
+    /// Allocations (and reallocations) made.
+    pub allocations: usize,
+    /// The largest single request in bytes: a bound on what one buffer took, so that a test can
+    /// show an input was refused before anything was allocated for it.
+    pub largest: usize,
+}
+
+/// Runs `f` and returns its result with the current thread's [`Usage`] meanwhile.
+pub fn measure<R>(f: impl FnOnce() -> R) -> (R, Usage) {
+    LARGEST.with(|l| l.set(0));
+    let (r, allocations) = count(f);
+    (r, Usage { allocations, largest: LARGEST.with(Cell::get) })
 }
 
 #[cfg(test)]
@@ -98,5 +118,13 @@ mod tests {
             .1
         };
         assert_eq!(spawn(0), spawn(1000));
+    }
+
+    #[test]
+    fn measure_reports_the_largest_request() {
+        let (_, usage) = measure(|| (vec![0u8; 10], vec![0u64; 1000]));
+        assert_eq!(usage, Usage { allocations: 2, largest: 8000 });
+        let (_, usage) = measure(|| 1 + 1);
+        assert_eq!(usage, Usage { allocations: 0, largest: 0 });
     }
 }

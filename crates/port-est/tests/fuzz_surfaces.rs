@@ -4,7 +4,6 @@
 //! within the limits (the `[mhe]` memory estimate under its limit), and every error says where.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
 
 use port_est::bds_ins::{self, RtkCoding};
 use port_est::data::DataReader;
@@ -90,10 +89,14 @@ fn located(e: &Error, file: &str) {
     );
 }
 
+#[global_allocator]
+static GLOBAL: counting_allocator::Counting = counting_allocator::Counting;
+
+/// Runs one fuzzed case and checks its memory stayed bounded: no single allocation beyond 256 MiB
+/// (the largest default limit, `--mhe-memory-limit`).
 fn watchdog<T>(f: impl FnOnce() -> T) -> T {
-    let t0 = Instant::now();
-    let out = f();
-    assert!(t0.elapsed() < Duration::from_secs(60), "a case took {:?}", t0.elapsed());
+    let (out, usage) = counting_allocator::measure(f);
+    assert!(usage.largest <= 256 << 20, "a case allocated {} bytes at once", usage.largest);
     out
 }
 

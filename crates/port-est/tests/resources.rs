@@ -3,7 +3,6 @@
 //! defuzzification resolution are refused quickly, at their place, naming the limit.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
 use port_est::truck::{TruckOptions, truck};
@@ -30,10 +29,19 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
+#[global_allocator]
+static GLOBAL: counting_allocator::Counting = counting_allocator::Counting;
+
+/// The largest single allocation an input beyond a limit may cause: the limits are checked before
+/// anything is allocated for what they bound (the default file limit is 16 MiB; a file is read
+/// up to one byte beyond it).
+const REFUSED_WITHIN: usize = 32 << 20;
+
+/// Runs `f` (an input beyond a limit) and checks that no allocation larger than
+/// [`REFUSED_WITHIN`] was made for it.
 fn quickly<T>(what: &str, f: impl FnOnce() -> T) -> T {
-    let t0 = Instant::now();
-    let out = f();
-    assert!(t0.elapsed() < Duration::from_secs(10), "{what} took {:?}", t0.elapsed());
+    let (out, usage) = counting_allocator::measure(f);
+    assert!(usage.largest <= REFUSED_WITHIN, "{what}: an allocation of {} bytes", usage.largest);
     out
 }
 
@@ -199,4 +207,15 @@ fn a_rule_file_asking_for_an_absurd_resolution_is_refused_at_its_line() {
         let e = quickly(setting, || bds_ins(&options)).unwrap_err().to_string();
         assert!(e.starts_with(&format!("--fis: {}:8:", fis.display())), "{setting}: {e}");
     }
+}
+
+/// The memory check above can fail: reading a large file to its end allocates its size.
+#[test]
+fn the_memory_check_sees_a_large_allocation() {
+    let d = dir("large-allocation");
+    let big = d.join("big.bin");
+    std::fs::write(&big, vec![b' '; 40 << 20]).unwrap();
+    let (_, usage) = counting_allocator::measure(|| std::fs::read(&big).unwrap().len());
+    assert!(usage.largest > REFUSED_WITHIN, "{usage:?}");
+    let _ = std::fs::remove_file(big);
 }
