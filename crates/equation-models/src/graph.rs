@@ -240,6 +240,12 @@ impl Graph {
         self.seen = HashMap::new();
     }
 
+    /// The operation of node `i`.
+    #[cfg(test)]
+    pub(crate) fn op(&self, i: u32) -> Op {
+        self.ops[i as usize]
+    }
+
     /// Number of nodes.
     pub(crate) fn len(&self) -> usize {
         self.ops.len()

@@ -642,3 +642,22 @@ impl AnyModel for EquationModel {
         self.linear.as_ref().map(|m| m as &dyn LinearModel)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{Fun, Op};
+
+    #[test]
+    fn a_definition_is_evaluated_once_for_all_its_users() {
+        let text = "[model]\nstates = [\"x\", \"y\"]\noutputs = [\"o\"]\n[definitions]\nd = \"sin(x) * y\"\n\
+                    [f]\nx = \"d + x\"\ny = \"d * d - y\"\n[h]\no = \"d\"\n";
+        let m = EquationModel::from_toml_str(text, "d.toml").unwrap();
+        let sines =
+            |rows: &Rows| rows.schedule.iter().filter(|&&i| matches!(m.graph.op(i), Op::Unary(Fun::Sin, _))).count();
+        assert_eq!((sines(&m.rhs), sines(&m.out)), (1, 1));
+        // sin, the product d, then d + x, d * d, d * d - y.
+        assert_eq!(m.rhs.schedule.len(), 5);
+        assert_eq!(m.out.schedule.len(), 2);
+    }
+}
