@@ -17,7 +17,7 @@
 //! * [`EquationModel`] implements [`models::DiscreteModel`], [`models::DifferentiableModel`]
 //!   and [`models::AnyModel`] (with `linear()` when the equations are linear).
 //! * Every problem with a file is an [`EquationError`] at the `file:line:column` of the key it
-//!   is about; hostile files are refused by the [`limits`] before any parsing.
+//!   is about; hostile files are refused by the [`limits`] while they are read.
 //!
 //! # Example
 //!
