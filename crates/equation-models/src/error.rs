@@ -177,14 +177,12 @@ pub enum EquationError {
         /// The limit.
         limit: usize,
     },
-    /// Parsing and differentiating the equations took longer than
-    /// [`crate::limits::MAX_COMPILE_SECONDS`] (expressions too large for the expression
-    /// library's symbolic differentiation).
-    #[error(
-        "{location}: parsing and differentiating the equations took more than {seconds} s (simplify the equations)"
-    )]
+    /// Reading and compiling the model file took longer than
+    /// [`crate::limits::MAX_COMPILE_SECONDS`] (a safeguard: compiling is linear in the size of
+    /// the file, bounded by the [limits](crate::limits), far below the budget).
+    #[error("{location}: compiling the model file took more than {seconds} s (simplify the equations)")]
     TooSlow {
-        /// The first equation of the model.
+        /// The start of the file.
         location: Location,
         /// The budget.
         seconds: u64,
@@ -209,7 +207,8 @@ pub enum EquationError {
         /// The failure.
         message: String,
     },
-    /// The expression library panicked on an equation (a defect caught, not a crash).
+    /// The compiler failed on an equation (a defect caught, not a crash; not produced by the
+    /// current compiler, which has no such failure).
     #[error("{location}: equation `{equation}`: the expression library failed: {message}")]
     Internal {
         /// The equation's key.

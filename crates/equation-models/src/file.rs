@@ -1,4 +1,4 @@
-//! Reading a model file: the TOML tables checked, names declared, expressions expanded.
+//! Reading a model file: the TOML tables checked, names declared, expressions compiled.
 
 use std::borrow::Cow;
 use std::collections::HashSet;
@@ -7,10 +7,10 @@ use std::ops::Range;
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
-use crate::compiled::Compiled;
 use crate::error::{EquationError, Location};
-use crate::expand::{ExpandError, Meaning, expand, is_identifier, is_reserved, push_number};
-use crate::limits::{MAX_FILE_BYTES, MAX_NAMES, MAX_SYMBOLS};
+use crate::graph::Graph;
+use crate::limits::{MAX_FILE_BYTES, MAX_NAMES, MAX_SYMBOLS, MAX_TOTAL_OPERATORS};
+use crate::parse::{Meaning, ParseError, is_identifier, is_reserved, parse_into};
 
 /// How time advances in a model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,15 +40,15 @@ pub enum Discretization {
     Zoh,
 }
 
-/// One equation: its label (`f.x`), the location of its key and its expanded text.
+/// One equation: its label (`f.x`), the location of its key and the node of its value.
 #[derive(Debug, Clone)]
 pub(crate) struct Equation {
     pub label: String,
     pub location: Location,
-    pub text: String,
+    pub root: u32,
 }
 
-/// A model file read and checked, its expressions expanded (not yet compiled).
+/// A model file read and checked, its expressions compiled into one graph.
 #[derive(Debug, Clone)]
 pub(crate) struct Spec {
     pub states: Vec<String>,
@@ -56,6 +56,8 @@ pub(crate) struct Spec {
     pub outputs: Vec<String>,
     pub parameters: Vec<(String, f64)>,
     pub time: TimeModel,
+    /// Every definition and equation, compiled.
+    pub graph: Graph,
     /// One equation per state, in the order of the states.
     pub rhs: Vec<Equation>,
     /// One equation per output, in the order of the outputs.
@@ -179,13 +181,13 @@ impl Names<'_> {
     }
 }
 
-fn expand_error(location: Location, equation: &str, e: ExpandError) -> EquationError {
+fn parse_error(location: Location, equation: &str, e: ParseError) -> EquationError {
     let equation = equation.to_owned();
     match e {
-        ExpandError::UnknownSymbol(symbol) => EquationError::UnknownSymbol { location, equation, symbol },
-        ExpandError::UnknownFunction(function) => EquationError::UnknownFunction { location, equation, function },
-        ExpandError::Syntax(message) => EquationError::Parse { location, equation, message },
-        ExpandError::Limit { what, size, limit } => {
+        ParseError::UnknownSymbol(symbol) => EquationError::UnknownSymbol { location, equation, symbol },
+        ParseError::UnknownFunction(function) => EquationError::UnknownFunction { location, equation, function },
+        ParseError::Syntax(message) => EquationError::Parse { location, equation, message },
+        ParseError::Limit { what, size, limit } => {
             EquationError::LimitExceeded { location, what: format!("equation `{equation}`: {what}"), size, limit }
         }
     }
@@ -236,13 +238,44 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
         }
     }
 
+    let n_slots = states.len() + inputs.len();
     let slot = |name: &str| {
         states
             .iter()
             .position(|s| s == name)
             .or_else(|| inputs.iter().position(|s| s == name).map(|i| states.len() + i))
     };
-    let mut definitions: Vec<(String, String)> = Vec::new();
+    let mut graph = Graph::new(n_slots);
+    let mut total_operators = 0usize;
+    let mut definitions: Vec<(String, u32)> = Vec::new();
+    // Parses one expression into the graph, within the per-expression and total limits.
+    let mut compile = |graph: &mut Graph,
+                       definitions: &[(String, u32)],
+                       label: &str,
+                       location: &Location,
+                       source: &str|
+     -> Result<u32, EquationError> {
+        let (root, operators) = parse_into(source, graph, |n| {
+            if let Some(s) = slot(n) {
+                Some(Meaning::Node(s as u32))
+            } else if let Some((_, p)) = parameters.iter().find(|(p, _)| p == n) {
+                Some(Meaning::Value(*p))
+            } else {
+                definitions.iter().find(|(d, _)| d == n).map(|(_, node)| Meaning::Node(*node))
+            }
+        })
+        .map_err(|e| parse_error(location.clone(), label, e))?;
+        total_operators += operators;
+        if total_operators > MAX_TOTAL_OPERATORS {
+            return Err(EquationError::LimitExceeded {
+                location: location.clone(),
+                what: "the number of operators of all definitions and equations together".to_owned(),
+                size: total_operators,
+                limit: MAX_TOTAL_OPERATORS,
+            });
+        }
+        Ok(root)
+    };
     if let Some(entry) = find(root, "definitions") {
         let table = as_table(&cx, entry)?;
         check_count(&cx, entry, table.len())?;
@@ -251,36 +284,18 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
             let label = format!("definitions.{}", k.get_ref());
             let source =
                 v.get_ref().as_str().ok_or_else(|| cx.format(&k.span(), format!("`{label}` must be a string")))?;
-            let expanded = expand(source, |n| {
-                if let Some(s) = slot(n) {
-                    Some(Meaning::Slot(s))
-                } else if let Some((_, p)) = parameters.iter().find(|(p, _)| p == n) {
-                    Some(Meaning::Value(*p))
-                } else {
-                    definitions.iter().find(|(d, _)| d == n).map(|(_, t)| Meaning::Text(t))
-                }
-            })
-            .map_err(|e| expand_error(cx.at(&k.span()), &label, e))?;
-            definitions.push((k.get_ref().to_string(), fold_constant(expanded)));
+            let node = compile(&mut graph, &definitions, &label, &cx.at(&k.span()), source)?;
+            definitions.push((k.get_ref().to_string(), node));
         }
     }
-    let expand_equation = |section: &str, k: &Spanned<Cow<'_, str>>, v: &Spanned<DeValue<'_>>| {
+    let mut expand_equation = |section: &str, k: &Spanned<Cow<'_, str>>, v: &Spanned<DeValue<'_>>| {
         let label = format!("{section}.{}", k.get_ref());
         let location = cx.at(&k.span());
         let source = v.get_ref().as_str().ok_or_else(|| cx.format(&k.span(), format!("`{label}` must be a string")))?;
-        let text = expand(source, |n| {
-            if let Some(s) = slot(n) {
-                Some(Meaning::Slot(s))
-            } else if let Some((_, p)) = parameters.iter().find(|(p, _)| p == n) {
-                Some(Meaning::Value(*p))
-            } else {
-                definitions.iter().find(|(d, _)| d == n).map(|(_, t)| Meaning::Text(t))
-            }
-        })
-        .map_err(|e| expand_error(location.clone(), &label, e))?;
-        Ok::<_, EquationError>(Equation { label, location, text })
+        let root = compile(&mut graph, &definitions, &label, &location, source)?;
+        Ok::<_, EquationError>(Equation { label, location, root })
     };
-    let section_equations = |section: &str, entry: Entry<'_, '_>, targets: &[String], expected: &str| {
+    let mut section_equations = |section: &str, entry: Entry<'_, '_>, targets: &[String], expected: &str| {
         let table = as_table(&cx, entry)?;
         let mut equations: Vec<Option<Equation>> = vec![None; targets.len()];
         for (k, v) in in_file_order(table) {
@@ -331,30 +346,7 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
         }
     };
     let discretization_at = cx.at(&find(model, "discretization").map_or(model_span.clone(), |(k, _)| k.span()));
-    Ok(Spec { states, inputs, outputs, parameters, time, rhs, out, discretization_at })
-}
-
-/// A definition that mentions no state or input, evaluated once to its number (the same
-/// arithmetic as in place), so that it costs one operand wherever it is used; kept as text if
-/// its value is not a finite number (the equations using it then report the failure).
-fn fold_constant(text: String) -> String {
-    let b = text.as_bytes();
-    let mentions_variable = (0..b.len()).any(|i| {
-        b[i] == b'v'
-            && b.get(i + 1).is_some_and(u8::is_ascii_digit)
-            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'))
-    });
-    if mentions_variable {
-        return text;
-    }
-    match Compiled::parse(&text, 0).ok().and_then(|c| c.eval(&[], &[]).ok()) {
-        Some(v) => {
-            let mut out = String::new();
-            push_number(&mut out, v);
-            out
-        }
-        None => text,
-    }
+    Ok(Spec { states, inputs, outputs, parameters, time, graph, rhs, out, discretization_at })
 }
 
 fn check_count(cx: &Ctx<'_>, entry: Entry<'_, '_>, count: usize) -> Result<(), EquationError> {

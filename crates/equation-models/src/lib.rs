@@ -6,16 +6,18 @@
 //! `[dxdt]` (integrated by explicit Euler or RK4 over `ts`, or by the exact zero-order hold when
 //! linear), plus the measurements `[h]`. The crate's `README.md` describes the format.
 //!
-//! * Each expression is parsed once (by the `exmex` expression library) after the definitions
-//!   and parameters are substituted into it, so the derivatives see through them; evaluation
-//!   fills a stack buffer of the expression's variables (no allocation for up to 32 variables
-//!   per expression; the RK4 and Euler steps allocate their stage vectors).
-//! * The Jacobians are exact: symbolic partial derivatives, and for `[dxdt]` the chain rule
-//!   through the Euler or RK4 step (the matrix `e^{A ts}` for the exact zero-order hold).
+//! * The definitions and equations are compiled once into one computation graph: a definition
+//!   is a shared intermediate value, computed once per evaluation whatever the number of
+//!   equations that use it. Evaluation works in a per-thread scratch buffer: `f`, `h` and their
+//!   Jacobians allocate nothing once a thread has evaluated the model.
+//! * The Jacobians are exact: forward-mode chain rule through the graph (a hand-written
+//!   derivative for every operation and function, `atan2`, `abs`, `min` and `max` included), and
+//!   for `[dxdt]` the chain rule through the Euler or RK4 step (the matrix `e^{A ts}` for the
+//!   exact zero-order hold).
 //! * [`EquationModel`] implements [`models::DiscreteModel`], [`models::DifferentiableModel`]
 //!   and [`models::AnyModel`] (with `linear()` when the equations are linear).
 //! * Every problem with a file is an [`EquationError`] at the `file:line:column` of the key it
-//!   is about; hostile files are refused by the [`limits`] before any parsing.
+//!   is about; hostile files are refused by the [`limits`] while they are read.
 //!
 //! # Example
 //!
@@ -52,14 +54,15 @@
 
 #![warn(missing_docs)]
 
-mod compiled;
 pub mod error;
-mod expand;
 mod file;
+mod graph;
 pub mod limits;
 mod model;
+mod parse;
+mod scratch;
 
 pub use error::{EquationError, Location};
-pub use expand::{CONSTANTS, FUNCTIONS};
 pub use file::{Discretization, TimeModel};
 pub use model::EquationModel;
+pub use parse::{CONSTANTS, FUNCTIONS};

@@ -4,8 +4,8 @@ mod common;
 
 use common::Lcg;
 use equation_models::{Discretization, EquationModel, TimeModel};
-use models::{AnyModel, DiscreteModel, check_jacobians};
-use nalgebra::DVector;
+use models::{AnyModel, DifferentiableModel, DiscreteModel, check_jacobians};
+use nalgebra::{DMatrix, DVector};
 
 const BICYCLE: &str = include_str!("../examples/models/kinematic_bicycle.toml");
 
@@ -114,27 +114,77 @@ fn example_bicycle_file_reads_and_differentiates() {
 }
 
 #[test]
-fn functions_without_derivative_leave_a_discrete_model() {
+fn nonsmooth_functions_have_exact_derivatives_away_from_their_kinks() {
     let model = EquationModel::from_toml_str(
         r#"
 [model]
 states = ["x", "y"]
-outputs = ["bearing"]
+inputs = ["u"]
+outputs = ["bearing", "size"]
 [f]
-x = "max(x, 0.5 * y)"
-y = "y"
+x = "max(x, 0.5 * y) + min(x * y, u) + abs(x - y) * atan2(y, x + 3)"
+y = "atan2(x * u, y) - abs(sin(y)) + max(min(x, y), u)"
 [h]
 bearing = "atan2(y, x)"
+size = "max(abs(x), abs(y)) + signum(x) + floor(y) + fract(x)"
 "#,
         "m.toml",
     )
     .unwrap();
-    assert!(model.differentiable().is_none());
-    assert!(model.not_differentiable().unwrap().contains("f.x"));
-    let mut out = DVector::zeros(1);
-    model.h(&DVector::from_vec(vec![1.0, 1.0]), &DVector::zeros(0), &mut out).unwrap();
+    assert!(model.differentiable().is_some() && model.not_differentiable().is_none());
+    let mut out = DVector::zeros(2);
+    model.h(&DVector::from_vec(vec![1.0, 1.0]), &DVector::zeros(1), &mut out).unwrap();
     assert!((out[0] - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
-    let mut next = DVector::zeros(2);
-    model.f(&DVector::from_vec(vec![1.0, 4.0]), &DVector::zeros(0), &mut next).unwrap();
-    assert_eq!(next[0], 2.0);
+    // Random points keep (with probability one) away from the kinks and jumps.
+    check_random_points(&model, 4);
+    // The choices at the kinks: abs'(0) = 0, ties of max and min take the first argument.
+    let at = |expr: &str, x: f64| {
+        let text = format!("[model]\nstates = [\"x\"]\noutputs = [\"y\"]\n[f]\nx = \"{expr}\"\n[h]\ny = \"x\"\n");
+        let model = EquationModel::from_toml_str(&text, "kink.toml").unwrap();
+        let mut j = DMatrix::zeros(1, 1);
+        model.f_jacobian(&DVector::from_vec(vec![x]), &DVector::zeros(0), &mut j).unwrap();
+        j[(0, 0)]
+    };
+    assert_eq!(at("abs(x)", 0.0), 0.0);
+    assert_eq!(at("abs(x)", -2.0), -1.0);
+    assert_eq!(at("max(2 * x, 1)", 0.5), 2.0);
+    assert_eq!(at("max(1, 2 * x)", 0.5), 0.0);
+    assert_eq!(at("min(3 * x, 1 + x)", 0.5), 3.0);
+    assert_eq!(at("signum(x) + floor(x) + ceil(x) + round(x) + trunc(x)", 0.3), 0.0);
+    assert_eq!(at("fract(x)", 2.3), 1.0);
+    assert_eq!(at("atan2(1, x)", 0.0), -1.0);
+    // atan2 at the origin has no derivative: a typed error naming the derivative.
+    let text = "[model]\nstates = [\"x\"]\noutputs = [\"y\"]\n[f]\nx = \"atan2(x, x)\"\n[h]\ny = \"x\"\n";
+    let model = EquationModel::from_toml_str(text, "origin.toml").unwrap();
+    let mut j = DMatrix::zeros(1, 1);
+    let e = model.f_jacobian(&DVector::from_vec(vec![0.0]), &DVector::zeros(0), &mut j).unwrap_err();
+    assert!(e.to_string().contains("d(f.x)/dx"), "{e}");
+}
+
+#[test]
+fn a_shared_definition_equals_its_inlined_twin() {
+    let make = |defs: &str, a: &str, b: &str| {
+        let text = format!(
+            "[model]\nstates = [\"x\", \"y\"]\ninputs = [\"u\"]\noutputs = [\"o\"]\nts = 0.1\n[definitions]\n{defs}\n[dxdt]\nx = \"{a}\"\ny = \"{b}\"\n[h]\no = \"{a}\"\n"
+        );
+        EquationModel::from_toml_str(&text, "twin.toml").unwrap()
+    };
+    let shared = make("d = \"sin(x) * y + atan2(y, u + 2)\"", "d + d^2", "u - d * x");
+    let inlined = make(
+        "",
+        "(sin(x) * y + atan2(y, u + 2)) + (sin(x) * y + atan2(y, u + 2))^2",
+        "u - (sin(x) * y + atan2(y, u + 2)) * x",
+    );
+    let mut rng = Lcg(5);
+    for _ in 0..20 {
+        let (x, u) = (rng.vector(2, -2.0, 2.0), rng.vector(1, -0.5, 0.5));
+        let values = |m: &EquationModel| {
+            let (mut f, mut fj, mut h, mut hj) =
+                (DVector::zeros(2), DMatrix::zeros(2, 2), DVector::zeros(1), DMatrix::zeros(1, 2));
+            m.f_with_jacobian(&x, &u, &mut f, &mut fj).unwrap();
+            m.h_with_jacobian(&x, &u, &mut h, &mut hj).unwrap();
+            (f, fj, h, hj)
+        };
+        assert_eq!(values(&shared), values(&inlined));
+    }
 }

@@ -45,6 +45,27 @@ fn functions_constants_and_parameters_evaluate_as_written() {
 }
 
 #[test]
+fn precedence_is_that_of_the_expression_library_used_before() {
+    // Values that `exmex` 0.21, which this crate evaluated with before it compiled its own
+    // graph, gives at x = 3 (`h` here evaluates `x * 0 + ...`).
+    let cases: [(&str, f64); 9] = [
+        ("1 + -x^2", 10.0),
+        ("1 - -x^2", -8.0),
+        ("2 * -x^2", 18.0),
+        ("2^-x", 0.125),
+        ("2^-x^2", 0.015625),
+        ("-x^2 + 2^-x", 9.125),
+        ("- (1) + -x^2", 8.0),
+        ("2 * (1 - x^2)", -16.0),
+        ("-2 * -x", 6.0),
+    ];
+    for (expr, expected) in cases {
+        let v = value(expr);
+        assert!((v - expected).abs() < 1e-12, "{expr} = {v}, expected {expected}");
+    }
+}
+
+#[test]
 fn models_can_be_shared_between_threads() {
     fn assert_send_sync<T: Send + Sync + Clone>() {}
     assert_send_sync::<EquationModel>();

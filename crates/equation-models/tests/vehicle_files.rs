@@ -79,6 +79,12 @@ fn compare_at(what: &str, eq: &EquationModel, compiled: &dyn DifferentiableModel
     eq_d.h_jacobian(x, u, &mut c1).unwrap();
     compiled.h_jacobian(x, u, &mut c2).unwrap();
     assert_close(&format!("{what} dh/dx"), &c1, &c2);
+    // One pass for the value and its Jacobian gives the same numbers as two.
+    let (mut f3, mut a3, mut y3, mut c3) =
+        (DVector::zeros(n), DMatrix::zeros(n, n), DVector::zeros(m), DMatrix::zeros(m, n));
+    eq_d.f_with_jacobian(x, u, &mut f3, &mut a3).unwrap();
+    eq_d.h_with_jacobian(x, u, &mut y3, &mut c3).unwrap();
+    assert_eq!((f3, a3, y3, c3), (f1, a1, y1, c1), "{what}: with_jacobian");
 }
 
 /// Compares on `SAMPLES` random points drawn by `sample`.
@@ -206,81 +212,21 @@ fn bds_ins_is_the_exact_discretisation_of_the_error_model() {
     assert_eq!(foreign("bds-ins.toml", "x0"), DMatrix::zeros(13, 1));
 }
 
-/// The six wheel positions of the truck, in the crate's order.
-const WHEELS: [&str; 6] = ["L1", "R1", "L2", "R2", "L3", "R3"];
-
-/// `truck.toml` with the body-axis forces `FX_j`, `FY_j` of every wheel as outputs and the
-/// force-free part of (1) as `[dxdt]`: each equation within the limits of the format.
-fn truck_per_wheel() -> EquationModel {
-    let file = text("truck.toml");
-    let names: Vec<String> = WHEELS.iter().flat_map(|w| [format!("FX_{w}"), format!("FY_{w}")]).collect();
-    let outputs: Vec<String> = names.iter().map(|n| format!("\"out_{n}\"")).collect();
-    let outputs_line = file.lines().find(|l| l.starts_with("outputs = ")).expect("[model] outputs");
-    let head = &file[..file.find("\n[dxdt]").expect("[dxdt] after the definitions")];
-    let mut edited = head.replacen(outputs_line, &format!("outputs = [{}]", outputs.join(", ")), 1);
-    edited.push_str("\n[dxdt]\nVx = \"Vy * gamma\"\nVy = \"-Vx * gamma\"\ngamma = \"0\"\n[h]\n");
-    for n in &names {
-        edited.push_str(&format!("out_{n} = \"{n}\"\n"));
-    }
-    EquationModel::from_toml_str_with_foreign_keys(&edited, "truck.toml, per wheel", FOREIGN)
-        .unwrap_or_else(|e| panic!("{e}"))
-}
-
 #[test]
-fn truck_file_is_complete_but_beyond_the_format_and_its_definitions_match_the_crate() {
-    use truck_dynamics::kinematics::{Geometry, wheel_kinematics};
+fn truck_is_the_euler_step_of_the_pac89_planar_model() {
     use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams};
-    // The whole file exceeds the operator limit (definitions are substituted as text). When the
-    // format can share subexpressions, replace this by `compare` on the whole file.
-    let whole = EquationModel::from_toml_str_with_foreign_keys(&text("truck.toml"), "truck.toml", FOREIGN);
-    match whole {
-        Err(equation_models::EquationError::LimitExceeded { what, .. }) => {
-            assert!(what.contains("dxdt.Vx") && what.contains("operators"), "{what}");
-        }
-        other => panic!("truck.toml was expected to exceed the operator limit: {other:?}"),
-    }
-    let eq = truck_per_wheel();
-    // atan2, abs and max have no derivative in the expression library.
-    assert!(eq.differentiable().is_none());
+    let eq = load("truck.toml");
+    // atan2 (slip angles), abs and max (slip ratios) have derivatives.
+    assert!(eq.differentiable().is_some() && eq.linear().is_none());
     let params = TruckParams::digest_preset();
     let compiled = TruckEkfModel::paper(params).unwrap();
-    let (geometry, loads, tyre) = (Geometry::new(&params), params.static_loads(), params.tyre);
-    let mut rng = Lcg(6);
-    for _ in 0..SAMPLES {
+    compare("truck", &eq, &compiled, 6, |rng| {
         let x = DVector::from_vec(vec![rng.uniform(5.0, 25.0), rng.uniform(-0.5, 0.5), rng.uniform(-0.2, 0.2)]);
         let delta = rng.uniform(-0.1, 0.1);
+        // Wheel speeds within ±2 % of rolling (slip ratios of a few percent, both signs).
         let omega: [f64; 6] = std::array::from_fn(|_| x[0] / params.rolling_radius * rng.uniform(0.98, 1.02));
-        let u = TruckInput { delta, omega }.to_dvector();
-        let mut forces = DVector::zeros(12);
-        eq.h(&x, &u, &mut forces).unwrap();
-        // Each wheel against the crate's kinematics and lumped Pac89 tyre.
-        let (mut fx, mut fy, mut mz) = (0.0, 0.0, 0.0);
-        for j in 0..6 {
-            let k = wheel_kinematics(&geometry, j, [x[0], x[1], x[2]], delta, omega[j], params.rolling_radius, 0.1);
-            let n = geometry.tyres[j];
-            let lon = tyre.longitudinal_lumped(n, loads[j], k.slip).unwrap().force;
-            let lat = tyre.lateral_lumped(n, loads[j], k.alpha).unwrap().force;
-            let want = [lon * k.cos_delta - lat * k.sin_delta, lon * k.sin_delta + lat * k.cos_delta];
-            let got = [forces[2 * j], forces[2 * j + 1]];
-            let w = DMatrix::from_column_slice(2, 1, &want);
-            assert_close(
-                &format!("truck wheel {} at x = {x:?}, u = {u:?}", WHEELS[j]),
-                &DMatrix::from_column_slice(2, 1, &got),
-                &w,
-            );
-            fx += got[0];
-            fy += got[1];
-            mz += geometry.x[j] * got[1] - geometry.y[j] * got[0];
-        }
-        // Summed as the file's [dxdt] and [h] do: the Euler step (12) and the measurement (14).
-        let mut kin = DVector::zeros(3);
-        eq.rhs(&x, &u, &mut kin).unwrap();
-        let derivative =
-            DVector::from_vec(vec![kin[0] + fx / params.mass, kin[1] + fy / params.mass, mz / params.yaw_inertia]);
-        let (mut f, mut y) = (DVector::zeros(3), DVector::zeros(3));
-        compiled.f(&x, &u, &mut f).unwrap();
-        compiled.h(&x, &u, &mut y).unwrap();
-        assert_close("truck f", &column(&(&x + derivative * compiled.ts())), &column(&f));
-        assert_close("truck h", &DMatrix::from_column_slice(3, 1, &[x[0], fy / params.mass, x[2]]), &column(&y));
-    }
+        (x, TruckInput { delta, omega }.to_dvector())
+    });
+    // The port-est values are the reproduction's EKF settings.
+    assert_eq!(foreign("truck.toml", "x0"), DMatrix::from_column_slice(3, 1, &[19.44, 0.0, 0.0]));
 }
