@@ -98,9 +98,8 @@ pub use nalgebra;
 pub use registry::{AnyEstimator, EstimatorEntry, EstimatorSettings, SettingsKind, SmfSolver};
 pub use smf::{
     Consistency, FallbackReason, InconsistencyPolicy, Inflation, InputModel, NonlinearSetMembershipFilter,
-    NonlinearSmfSettings, RemainderBounds, SdpUpdateSolver, SetEstimate,
-    SetMembershipFilter, StepReport, TAU_FLOOR, TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver,
-    UpdateStatus,
+    NonlinearSmfSettings, RemainderBounds, SdpUpdateSolver, SetEstimate, SetMembershipFilter, StepReport, TAU_FLOOR,
+    TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus,
 };
 pub use traits::{
     DataCheck, DynEstimator, Estimate, EstimateKind, Estimator, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus,

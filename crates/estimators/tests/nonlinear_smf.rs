@@ -109,7 +109,13 @@ fn on_a_linear_model_it_is_the_linear_filter() {
         let b = DMatrix::from_fn(3, 1, |_, _| rng.uniform(-1.0, 1.0));
         let c = DMatrix::from_fn(2, 3, |_, _| rng.uniform(-1.0, 1.0));
         let model = ConstantModel::new(a, b, c).unwrap();
-        let s = setup(DVector::zeros(3), DMatrix::identity(3, 3), DMatrix::identity(3, 3) * 0.01, DMatrix::identity(2, 2) * 0.1, 1);
+        let s = setup(
+            DVector::zeros(3),
+            DMatrix::identity(3, 3),
+            DMatrix::identity(3, 3) * 0.01,
+            DMatrix::identity(2, 2) * 0.1,
+            1,
+        );
         let mut linear = SetMembershipFilter::new(s.clone()).unwrap();
         let mut nonlinear = NonlinearSetMembershipFilter::new(s).unwrap();
         let w = Noise::ellipsoid_boundary(DMatrix::identity(3, 3) * 0.01).unwrap();
@@ -159,7 +165,11 @@ fn the_set_contains_the_truth_with_every_noise_on_its_boundary() {
     let vr = DMatrix::from_diagonal(&dvector![1.0, 1.0, 1e-2]);
     let cases: [(&dyn AnyModel, Setup, usize); 2] = [
         (&quadratic, setup(dvector![0.0, 1.0], DMatrix::identity(2, 2) * 0.1, q, r, 1), 400),
-        (&vessel, setup(DVector::zeros(6), DMatrix::from_diagonal(&dvector![4.0, 4.0, 0.01, 0.01, 0.01, 1e-4]), vq, vr, 3), 600),
+        (
+            &vessel,
+            setup(DVector::zeros(6), DMatrix::from_diagonal(&dvector![4.0, 4.0, 0.01, 0.01, 0.01, 1e-4]), vq, vr, 3),
+            600,
+        ),
     ];
     let mut steps = 0;
     for (seed, (model, s, horizon)) in cases.into_iter().enumerate() {
@@ -172,7 +182,9 @@ fn the_set_contains_the_truth_with_every_noise_on_its_boundary() {
         let mut est = registry::build(registry::names::SMF_NL, s, None).unwrap();
         for k in 0..horizon {
             let t = k as f64 * 0.1;
-            let u = DVector::from_fn(p, |i, _| if p == 1 { 0.05 * t.sin() } else { [2e5, 5e4, 1e6][i] * (t / (5.0 + i as f64)).sin() });
+            let u = DVector::from_fn(p, |i, _| {
+                if p == 1 { 0.05 * t.sin() } else { [2e5, 5e4, 1e6][i] * (t / (5.0 + i as f64)).sin() }
+            });
             let mut next = DVector::zeros(n);
             model.discrete().f(&x, &u, &mut next).unwrap();
             x = next + w.sample(&mut rng);
@@ -192,7 +204,13 @@ fn the_set_contains_the_truth_with_every_noise_on_its_boundary() {
 fn a_hessian_unbounded_on_the_set_is_refused_and_the_filter_is_unchanged() {
     // h = 1/x₀ over a predicted set that holds x₀ = 0: no bound exists.
     let model = Quadratic { a: 0.0, reciprocal: true };
-    let s = setup(dvector![0.5, 0.0], DMatrix::identity(2, 2), DMatrix::identity(2, 2) * 1e-2, DMatrix::identity(2, 2) * 1e-2, 1);
+    let s = setup(
+        dvector![0.5, 0.0],
+        DMatrix::identity(2, 2),
+        DMatrix::identity(2, 2) * 1e-2,
+        DMatrix::identity(2, 2) * 1e-2,
+        1,
+    );
     let mut f = NonlinearSetMembershipFilter::new(s).unwrap();
     let before = f.estimate().clone();
     let e = f.step(&model, &dvector![0.0], &dvector![2.0, 0.0]).unwrap_err();
@@ -203,7 +221,13 @@ fn a_hessian_unbounded_on_the_set_is_refused_and_the_filter_is_unchanged() {
     // Bad data: unchanged too; then a step on a set away from 0 succeeds.
     assert!(f.step(&model, &dvector![0.0], &dvector![f64::NAN, 0.0]).is_err());
     assert_eq!(f.estimate().shape, before.shape);
-    let s = setup(dvector![5.0, 0.0], DMatrix::identity(2, 2) * 0.01, DMatrix::identity(2, 2) * 1e-4, DMatrix::identity(2, 2) * 1e-4, 1);
+    let s = setup(
+        dvector![5.0, 0.0],
+        DMatrix::identity(2, 2) * 0.01,
+        DMatrix::identity(2, 2) * 1e-4,
+        DMatrix::identity(2, 2) * 1e-4,
+        1,
+    );
     let mut f = NonlinearSetMembershipFilter::new(s).unwrap();
     f.step(&model, &dvector![0.0], &dvector![0.2, 0.0]).unwrap();
     assert!(f.remainders().measurement[0] > 0.0);
@@ -219,7 +243,8 @@ fn predict_then_update_is_the_step_when_h_is_linear() {
         DMatrix::from_diagonal(&dvector![1.0, 1.0, 0.1]),
         3,
     );
-    let (mut a, mut b) = (NonlinearSetMembershipFilter::new(s.clone()).unwrap(), NonlinearSetMembershipFilter::new(s).unwrap());
+    let (mut a, mut b) =
+        (NonlinearSetMembershipFilter::new(s.clone()).unwrap(), NonlinearSetMembershipFilter::new(s).unwrap());
     let u = dvector![1e5, 0.0, 1e5];
     for k in 0..20 {
         let y = dvector![0.01 * f64::from(k), 0.0, 0.001];

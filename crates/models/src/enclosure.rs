@@ -165,7 +165,12 @@ pub fn check_enclosure_dims(
 }
 
 /// `Σ_j M_ij x_j (+ Σ_k N_ik u_k)` in interval arithmetic.
-fn affine(m: &nalgebra::DMatrix<f64>, x: &[Interval], input: Option<(&nalgebra::DMatrix<f64>, &DVector<f64>)>, i: usize) -> Interval {
+fn affine(
+    m: &nalgebra::DMatrix<f64>,
+    x: &[Interval],
+    input: Option<(&nalgebra::DMatrix<f64>, &DVector<f64>)>,
+    i: usize,
+) -> Interval {
     let mut s = Interval::ZERO;
     for (j, xj) in x.iter().enumerate() {
         s = s + *xj * m[(i, j)];

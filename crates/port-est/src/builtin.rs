@@ -79,7 +79,9 @@ impl Builtin {
         let e = |e: &dyn std::fmt::Display| format!("{PREFIX}{}: {e}", self.name);
         Ok(match self.name {
             "carrier" => {
-                let d = CarrierModel::new(CarrierParams::paper_preset()).and_then(|m| m.discretize(1e-3)).map_err(|x| e(&x))?;
+                let d = CarrierModel::new(CarrierParams::paper_preset())
+                    .and_then(|m| m.discretize(1e-3))
+                    .map_err(|x| e(&x))?;
                 let (a, b, c) = d.to_dynamic();
                 Arc::new(ConstantModel::new(a, b, c).map_err(|x| e(&x))?)
             }

@@ -20,8 +20,8 @@
 //! files are removed on SIGINT/SIGTERM, and those of a killed run are named by the next.
 
 pub mod bds_ins;
-pub mod builtin;
 mod blame;
+pub mod builtin;
 pub mod cli;
 pub mod data;
 pub mod error;

@@ -98,7 +98,6 @@ pub enum Dynamics {
     },
 }
 
-
 /// A validated model: `n` states, `p` inputs, `m` outputs, its noise descriptions and settings.
 #[derive(Debug, Clone)]
 pub struct Model {
@@ -196,11 +195,9 @@ impl Model {
                  builtin:vessel and linear models do)",
                 needs.requirement()
             ),
-            (Dynamics::Builtin { vehicle, .. }, Capability::SecondOrder) => format!(
-                "needs {}; the compiled {} model does not offer them yet",
-                needs.requirement(),
-                vehicle.name
-            ),
+            (Dynamics::Builtin { vehicle, .. }, Capability::SecondOrder) => {
+                format!("needs {}; the compiled {} model does not offer them yet", needs.requirement(), vehicle.name)
+            }
             (Dynamics::Equations(_), _) => format!(
                 "needs {}; the equations of {file} are not linear (or have a constant term, or an output \
                  depends on an input)",
@@ -415,20 +412,15 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         }
     };
     let mut keys = Vec::with_capacity(12);
-    for (k, span) in [
-        ("q", f.q.span()),
-        ("r", f.r.span()),
-        ("p0", f.p0.span()),
-        ("x0", f.x0.span()),
-    ]
-    .into_iter()
-    .chain(f.u_lower.as_ref().map(|v| ("u_lower", v.span())))
-    .chain(f.u_upper.as_ref().map(|v| ("u_upper", v.span())))
-    .chain(f.a.as_ref().map(|v| ("a", v.span())))
-    .chain(f.b.as_ref().map(|v| ("b", v.span())))
-    .chain(f.c.as_ref().map(|v| ("c", v.span())))
-    .chain(f.model.as_ref().map(|v| ("model", v.span())))
-    .chain(f.ukf.as_ref().map(|v| ("ukf", v.span())))
+    for (k, span) in [("q", f.q.span()), ("r", f.r.span()), ("p0", f.p0.span()), ("x0", f.x0.span())]
+        .into_iter()
+        .chain(f.u_lower.as_ref().map(|v| ("u_lower", v.span())))
+        .chain(f.u_upper.as_ref().map(|v| ("u_upper", v.span())))
+        .chain(f.a.as_ref().map(|v| ("a", v.span())))
+        .chain(f.b.as_ref().map(|v| ("b", v.span())))
+        .chain(f.c.as_ref().map(|v| ("c", v.span())))
+        .chain(f.model.as_ref().map(|v| ("model", v.span())))
+        .chain(f.ukf.as_ref().map(|v| ("ukf", v.span())))
     {
         let (line, column) = line_col(text, span.start);
         keys.push((k, line, column));

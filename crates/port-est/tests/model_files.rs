@@ -32,6 +32,7 @@ fn every_vehicle_file_is_read_and_says_what_runs_on_it() {
         ("car", 4, 1, 1, "rmhe", "yang-li"),
         ("vessel", 6, 3, 3, "mhe-ukf", "kf"),
         ("bds-ins", 13, 0, 3, "kf", "rmhe"),
+        ("truck", 3, 7, 3, "ekf", "smf"),
     ];
     for (name, n, p, m, runs, not) in cases {
         let path = workspace().join(format!("examples/models/{name}.toml"));

@@ -20,7 +20,9 @@ impl DiscreteVessel {
 
     fn check_enclosure(&self, u: &DVector<f64>) -> Result<(), ModelError> {
         if !self.has_enclosures() {
-            return Err(ModelError::Evaluation("the vessel's enclosures are implemented for the Euler model only".into()));
+            return Err(ModelError::Evaluation(
+                "the vessel's enclosures are implemented for the Euler model only".into(),
+            ));
         }
         models::error::check_dims("u (tau)", u, INPUT_DIM, 1)?;
         models::error::check_finite("u (tau)", u)
@@ -99,12 +101,8 @@ mod tests {
         let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
         let mut rng = Xoshiro256StarStar::seed_from_u64(11);
         let mut enc = TaylorEnclosure::new(STATE_DIM, STATE_DIM);
-        let (mut f, mut j, mut jp, mut jm) = (
-            DVector::zeros(6),
-            DMatrix::zeros(6, 6),
-            DMatrix::zeros(6, 6),
-            DMatrix::zeros(6, 6),
-        );
+        let (mut f, mut j, mut jp, mut jm) =
+            (DVector::zeros(6), DMatrix::zeros(6, 6), DMatrix::zeros(6, 6), DMatrix::zeros(6, 6));
         let scale = [50.0, 50.0, 3.0, 3.0, 1.0, 0.1];
         for _ in 0..200 {
             let centre: Vec<f64> = scale.iter().map(|s| rng.uniform(-s, *s)).collect();

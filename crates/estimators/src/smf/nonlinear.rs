@@ -207,7 +207,15 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             r_eff: r.clone(),
             remainders: RemainderBounds { process: DVector::zeros(n), measurement: DVector::zeros(m) },
         };
-        Ok(Self { inner, dims: Dims::new(n, p, m), q, r, settings: NonlinearSmfSettings::default(), ws, u_last: DVector::zeros(p) })
+        Ok(Self {
+            inner,
+            dims: Dims::new(n, p, m),
+            q,
+            r,
+            settings: NonlinearSmfSettings::default(),
+            ws,
+            u_last: DVector::zeros(p),
+        })
     }
 
     /// Replaces the settings.
