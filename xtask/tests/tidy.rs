@@ -26,7 +26,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("svg-plot", &[]),
     ("intervals", &[]),
     ("models", &["dense-kernels", "intervals"]),
-    ("equation-models", &["models"]),
+    ("equation-models", &["models", "intervals"]),
     ("ellipsoid", &["dense-kernels"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels", "intervals"]),

@@ -425,6 +425,77 @@ impl Graph {
     }
 }
 
+impl Graph {
+    /// [`Graph::run`] on intervals (module `interval_rules`): `values` holds enclosures of the
+    /// states (slots `0..n`) and inputs; afterwards every scheduled node's value enclosure, and in
+    /// `grads` (`n` per node) the enclosure of its derivatives with respect to the states, for the
+    /// nodes that `varies` marks.
+    pub(crate) fn run_enclosure(
+        &self,
+        schedule: &[u32],
+        n: usize,
+        varies: &[bool],
+        values: &mut [intervals::Interval],
+        grads: &mut [intervals::Interval],
+    ) {
+        use crate::interval_rules::{apply, bin_apply, bin_partials, derivative};
+        use intervals::Interval;
+        for s in 0..n {
+            let row = &mut grads[s * n..(s + 1) * n];
+            row.fill(Interval::ZERO);
+            row[s] = Interval::point(1.0);
+        }
+        for &i in schedule {
+            let i = i as usize;
+            let (done, rest) = grads.split_at_mut(i * n);
+            let row = &mut rest[..n];
+            let ga = |a: u32| &done[a as usize * n..(a as usize + 1) * n];
+            match self.ops[i] {
+                Op::Slot => {}
+                Op::Const(c) => values[i] = Interval::point(c),
+                Op::Neg(a) => {
+                    values[i] = -values[a as usize];
+                    if varies[i] {
+                        for (r, &d) in row.iter_mut().zip(ga(a)) {
+                            *r = -d;
+                        }
+                    }
+                }
+                Op::Unary(f, a) => {
+                    let x = values[a as usize];
+                    let v = apply(f, x);
+                    values[i] = v;
+                    if varies[i] {
+                        let d = derivative(f, x, v);
+                        for (r, &g) in row.iter_mut().zip(ga(a)) {
+                            *r = d * g;
+                        }
+                    }
+                }
+                Op::Binary(g, a, b) => {
+                    let (x, y) = (values[a as usize], values[b as usize]);
+                    let v = bin_apply(g, x, y);
+                    values[i] = v;
+                    if varies[i] {
+                        let (va, vb) = (varies[a as usize], varies[b as usize]);
+                        let (da, db) = bin_partials(g, x, y, v, va, vb);
+                        for (k, r) in row.iter_mut().enumerate() {
+                            let mut acc = Interval::ZERO;
+                            if va {
+                                acc = acc + da * ga(a)[k];
+                            }
+                            if vb {
+                                acc = acc + db * ga(b)[k];
+                            }
+                            *r = acc;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -55,8 +55,10 @@
 #![warn(missing_docs)]
 
 pub mod error;
+mod enclosure;
 mod file;
 mod graph;
+mod interval_rules;
 pub mod limits;
 mod model;
 mod parse;

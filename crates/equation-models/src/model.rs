@@ -16,10 +16,10 @@ use crate::scratch::with_scratch;
 /// The equations of one section (`[f]`/`[dxdt]`, or `[h]`): their labels, the nodes of their
 /// values and the nodes they need, in evaluation order.
 #[derive(Debug, Clone)]
-struct Rows {
-    labels: Vec<String>,
-    roots: Vec<u32>,
-    schedule: Vec<u32>,
+pub(crate) struct Rows {
+    pub(crate) labels: Vec<String>,
+    pub(crate) roots: Vec<u32>,
+    pub(crate) schedule: Vec<u32>,
 }
 
 impl Rows {
@@ -42,14 +42,14 @@ pub struct EquationModel {
     inputs: Vec<String>,
     outputs: Vec<String>,
     parameters: Vec<(String, f64)>,
-    time: TimeModel,
-    graph: Graph,
-    rhs: Rows,
-    out: Rows,
+    pub(crate) time: TimeModel,
+    pub(crate) graph: Graph,
+    pub(crate) rhs: Rows,
+    pub(crate) out: Rows,
     /// Per node: whether it depends on a state (the nodes whose derivatives are propagated).
-    varies: Vec<bool>,
+    pub(crate) varies: Vec<bool>,
     /// `(A_d, B_d)` of an exact zero-order hold.
-    zoh: Option<(DMatrix<f64>, DMatrix<f64>)>,
+    pub(crate) zoh: Option<(DMatrix<f64>, DMatrix<f64>)>,
     linear: Option<ConstantModel>,
 }
 
@@ -635,6 +635,12 @@ impl AnyModel for EquationModel {
     }
 
     fn differentiable(&self) -> Option<&dyn DifferentiableModel> {
+        Some(self)
+    }
+
+    /// Interval enclosures of `f`, `h` and their Jacobians over boxes (module `enclosure`), for
+    /// the nonlinear set-membership filter.
+    fn second_order(&self) -> Option<&dyn models::SecondOrderModel> {
         Some(self)
     }
 

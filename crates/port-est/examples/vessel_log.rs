@@ -9,19 +9,28 @@
 //! writes `DIR/data.csv` (header `k`, then the model file's input and output names) and
 //! `DIR/truth.csv` (`k,x,y,psi,u,v,r`: the true state after step `k`, to compare estimates with).
 //! The truth is the compiled model, not the equations the estimators read: two implementations.
+//! A fourth argument `bounded` draws the noises uniformly inside the ellipsoids `q`, `r` (the
+//! set-membership filters' assumption) instead of Gaussian with those covariances, and the
+//! initial state inside `p0` around `x0`:
+//!
+//! ```sh
+//! cargo run -p port-est --example vessel_log -- examples/models/vessel.toml examples/vessel-bounded 1000 bounded
+//! ```
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use models::DiscreteModel;
+use models::{DiscreteModel, Noise};
 use models::rng::Xoshiro256StarStar;
 use nalgebra::DVector;
 use vessel_dynamics::{DiscreteVessel, VesselParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [model, dir, steps] = args.as_slice() else {
-        return Err("usage: vessel_log MODEL.toml DIR STEPS".into());
+    let (model, dir, steps, bounded) = match args.as_slice() {
+        [model, dir, steps] => (model, dir, steps, false),
+        [model, dir, steps, kind] if kind == "bounded" => (model, dir, steps, true),
+        _ => return Err("usage: vessel_log MODEL.toml DIR STEPS [bounded]".into()),
     };
     let steps: usize = steps.parse().map_err(|e| format!("STEPS {steps:?}: {e}"))?;
     if !(1..=1_000_000).contains(&steps) {
@@ -39,8 +48,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (lq, lr) = (chol(&file.q, "q")?, chol(&file.r, "r")?);
 
     let mut rng = Xoshiro256StarStar::seed_from_u64(2016);
-    let mut normal = |n: usize| DVector::from_fn(n, |_, _| rng.standard_normal());
+    let in_ellipsoid = |m: &nalgebra::DMatrix<f64>| Noise::uniform_ellipsoid(m.clone());
+    let (w, v, x0) = (in_ellipsoid(&file.q)?, in_ellipsoid(&file.r)?, in_ellipsoid(&file.p0)?);
     let mut x = file.x0.clone();
+    if bounded {
+        x += x0.sample(&mut rng);
+    }
     let (mut next, mut y) = (DVector::zeros(6), DVector::zeros(3));
     let mut data = format!("k,{},{}\n", inputs.join(","), outputs.join(","));
     let mut truth = String::from("k,x,y,psi,u,v,r\n");
@@ -53,9 +66,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             1e6 * (std::f64::consts::TAU * t / 60.0).sin(),
         ]);
         vessel.f(&x, &tau, &mut next)?;
-        next += &lq * normal(6);
+        next += if bounded { w.sample(&mut rng) } else { &lq * DVector::from_fn(6, |_, _| rng.standard_normal()) };
         vessel.h(&next, &tau, &mut y)?;
-        y += &lr * normal(3);
+        y += if bounded { v.sample(&mut rng) } else { &lr * DVector::from_fn(3, |_, _| rng.standard_normal()) };
         let row: Vec<String> = tau.iter().chain(y.iter()).map(|v| format!("{v:e}")).collect();
         writeln!(data, "{k},{}", row.join(","))?;
         let state: Vec<String> = next.iter().map(|v| format!("{v:e}")).collect();

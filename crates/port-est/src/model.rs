@@ -190,11 +190,6 @@ impl Model {
                 needs.requirement(),
                 m.not_differentiable().unwrap_or("the equations have no derivatives")
             ),
-            (Dynamics::Equations(_), Capability::SecondOrder) => format!(
-                "needs {}; models written as equations do not offer interval enclosures yet (the compiled \
-                 builtin:vessel and linear models do)",
-                needs.requirement()
-            ),
             (Dynamics::Builtin { vehicle, .. }, Capability::SecondOrder) => {
                 format!("needs {}; the compiled {} model does not offer them yet", needs.requirement(), vehicle.name)
             }

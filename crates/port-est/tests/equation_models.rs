@@ -205,3 +205,38 @@ fn an_equation_that_fails_at_some_step_is_named_with_the_step_and_the_values() {
     let model = EquationModel::from_toml_str_with_foreign_keys(&model, "m.toml", &port_est::model::NOISE_KEYS).unwrap();
     assert!(model.differentiable().is_some());
 }
+
+#[test]
+fn the_nonlinear_set_membership_filter_bounds_a_pendulum_written_as_equations() {
+    // The noise inside its ellipsoids (q, r as shapes), the initial state inside p0: every state
+    // lies in the published intervals [lo, hi] (the bounding box of the guaranteed ellipsoid).
+    let model = EquationModel::from_toml_str_with_foreign_keys(PENDULUM, "m.toml", &port_est::model::NOISE_KEYS).unwrap();
+    let mut rng = Xoshiro256StarStar::seed_from_u64(3);
+    let inside = |m: &[f64]| models::Noise::uniform_ellipsoid(nalgebra::DMatrix::from_diagonal(&DVector::from_vec(m.to_vec()))).unwrap();
+    let (w, v, x0) = (inside(&[1e-6, 1e-4]), inside(&[1e-4]), inside(&[0.04, 0.04]));
+    let mut x = DVector::from_vec(vec![0.5, 0.0]) + x0.sample(&mut rng);
+    let mut data = String::from("k,torque,angle\n");
+    let mut truth = Vec::new();
+    for k in 0..300 {
+        let u = DVector::from_element(1, 0.5 * (0.05 * k as f64).sin());
+        let mut next = DVector::zeros(2);
+        model.f(&x, &u, &mut next).unwrap();
+        x = next + w.sample(&mut rng);
+        let mut y = DVector::zeros(1);
+        model.h(&x, &u, &mut y).unwrap();
+        y += v.sample(&mut rng);
+        data.push_str(&format!("{k},{:e},{:e}\n", u[0], y[0]));
+        truth.push(x.clone());
+    }
+    let out = rows(&run(PENDULUM, &data, "smf-nl").unwrap());
+    assert_eq!(out.len(), 300);
+    // Columns: k, xhat1, xhat2, lo1, lo2, hi1, hi2, …
+    for (k, (r, x)) in out.iter().zip(&truth).enumerate() {
+        for i in 0..2 {
+            assert!(r[3 + i] <= x[i] && x[i] <= r[5 + i], "step {k}: state {i} = {} not in [{}, {}]", x[i], r[3 + i], r[5 + i]);
+        }
+    }
+    // And the set does not blow up: the angle's interval stays within a few sensor widths.
+    let widest = out.iter().skip(20).map(|r| r[5] - r[3]).fold(0.0, f64::max);
+    assert!(widest < 0.2, "widest angle interval {widest}");
+}
