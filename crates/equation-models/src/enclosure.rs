@@ -24,7 +24,14 @@ struct Work {
 }
 
 impl EquationModel {
-    fn check_box(&self, what: &str, rows: usize, x: &[Interval], u: &DVector<f64>, out: &TaylorEnclosure) -> Result<(), ModelError> {
+    fn check_box(
+        &self,
+        what: &str,
+        rows: usize,
+        x: &[Interval],
+        u: &DVector<f64>,
+        out: &TaylorEnclosure,
+    ) -> Result<(), ModelError> {
         let d = self.dims();
         check_enclosure_dims(what, rows, d.states, x, out)?;
         models::error::check_dims("u", u, d.inputs, 1)?;
@@ -32,7 +39,15 @@ impl EquationModel {
     }
 
     /// `rows` over the box `x` (input `u`): values into `value`, Jacobian (row-major) into `jac`.
-    fn enclose(&self, rows: &Rows, x: &[Interval], u: &[f64], work: &mut Work, value: &mut [Interval], jac: &mut [Interval]) {
+    fn enclose(
+        &self,
+        rows: &Rows,
+        x: &[Interval],
+        u: &[f64],
+        work: &mut Work,
+        value: &mut [Interval],
+        jac: &mut [Interval],
+    ) {
         let n = x.len();
         work.values[..n].copy_from_slice(x);
         for (v, &ui) in work.values[n..n + u.len()].iter_mut().zip(u) {

@@ -237,7 +237,14 @@ pub(crate) fn bin_apply(g: Bin, a: Interval, b: Interval) -> Interval {
 }
 
 /// `(∂g/∂a, ∂g/∂b)` on intervals, given `v ⊇ g(a, b)`; `need_a`, `need_b` say which are used.
-pub(crate) fn bin_partials(g: Bin, a: Interval, b: Interval, v: Interval, need_a: bool, need_b: bool) -> (Interval, Interval) {
+pub(crate) fn bin_partials(
+    g: Bin,
+    a: Interval,
+    b: Interval,
+    v: Interval,
+    need_a: bool,
+    need_b: bool,
+) -> (Interval, Interval) {
     let (one, zero) = (Interval::point(1.0), Interval::ZERO);
     match g {
         Bin::Add => (one, one),

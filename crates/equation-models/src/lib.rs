@@ -54,8 +54,8 @@
 
 #![warn(missing_docs)]
 
-pub mod error;
 mod enclosure;
+pub mod error;
 mod file;
 mod graph;
 mod interval_rules;

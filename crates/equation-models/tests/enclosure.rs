@@ -37,7 +37,8 @@ fn check(model: &EquationModel, centre: &[f64], spread: &[f64], u: &DVector<f64>
     let (n, m) = (d.states, d.outputs);
     let mut rng = Xoshiro256StarStar::seed_from_u64(seed);
     let (mut fe, mut he) = (TaylorEnclosure::new(n, n), TaylorEnclosure::new(m, n));
-    let (mut f, mut h, mut jf, mut jh) = (DVector::zeros(n), DVector::zeros(m), DMatrix::zeros(n, n), DMatrix::zeros(m, n));
+    let (mut f, mut h, mut jf, mut jh) =
+        (DVector::zeros(n), DVector::zeros(m), DMatrix::zeros(n, n), DMatrix::zeros(m, n));
     for _ in 0..100 {
         let c: Vec<f64> = centre.iter().zip(spread).map(|(c, s)| c + rng.uniform(-s, *s)).collect();
         let r: Vec<f64> = spread.iter().map(|s| rng.uniform(0.0, *s)).collect();
@@ -52,7 +53,12 @@ fn check(model: &EquationModel, centre: &[f64], spread: &[f64], u: &DVector<f64>
             for i in 0..n {
                 assert!(fe.value(i).contains(f[i]), "f{i} = {} not in {}", f[i], fe.value(i));
                 for j in 0..n {
-                    assert!(fe.jacobian(i, j).contains(jf[(i, j)]), "F{i}{j} = {} not in {}", jf[(i, j)], fe.jacobian(i, j));
+                    assert!(
+                        fe.jacobian(i, j).contains(jf[(i, j)]),
+                        "F{i}{j} = {} not in {}",
+                        jf[(i, j)],
+                        fe.jacobian(i, j)
+                    );
                 }
             }
             for i in 0..m {
@@ -68,7 +74,13 @@ fn check(model: &EquationModel, centre: &[f64], spread: &[f64], u: &DVector<f64>
 #[test]
 fn the_enclosures_contain_the_model_and_its_jacobians_at_every_point_of_the_box() {
     let vessel = vehicle("vessel");
-    check(&vessel, &[10.0, -5.0, 0.3, 2.0, 0.2, 0.01], &[5.0, 5.0, 0.3, 0.5, 0.2, 0.02], &DVector::from_vec(vec![2e5, 5e4, 1e6]), 1);
+    check(
+        &vessel,
+        &[10.0, -5.0, 0.3, 2.0, 0.2, 0.01],
+        &[5.0, 5.0, 0.3, 0.5, 0.2, 0.02],
+        &DVector::from_vec(vec![2e5, 5e4, 1e6]),
+        1,
+    );
     let truck = vehicle("truck");
     let mut u = DVector::from_element(7, 19.0 / 0.52);
     u[0] = 0.05;

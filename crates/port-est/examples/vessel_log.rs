@@ -20,8 +20,8 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use models::{DiscreteModel, Noise};
 use models::rng::Xoshiro256StarStar;
+use models::{DiscreteModel, Noise};
 use nalgebra::DVector;
 use vessel_dynamics::{DiscreteVessel, VesselParams};
 

@@ -210,9 +210,12 @@ fn an_equation_that_fails_at_some_step_is_named_with_the_step_and_the_values() {
 fn the_nonlinear_set_membership_filter_bounds_a_pendulum_written_as_equations() {
     // The noise inside its ellipsoids (q, r as shapes), the initial state inside p0: every state
     // lies in the published intervals [lo, hi] (the bounding box of the guaranteed ellipsoid).
-    let model = EquationModel::from_toml_str_with_foreign_keys(PENDULUM, "m.toml", &port_est::model::NOISE_KEYS).unwrap();
+    let model =
+        EquationModel::from_toml_str_with_foreign_keys(PENDULUM, "m.toml", &port_est::model::NOISE_KEYS).unwrap();
     let mut rng = Xoshiro256StarStar::seed_from_u64(3);
-    let inside = |m: &[f64]| models::Noise::uniform_ellipsoid(nalgebra::DMatrix::from_diagonal(&DVector::from_vec(m.to_vec()))).unwrap();
+    let inside = |m: &[f64]| {
+        models::Noise::uniform_ellipsoid(nalgebra::DMatrix::from_diagonal(&DVector::from_vec(m.to_vec()))).unwrap()
+    };
     let (w, v, x0) = (inside(&[1e-6, 1e-4]), inside(&[1e-4]), inside(&[0.04, 0.04]));
     let mut x = DVector::from_vec(vec![0.5, 0.0]) + x0.sample(&mut rng);
     let mut data = String::from("k,torque,angle\n");
@@ -233,7 +236,13 @@ fn the_nonlinear_set_membership_filter_bounds_a_pendulum_written_as_equations() 
     // Columns: k, xhat1, xhat2, lo1, lo2, hi1, hi2, …
     for (k, (r, x)) in out.iter().zip(&truth).enumerate() {
         for i in 0..2 {
-            assert!(r[3 + i] <= x[i] && x[i] <= r[5 + i], "step {k}: state {i} = {} not in [{}, {}]", x[i], r[3 + i], r[5 + i]);
+            assert!(
+                r[3 + i] <= x[i] && x[i] <= r[5 + i],
+                "step {k}: state {i} = {} not in [{}, {}]",
+                x[i],
+                r[3 + i],
+                r[5 + i]
+            );
         }
     }
     // And the set does not blow up: the angle's interval stays within a few sensor widths.

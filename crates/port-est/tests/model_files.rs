@@ -107,7 +107,7 @@ fn a_builtin_vehicle_is_its_compiled_model_with_its_files_noise() {
     let root = workspace();
     let dir = out_dir("builtin");
     let run = |model: &str, estimator: &str| {
-        let output = dir.join(format!("{}-{estimator}.csv", model.replace(':', "-").replace('/', "-")));
+        let output = dir.join(format!("{}-{estimator}.csv", model.replace([':', '/'], "-")));
         filter(&FilterOptions {
             model: if model.starts_with("builtin:") { model.into() } else { root.join(model) },
             input: root.join("examples/vessel/data.csv"),

@@ -108,6 +108,11 @@ fn guarantee_lost(step: u64, reason: impl Into<String>) -> EstimatorError {
     EstimatorError::GuaranteeLost { step, reason: reason.into() }
 }
 
+/// The largest entry, NaN if any is.
+fn largest(v: &DVector<f64>) -> f64 {
+    v.iter().copied().fold(0.0, |a, b| if b.is_nan() || b > a { b } else { a })
+}
+
 /// The midpoint of a bounded interval.
 fn mid(v: Interval) -> f64 {
     0.5 * v.lo() + 0.5 * v.hi()
@@ -223,7 +228,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
     /// # Errors
     /// [`EstimatorError::InvalidSetting`] for a `max_remainder` that is not positive.
     pub fn with_settings(mut self, settings: NonlinearSmfSettings) -> Result<Self, EstimatorError> {
-        if !(settings.max_remainder > 0.0) {
+        if settings.max_remainder.is_nan() || settings.max_remainder <= 0.0 {
             return Err(EstimatorError::InvalidSetting {
                 what: "max_remainder",
                 value: settings.max_remainder,
@@ -314,8 +319,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             let rho = remainder(&ws.point_f, &ws.box_f, i, ws.lin.a.row(i).iter().copied(), &ws.radius, f_hat);
             ws.remainders.process[i] = (rho + (b - b_mid).mag()).hi();
         }
-        let worst = ws.remainders.process.iter().copied().fold(0.0, f64::max);
-        if !(worst <= self.settings.max_remainder) {
+        let worst = largest(&ws.remainders.process);
+        if worst.is_nan() || worst > self.settings.max_remainder {
             return Err(guarantee_lost(
                 step,
                 format!(
@@ -386,8 +391,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             let sigma = remainder(&ws.point_h, &ws.box_h, i, ws.lin.c.row(i).iter().copied(), &ws.radius, h_hat);
             ws.remainders.measurement[i] = (sigma + (y_lin - y_mid).mag()).hi();
         }
-        let worst = ws.remainders.measurement.iter().copied().fold(0.0, f64::max);
-        if !(worst <= self.settings.max_remainder) {
+        let worst = largest(&ws.remainders.measurement);
+        if worst.is_nan() || worst > self.settings.max_remainder {
             return Err(guarantee_lost(
                 step,
                 format!(
