@@ -1,6 +1,7 @@
 //! The linear algebra of the Kalman and extended Kalman steps, at the filter's sizes.
 //!
-//! [`StepKernels`] is chosen once per filter from `(n, m)`: for `n, m ≤` [`MAX_FIXED`] the
+//! [`StepKernels`] is chosen once per filter from `(n, m)`: for `n ≤` [`MAX_STATES`] (the
+//! vehicles' filters have 3 to 13 states) and `m ≤` [`MAX_OUTPUTS`] the
 //! const-generic instances of [`dense_kernels::small`] (constant trip counts, no bounds checks,
 //! output columns in registers), otherwise the general runtime-size kernels. Both perform the
 //! same operations in the same order, so they give the same numbers (tested on every dispatched
@@ -18,8 +19,10 @@ use crate::kalman::{GaussianEstimate, commit_prediction, data_check};
 use crate::traits::{SolveOutcome, StepStatus};
 use crate::validate::all_finite;
 
-/// The largest state and output counts with const-generic kernels.
-pub(crate) const MAX_FIXED: usize = 8;
+/// The largest state count with const-generic kernels.
+pub(crate) const MAX_STATES: usize = 13;
+/// The largest output count with const-generic kernels.
+pub(crate) const MAX_OUTPUTS: usize = 8;
 
 /// `out = sym(a p aᵀ + q)` using the scratch `ap` (all `n × n`).
 type PropagateFn = fn(&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>, &mut DMatrix<f64>, &mut DMatrix<f64>);
@@ -62,10 +65,10 @@ pub(crate) struct StepKernels {
 }
 
 impl StepKernels {
-    /// The const-generic kernels for `n` states and `m` outputs when both are at most
-    /// [`MAX_FIXED`], the general ones otherwise.
+    /// The const-generic kernels for `n ≤` [`MAX_STATES`] states and `m ≤` [`MAX_OUTPUTS`]
+    /// outputs, the general ones otherwise.
     pub(crate) fn for_sizes(n: usize, m: usize) -> Self {
-        let fixed = (1..=MAX_FIXED).contains(&n) && (1..=MAX_FIXED).contains(&m);
+        let fixed = (1..=MAX_STATES).contains(&n) && (1..=MAX_OUTPUTS).contains(&m);
         if fixed { by_n(n, m) } else { Self::general() }
     }
 
@@ -96,7 +99,7 @@ fn fixed<const N: usize, const M: usize>() -> StepKernels {
     }
 }
 
-/// `match n { N => match m { M => fixed::<N, M>(), … }, … }` over `1..=MAX_FIXED`.
+/// `match n { N => match m { M => fixed::<N, M>(), … }, … }` over the table's sizes.
 macro_rules! dispatch {
     ($n:expr, $m:expr; [$($N:literal)*] $ms:tt) => {
         match $n {
@@ -113,7 +116,7 @@ macro_rules! dispatch {
 }
 
 fn by_n(n: usize, m: usize) -> StepKernels {
-    dispatch!(n, m; [1 2 3 4 5 6 7 8] [1 2 3 4 5 6 7 8])
+    dispatch!(n, m; [1 2 3 4 5 6 7 8 9 10 11 12 13] [1 2 3 4 5 6 7 8])
 }
 
 fn propagate_general(
@@ -381,8 +384,8 @@ mod tests {
     /// which the general path skips).
     #[test]
     fn every_dispatched_size_matches_the_general_path() {
-        for n in 1..=MAX_FIXED {
-            for m in 1..=MAX_FIXED {
+        for n in 1..=MAX_STATES {
+            for m in 1..=MAX_OUTPUTS {
                 let seed = (10 * n + m) as u64;
                 let fixed = StepKernels::for_sizes(n, m);
                 let general = StepKernels::general();
@@ -418,7 +421,7 @@ mod tests {
             }
         }
         // Beyond the table: the general kernels.
-        for (n, m) in [(0, 1), (9, 3), (3, 9), (13, 6)] {
+        for (n, m) in [(0, 1), (1, 0), (14, 3), (3, 9), (13, 9)] {
             assert!(!StepKernels::for_sizes(n, m).is_fixed());
         }
     }
