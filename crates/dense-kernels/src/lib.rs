@@ -9,6 +9,9 @@
 //! * [`cholesky`]: in-place factorisations of matrices and column-major slices, left and right
 //!   triangular solves, solves and inverses from a factor; none of them allocates except
 //!   [`cholesky_checked`].
+//! * [`small`]: the same kernels with their sizes as const generic parameters, for a caller
+//!   that knows its sizes once (a filter of `n` states and `m` outputs) and dispatches to them;
+//!   same operations in the same order, so the same numbers.
 //! * Validation ([`spd`]): symmetry and positive definiteness with the workspace's tolerances,
 //!   reporting the offending entry or pivot.
 //!
@@ -23,6 +26,7 @@
 //! target's.
 
 pub mod cholesky;
+pub mod small;
 pub mod spd;
 
 use nalgebra::{DMatrix, DVector};
@@ -48,6 +52,9 @@ pub fn mul_nt(alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64, out: &m
 }
 
 /// `out = alpha · a · B + beta · out` where `B[l, j] = b[j·stride.0 + l·stride.1]` has `c` columns.
+///
+/// Up to [`small::MAX_ROWS`] rows the output column is accumulated in registers by a kernel with
+/// the row count fixed (one dispatch per call, same operations in the same order).
 fn mul_strided(
     alpha: f64,
     a: &DMatrix<f64>,
@@ -59,8 +66,28 @@ fn mul_strided(
 ) {
     let (r, k) = a.shape();
     debug_assert_eq!(out.shape(), (r, c));
-    let a = a.as_slice();
-    let o = out.as_mut_slice();
+    let (a, o) = (a.as_slice(), out.as_mut_slice());
+    macro_rules! rows {
+        ($($r:literal)*) => {
+            match r {
+                $($r => small::mul_rows::<$r>(alpha, a, b, (k, c), stride, beta, o),)*
+                _ => mul_any(alpha, a, b, (r, k, c), stride, beta, o),
+            }
+        };
+    }
+    rows!(1 2 3 4 5 6 7 8)
+}
+
+/// [`mul_strided`] for any row count.
+fn mul_any(
+    alpha: f64,
+    a: &[f64],
+    b: &[f64],
+    (r, k, c): (usize, usize, usize),
+    stride: (usize, usize),
+    beta: f64,
+    o: &mut [f64],
+) {
     for j in 0..c {
         let oc = &mut o[j * r..(j + 1) * r];
         scale_col(oc, beta);
@@ -81,18 +108,17 @@ pub fn gemv(alpha: f64, a: &DMatrix<f64>, x: &DVector<f64>, beta: f64, out: &mut
     let (r, k) = a.shape();
     debug_assert_eq!(x.len(), k);
     debug_assert_eq!(out.len(), r);
-    let a = a.as_slice();
-    let o = out.as_mut_slice();
-    scale_col(o, beta);
-    for l in 0..k {
-        let s = alpha * x[l];
-        if s != 0.0 {
-            let ac = &a[l * r..(l + 1) * r];
-            for i in 0..r {
-                o[i] += s * ac[i];
+    let (a, x, o) = (a.as_slice(), x.as_slice(), out.as_mut_slice());
+    // A vector is a one-column matrix: x[l] is at l.
+    macro_rules! rows {
+        ($($r:literal)*) => {
+            match r {
+                $($r => small::mul_rows::<$r>(alpha, a, x, (k, 1), (0, 1), beta, o),)*
+                _ => mul_any(alpha, a, x, (r, k, 1), (0, 1), beta, o),
             }
-        }
+        };
     }
+    rows!(1 2 3 4 5 6 7 8)
 }
 
 fn scale_col(c: &mut [f64], beta: f64) {

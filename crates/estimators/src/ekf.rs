@@ -16,15 +16,15 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use dense_kernels as dense;
 use models::{DifferentiableModel, Dims};
 
 use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
-use crate::kalman::{GaussianEstimate, GaussianUpdate, commit_prediction};
+use crate::gaussian_update::GaussianUpdate;
+use crate::kalman::{GaussianEstimate, commit_prediction};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
-use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
+use crate::validate::{InitialData, all_finite, check_initial, check_vec, replace_spd};
 
 /// An extended Kalman filter; `Q`, `R` are covariances.
 #[derive(Debug, Clone)]
@@ -106,7 +106,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// As [`ExtendedKalmanFilter::new`] for `Q`.
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        replace_spd("Q", &mut self.q, q, &mut self.upd.tmp)
+        replace_spd("Q", &mut self.q, q, &mut self.upd.buf.tmp)
     }
 
     /// Replaces the measurement covariance in place (no allocation; unchanged on error).
@@ -114,7 +114,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// As [`ExtendedKalmanFilter::new`] for `R`.
     pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        replace_spd("R", &mut self.r, r, &mut self.upd.s)
+        replace_spd("R", &mut self.r, r, &mut self.upd.buf.s)
     }
 
     /// The prediction (7), (8): `x⁻ = f(x̂, u)`, `P⁻ = F P Fᵀ + Q`, published. On error the state
@@ -165,7 +165,7 @@ impl ExtendedKalmanFilter {
     ) -> Result<&GaussianEstimate, EstimatorError> {
         let u = u.unwrap_or(&self.u_last);
         model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
-        if self.y_pred.iter().chain(self.h.iter()).any(|v| !v.is_finite()) {
+        if !all_finite(self.y_pred.as_slice()) || !all_finite(self.h.as_slice()) {
             return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
         }
         // Gain (9), update (10), covariance (11) in Joseph form.
@@ -188,13 +188,10 @@ impl ExtendedKalmanFilter {
         u: &DVector<f64>,
     ) -> Result<(), EstimatorError> {
         model.f_with_jacobian(&self.est.center, u, &mut self.x_pred, &mut self.f)?;
-        if self.x_pred.iter().chain(self.f.iter()).any(|v| !v.is_finite()) {
+        if !all_finite(self.x_pred.as_slice()) || !all_finite(self.f.as_slice()) {
             return Err(EstimatorError::NumericalFailure("the model's prediction or its Jacobian is not finite"));
         }
-        dense::mul_nn(1.0, &self.f, &self.est.covariance, 0.0, &mut self.fp);
-        self.p_pred.copy_from(&self.q);
-        dense::mul_nt(1.0, &self.fp, &self.f, 1.0, &mut self.p_pred);
-        dense::symmetrize(&mut self.p_pred);
+        (self.upd.kernels.propagate)(&self.f, &self.est.covariance, &self.q, &mut self.fp, &mut self.p_pred);
         Ok(())
     }
 

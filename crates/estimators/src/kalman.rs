@@ -16,8 +16,10 @@ use models::{Dims, LinearModel};
 
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
+use crate::gaussian_update::GaussianUpdate;
 use crate::traits::forward_estimator;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::validate::all_finite;
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
@@ -46,8 +48,9 @@ impl GaussianEstimate {
 
     /// Recomputes `std_dev` from the covariance.
     pub(crate) fn refresh_std_dev(&mut self) {
-        for i in 0..self.center.len() {
-            self.std_dev[i] = self.covariance[(i, i)].max(0.0).sqrt();
+        let n = self.center.len();
+        for (sd, v) in self.std_dev.iter_mut().zip(self.covariance.as_slice().iter().step_by(n + 1)) {
+            *sd = v.max(0.0).sqrt();
         }
     }
 }
@@ -73,30 +76,6 @@ pub struct KalmanFilter {
     steps: u64,
 }
 
-/// The measurement update shared by the Kalman and the extended Kalman filter, with its buffers:
-///
-/// ```text
-/// S = H P⁻ Hᵀ + R = G Gᵀ,   K = P⁻ Hᵀ S⁻¹  (two triangular solves with G)
-/// x⁺ = x⁻ + K ν,            P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ   (Joseph form)
-/// ```
-///
-/// for an innovation `ν` computed by the caller (`y − C x⁻` or `y − h(x⁻)`). Allocation-free.
-#[derive(Debug, Clone)]
-pub(crate) struct GaussianUpdate {
-    pht: DMatrix<f64>,
-    /// `S`, then its factor; also `m × m` scratch for the noise setters.
-    pub(crate) s: DMatrix<f64>,
-    k: DMatrix<f64>,
-    ikh: DMatrix<f64>,
-    /// `n × n` scratch, also for the noise setters.
-    pub(crate) tmp: DMatrix<f64>,
-    kr: DMatrix<f64>,
-    x_new: DVector<f64>,
-    p_new: DMatrix<f64>,
-    /// `G⁻¹ ν` for the normalised innovation squared.
-    z: DVector<f64>,
-}
-
 /// Publishes a prediction `(x⁻, P⁻)` as the estimate (swapping buffers) after checking that it is
 /// finite; on error nothing changes. Shared by the prediction-only steps of the Kalman and the
 /// extended Kalman filter.
@@ -105,7 +84,7 @@ pub(crate) fn commit_prediction(
     x_pred: &mut DVector<f64>,
     p_pred: &mut DMatrix<f64>,
 ) -> Result<(), EstimatorError> {
-    if x_pred.iter().chain(p_pred.iter()).any(|v| !v.is_finite()) {
+    if !all_finite(x_pred.as_slice()) || !all_finite(p_pred.as_slice()) {
         return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
     }
     std::mem::swap(&mut est.center, x_pred);
@@ -113,89 +92,6 @@ pub(crate) fn commit_prediction(
     est.refresh_std_dev();
     est.status = StepStatus::unchecked(SolveOutcome::Predicted);
     Ok(())
-}
-
-impl GaussianUpdate {
-    /// Buffers for `n` states and `m` outputs.
-    pub(crate) fn new(n: usize, m: usize) -> Self {
-        Self {
-            pht: DMatrix::zeros(n, m),
-            s: DMatrix::zeros(m, m),
-            k: DMatrix::zeros(n, m),
-            ikh: DMatrix::zeros(n, n),
-            tmp: DMatrix::zeros(n, n),
-            kr: DMatrix::zeros(n, m),
-            x_new: DVector::zeros(n),
-            p_new: DMatrix::zeros(n, n),
-            z: DVector::zeros(m),
-        }
-    }
-
-    /// Computes `x⁺`, `P⁺` from `x⁻`, `P⁻`, `H`, `R` and `ν` into the buffers and returns the
-    /// normalised innovation squared `νᵀ S⁻¹ ν` (NaN unless `want_nis`); nothing else changes, so
-    /// a failure leaves the filter as it was.
-    pub(crate) fn compute(
-        &mut self,
-        x_pred: &DVector<f64>,
-        p_pred: &DMatrix<f64>,
-        h: &DMatrix<f64>,
-        r: &DMatrix<f64>,
-        innov: &DVector<f64>,
-        want_nis: bool,
-    ) -> Result<f64, EstimatorError> {
-        dense::mul_nt(1.0, p_pred, h, 0.0, &mut self.pht);
-        self.s.copy_from(r);
-        dense::mul_nn(1.0, h, &self.pht, 1.0, &mut self.s);
-        if dense::cholesky_in_place(&mut self.s).is_err() {
-            return Err(EstimatorError::NumericalFailure("innovation covariance is not positive definite"));
-        }
-        let nis = if want_nis { nis(&self.s, innov, &mut self.z) } else { f64::NAN };
-        self.k.copy_from(&self.pht);
-        dense::solve_right_lower_t(&mut self.k, &self.s);
-        dense::solve_right_lower(&mut self.k, &self.s);
-        self.x_new.copy_from(x_pred);
-        dense::gemv(1.0, &self.k, innov, 1.0, &mut self.x_new);
-        dense::i_minus_lc(&self.k, h, &mut self.ikh);
-        dense::mul_nn(1.0, &self.ikh, p_pred, 0.0, &mut self.tmp);
-        dense::mul_nt(1.0, &self.tmp, &self.ikh, 0.0, &mut self.p_new);
-        dense::mul_nn(1.0, &self.k, r, 0.0, &mut self.kr);
-        dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
-        dense::symmetrize(&mut self.p_new);
-        if self.x_new.iter().chain(self.p_new.iter()).any(|v| !v.is_finite()) {
-            return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
-        }
-        Ok(nis)
-    }
-
-    /// Publishes the computed `x⁺`, `P⁺` into `est` (swaps buffers), status converged.
-    pub(crate) fn commit(&mut self, est: &mut GaussianEstimate) {
-        std::mem::swap(&mut est.center, &mut self.x_new);
-        std::mem::swap(&mut est.covariance, &mut self.p_new);
-        est.refresh_std_dev();
-        est.status = StepStatus::unchecked(SolveOutcome::Converged);
-    }
-
-    /// Publishes by the gate's verdict on `nis` at `step`: the computed update, or (the gate drops
-    /// the measurement) the prediction `(x⁻, P⁻)` from the buffers; the status says what the gate
-    /// found. On error nothing changes.
-    pub(crate) fn commit_gated(
-        &mut self,
-        gate: &InnovationGate,
-        nis: f64,
-        step: u64,
-        est: &mut GaussianEstimate,
-        x_pred: &mut DVector<f64>,
-        p_pred: &mut DMatrix<f64>,
-    ) -> Result<(), EstimatorError> {
-        let verdict = gate.judge(nis, step)?;
-        if verdict == GateVerdict::Drop {
-            commit_prediction(est, x_pred, p_pred)?;
-        } else {
-            self.commit(est);
-        }
-        est.status.data = data_check(verdict);
-        Ok(())
-    }
 }
 
 /// The data check a gate verdict stands for.
@@ -270,7 +166,7 @@ impl KalmanFilter {
     /// Replaces both noise matrices in place (each validated first; if either is rejected
     /// nothing changes; no allocation).
     pub fn set_noise(&mut self, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.upd.s)?;
+        crate::validate::check_spd_no_alloc("R", r, self.m, &mut self.upd.buf.s)?;
         self.set_process_noise(q)?;
         self.set_measurement_noise(r)
     }
@@ -278,13 +174,13 @@ impl KalmanFilter {
     /// Replaces the process-noise covariance `Q` in place (symmetric positive definite, `n × n`;
     /// no allocation; unchanged on error).
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::replace_spd("Q", &mut self.q, q, &mut self.upd.tmp)
+        crate::validate::replace_spd("Q", &mut self.q, q, &mut self.upd.buf.tmp)
     }
 
     /// Replaces the measurement-noise covariance `R` in place (symmetric positive definite, `m × m`;
     /// no allocation; unchanged on error).
     pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        crate::validate::replace_spd("R", &mut self.r, r, &mut self.upd.s)
+        crate::validate::replace_spd("R", &mut self.r, r, &mut self.upd.buf.s)
     }
 
     /// The prediction `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q`, published. On error the state is
@@ -320,7 +216,7 @@ impl KalmanFilter {
         self.x_pred.copy_from(&self.est.center);
         self.p_pred.copy_from(&self.est.covariance);
         self.innov.copy_from(y);
-        dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        (self.upd.kernels.gemv_m)(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
         self.gated_update(model.c(), None, self.steps.max(1))
     }
 
@@ -340,12 +236,8 @@ impl KalmanFilter {
 
     /// `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q` into the prediction buffers (allocation-free).
     fn predict_into_buffers(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, u: &DVector<f64>) {
-        dense::gemv(1.0, a, &self.est.center, 0.0, &mut self.x_pred);
-        dense::gemv(1.0, b, u, 1.0, &mut self.x_pred);
-        dense::mul_nn(1.0, a, &self.est.covariance, 0.0, &mut self.ap);
-        self.p_pred.copy_from(&self.q);
-        dense::mul_nt(1.0, &self.ap, a, 1.0, &mut self.p_pred);
-        dense::symmetrize(&mut self.p_pred);
+        let (x, p) = (&self.est.center, &self.est.covariance);
+        (self.upd.kernels.linear_predict)(a, b, x, p, u, &self.q, &mut self.ap, &mut self.x_pred, &mut self.p_pred);
     }
 
     /// The first half of a step for filters that choose their measurement noise from the
@@ -362,7 +254,7 @@ impl KalmanFilter {
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(model.a(), model.b(), u);
         self.innov.copy_from(y);
-        dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        (self.upd.kernels.gemv_m)(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
         Ok(())
     }
 
@@ -397,7 +289,7 @@ impl KalmanFilter {
         self.x_pred.copy_from(&self.est.center);
         self.p_pred.copy_from(&self.est.covariance);
         self.innov.copy_from(y);
-        dense::gemv(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        (self.upd.kernels.gemv_m)(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
         Ok(())
     }
 
@@ -430,7 +322,7 @@ impl KalmanFilter {
         self.predict_into_buffers(a, b, u);
         // Gain, mean and Joseph-form covariance, judged by the innovation gate.
         self.innov.copy_from(y);
-        dense::gemv(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
+        (self.upd.kernels.gemv_m)(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
         self.gated_update(c, None, self.steps + 1)?;
         self.steps += 1;
         Ok(&self.est)

@@ -73,6 +73,7 @@ pub mod adaptive;
 pub mod checks;
 pub mod ekf;
 pub mod error;
+mod gaussian_update;
 pub mod kalman;
 pub mod mhe;
 pub mod registry;
