@@ -123,7 +123,7 @@ fn linear_estimators_are_refused_on_nonlinear_equations_and_the_listing_says_why
     let mut listing = Vec::new();
     port_est::write_estimators_for(&model, &mut listing).unwrap();
     let listing = String::from_utf8(listing).unwrap();
-    assert!(listing.starts_with("m.toml: equations, differentiable; n = 2 states, p = 1 inputs, m = 1 outputs"));
+    assert!(listing.starts_with("m.toml: equations, second-order; n = 2 states, p = 1 inputs, m = 1 outputs"));
     let runs = listing.split("Does not run:").next().unwrap();
     for est in ["ekf", "ukf", "mhe-ukf"] {
         assert!(runs.contains(&format!("  {est} ")), "{est} runs:\n{listing}");

@@ -71,7 +71,7 @@ def test_a_linear_model_written_as_equations_is_the_matrix_model():
 
 def test_a_nonlinear_model_has_exact_jacobians_and_runs_the_ekf_and_ukf():
     m = pe.Model.from_equations(PENDULUM, "pendulum.toml")
-    assert m.dims == (2, 1, 2) and m.capability == "differentiable"
+    assert m.dims == (2, 1, 2) and m.capability == "second-order"
     rng = np.random.default_rng(8)
     for _ in range(10):
         x, u = rng.uniform(-1.5, 1.5, size=2), rng.uniform(-1, 1, size=1)
@@ -113,7 +113,7 @@ ROOT = Path(__file__).resolve().parents[3]
 
 def test_a_port_est_model_file_of_equations_runs_the_vessel_log_as_port_est_does():
     mf = pe.read_model(ROOT / "examples" / "models" / "vessel.toml")
-    assert mf.model.dims == (6, 3, 3) and mf.model.capability == "differentiable"
+    assert mf.model.dims == (6, 3, 3) and mf.model.capability == "second-order"
     data = np.loadtxt(ROOT / "examples" / "vessel" / "data.csv", delimiter=",", skiprows=1)
     truth = np.loadtxt(ROOT / "examples" / "vessel" / "truth.csv", delimiter=",", skiprows=1)
     us, ys = data[:, 1:4], data[:, 4:7]
