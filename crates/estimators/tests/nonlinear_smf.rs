@@ -1,7 +1,8 @@
 //! The nonlinear set-membership filter (`smf-nl`): equal to the linear filter on a linear model,
 //! its remainder bound exact on a quadratic map (closed form), containment with every noise on the
 //! boundary of its ellipsoid (the supply vessel and the quadratic map), honest refusals (a Hessian
-//! unbounded on the set, bad data) that leave the filter unchanged.
+//! unbounded on the set, bad data) that leave the filter unchanged; the truck through a slalom
+//! (mean-value remainder: its slip ratio has a kink), and its refusal when `V_x` may be ≤ 0.
 
 use estimators::{EstimatorError, NonlinearSetMembershipFilter, SetEstimate, SetMembershipFilter, Setup, registry};
 use models::{
@@ -9,6 +10,7 @@ use models::{
     TaylorEnclosure, Xoshiro256StarStar,
 };
 use nalgebra::{DMatrix, DVector, dvector};
+use truck_dynamics::{Slalom, TruckEkfModel, TruckInput, TruckParams};
 use vessel_dynamics::{DiscreteVessel, VesselParams};
 
 /// `x⁺ = [x₀ + a x₁² + u, 0.9 x₁]`, `y = [x₀, x₁] (or 1/x₀ with `reciprocal`)`.
@@ -254,4 +256,72 @@ fn predict_then_update_is_the_step_when_h_is_linear() {
         assert_eq!(one.center, two.center, "step {k}");
         assert_eq!(one.shape, two.shape, "step {k}");
     }
+}
+
+/// The truck's filter settings (the reproduction's EKF, digest §4): `Q = T·diag(q_c)`,
+/// `R = diag(σ²)`, `P0 = diag(σ0²)`, here the shapes of the noise ellipsoids.
+fn truck_setup(ts: f64, p0: [f64; 3]) -> Setup {
+    let d = |v: [f64; 3]| DMatrix::from_diagonal(&DVector::from_row_slice(&v));
+    setup(
+        dvector![19.44, 0.0, 0.0],
+        d(p0.map(|s| s * s)),
+        d([1e-4 * ts, 1e-4 * ts, 1e-6 * ts]),
+        d([0.05f64.powi(2), 0.05f64.powi(2), 0.002f64.powi(2)]),
+        7,
+    )
+}
+
+#[test]
+fn the_truck_set_contains_the_truth_through_a_slalom_with_every_noise_on_its_boundary() {
+    // The truth is the filter's model (what the guarantee covers), driven by a fast slalom with
+    // drive slip on the rear axles and brake slip on the front axle.
+    let model = TruckEkfModel::paper(TruckParams::digest_preset()).unwrap();
+    let re = model.planar().params().rolling_radius;
+    let s = truck_setup(model.ts(), [0.1, 0.1, 0.01]);
+    let slalom = Slalom { start: 0.0, frequency: 2.0, first_amplitude: 1.5f64.to_radians(), amplitude: 3f64.to_radians() };
+    let mut rng = Xoshiro256StarStar::seed_from_u64(21);
+    let w = Noise::ellipsoid_boundary(s.process_noise.clone()).unwrap();
+    let v = Noise::ellipsoid_boundary(s.measurement_noise.clone()).unwrap();
+    let mut x = &s.x0 + Noise::ellipsoid_boundary(s.p0.clone()).unwrap().sample(&mut rng);
+    let mut est = registry::build(registry::names::SMF_NL, s, None).unwrap();
+    let (mut next, mut y) = (DVector::zeros(3), DVector::zeros(3));
+    let mut widest_beta: f64 = 0.0;
+    for k in 0..300 {
+        let mut input = TruckInput::free_rolling(slalom.angle(k as f64 * model.ts()), x[0], re);
+        input.omega[..2].iter_mut().for_each(|o| *o *= 0.998);
+        input.omega[2..].iter_mut().for_each(|o| *o *= 1.003);
+        let u = input.to_dvector();
+        model.f(&x, &u, &mut next).unwrap();
+        x = &next + w.sample(&mut rng);
+        model.h(&x, &u, &mut y).unwrap();
+        y += v.sample(&mut rng);
+        est.step(&model, &u, &y).unwrap_or_else(|e| panic!("step {k}: {e}"));
+        let (c, p) = (est.estimate().center(), est.estimate().shape());
+        let d = distance_to(c, p, &x);
+        assert!(d <= 1.0, "step {k}: the truth is at distance {d} (> 1)");
+        // The certified sideslip interval atan(V_y box / V_x box) holds the truth's.
+        let b = |i: usize| Interval::centered(c[i], p[(i, i)].sqrt() * (1.0 + 1e-12));
+        let beta = (b(1) / b(0)).atan();
+        assert!(beta.contains((x[1] / x[0]).atan()), "step {k}");
+        widest_beta = widest_beta.max(beta.width());
+    }
+    assert!(widest_beta < 0.1, "the certified β interval reached {widest_beta} rad");
+}
+
+#[test]
+fn a_truck_set_that_may_hold_v_x_le_0_is_refused_and_the_filter_is_unchanged() {
+    // V_x ∈ 19.44 ± 25 on the set's box: the slip angle divides by the wheel's speed, so the
+    // enclosure of f is unbounded and no bound of the remainder exists.
+    let model = TruckEkfModel::paper(TruckParams::digest_preset()).unwrap();
+    let mut f = NonlinearSetMembershipFilter::new(truck_setup(model.ts(), [25.0, 0.1, 0.01])).unwrap();
+    let before = f.estimate().clone();
+    let u = TruckInput::free_rolling(0.01, 19.44, model.planar().params().rolling_radius).to_dvector();
+    let e = f.step(&model, &u, &dvector![19.44, 0.0, 0.0]).unwrap_err();
+    assert!(matches!(e, EstimatorError::GuaranteeLost { step: 1, .. }), "{e}");
+    assert!(e.to_string().contains("Jacobian or Hessian of f is unbounded"), "{e}");
+    assert_eq!((&f.estimate().center, &f.estimate().shape), (&before.center, &before.shape));
+    // A set away from V_x = 0 steps on.
+    let mut f = NonlinearSetMembershipFilter::new(truck_setup(model.ts(), [0.1, 0.1, 0.01])).unwrap();
+    f.step(&model, &u, &dvector![19.44, 0.0, 0.0]).unwrap();
+    assert!(f.remainders().process.iter().all(|r| *r > 0.0 && *r < 1e-3), "{:?}", f.remainders());
 }

@@ -18,6 +18,10 @@
 
 #![warn(missing_docs)]
 
+mod dual;
+
+pub use dual::Dual;
+
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::fmt;
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -129,6 +133,36 @@ impl Interval {
     #[must_use]
     pub fn hull(self, other: Interval) -> Self {
         Self { lo: self.lo.min(other.lo), hi: self.hi.max(other.hi) }
+    }
+
+    /// `|x|` (exact: no rounding).
+    #[must_use]
+    pub fn abs(self) -> Self {
+        if self.lo >= 0.0 {
+            self
+        } else if self.hi <= 0.0 {
+            -self
+        } else {
+            Self { lo: 0.0, hi: self.hi.max(-self.lo) }
+        }
+    }
+
+    /// `max(x, y)` over both intervals (exact).
+    #[must_use]
+    pub fn max(self, other: Interval) -> Self {
+        Self::new(self.lo.max(other.lo), self.hi.max(other.hi))
+    }
+
+    /// `min(x, y)` over both intervals (exact).
+    #[must_use]
+    pub fn min(self, other: Interval) -> Self {
+        Self::new(self.lo.min(other.lo), self.hi.min(other.hi))
+    }
+
+    /// Whether every element is `≥` every element of `other` (`lo ≥ other.hi`).
+    #[must_use]
+    pub fn certainly_ge(self, other: Interval) -> bool {
+        self.lo >= other.hi
     }
 
     /// `x²` (tighter than `x * x` when the interval holds 0).

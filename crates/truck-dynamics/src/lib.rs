@@ -11,6 +11,9 @@
 //! * [`planar`]: the estimator's model — [`PlanarTruck`] (continuous, eq (1)) and
 //!   [`TruckEkfModel`] (Euler at 1 ms (12), measurement (14), analytic `A = I + T·J` (13) and
 //!   `H` (15)), a [`models::DifferentiableModel`] that evaluates without allocating.
+//! * [`enclosure`]: interval enclosures of `f`, `h` and their Jacobians over boxes of states
+//!   (interval forward-mode AD), so that the nonlinear set-membership filter `smf-nl` runs on
+//!   the truck ([`models::SecondOrderModel`]).
 //! * [`truth`]: the richer truth model of the experiment ([`TruthModel`], a
 //!   [`models::ContinuousModel`]), [`simulate_truth`] (RK4 at 0.1 ms, output at 1 kHz) and the
 //!   [`Slalom`] manoeuvre.
@@ -78,6 +81,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod enclosure;
 pub mod error;
 pub mod kinematics;
 pub mod params;

@@ -472,6 +472,9 @@ impl models::AnyModel for TruckEkfModel {
     fn differentiable(&self) -> Option<&dyn models::DifferentiableModel> {
         Some(self)
     }
+    fn second_order(&self) -> Option<&dyn models::SecondOrderModel> {
+        Some(self)
+    }
 }
 
 #[cfg(test)]

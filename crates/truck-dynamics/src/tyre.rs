@@ -296,6 +296,23 @@ impl Pac89Tyre {
     }
 }
 
+impl Pac89Tyre {
+    /// The lateral curve of one of `tyres` tyres sharing the load `fz` \[N\] and the factor
+    /// `n·k` (tyres times the fade below the clamp) that [`Pac89Tyre::lateral_lumped`] applies.
+    pub(crate) fn lateral_lumped_curve(&self, tyres: u32, fz: f64) -> Result<(MagicFormula, f64), TruckError> {
+        let n = tyre_count(tyres)?;
+        let (fz_kn, k) = self.clamp(fz / n)?;
+        Ok((self.lateral_curve(fz_kn)?, n * k))
+    }
+
+    /// As [`Pac89Tyre::lateral_lumped_curve`], for the longitudinal curve.
+    pub(crate) fn longitudinal_lumped_curve(&self, tyres: u32, fz: f64) -> Result<(MagicFormula, f64), TruckError> {
+        let n = tyre_count(tyres)?;
+        let (fz_kn, k) = self.clamp(fz / n)?;
+        Ok((self.longitudinal_curve(fz_kn)?, n * k))
+    }
+}
+
 fn tyre_count(tyres: u32) -> Result<f64, TruckError> {
     let n = f64::from(tyres);
     positive("n (tyres per wheel position)", n)?;

@@ -302,7 +302,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         if !ws.box_f.is_bounded() {
             return Err(guarantee_lost(
                 step,
-                "the Hessian of f is unbounded on the set's bounding box (a function undefined there, or an overflow)",
+                "the Jacobian or Hessian of f is unbounded on the set's bounding box (a function undefined there, or an \
+                 overflow)",
             ));
         }
         for i in 0..n {
@@ -375,7 +376,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         }
         model.h_enclosure(&ws.boxed, u, &mut ws.box_h)?;
         if !ws.box_h.is_bounded() {
-            return Err(guarantee_lost(step, "the Hessian of h is unbounded on the predicted set's bounding box"));
+            return Err(guarantee_lost(step, "the Jacobian or Hessian of h is unbounded on the predicted set's bounding box"));
         }
         for i in 0..m {
             let value = ws.point_h.value(i);
