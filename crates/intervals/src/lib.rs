@@ -31,6 +31,7 @@ pub const LIBM_ULPS: u32 = 2;
 
 /// The next `f64` above `x` (`+∞` stays; NaN stays NaN).
 #[must_use]
+#[inline]
 pub fn up(x: f64) -> f64 {
     if x.is_nan() || x == f64::INFINITY {
         return x;
@@ -44,6 +45,7 @@ pub fn up(x: f64) -> f64 {
 
 /// The next `f64` below `x`.
 #[must_use]
+#[inline]
 pub fn down(x: f64) -> f64 {
     -up(-x)
 }
@@ -77,66 +79,77 @@ impl Interval {
 
     /// `[lo, hi]`; [`Interval::ENTIRE`] when a bound is NaN or `lo > hi`.
     #[must_use]
+    #[inline]
     pub fn new(lo: f64, hi: f64) -> Self {
         if lo.is_nan() || hi.is_nan() || lo > hi { Self::ENTIRE } else { Self { lo, hi } }
     }
 
     /// The point `[x, x]` (`ENTIRE` for NaN).
     #[must_use]
+    #[inline]
     pub fn point(x: f64) -> Self {
         Self::new(x, x)
     }
 
     /// `[c − r, c + r]` rounded outward (`r ≥ 0`).
     #[must_use]
+    #[inline]
     pub fn centered(c: f64, r: f64) -> Self {
         Self::new(down(c - r), up(c + r))
     }
 
     /// The lower bound.
     #[must_use]
+    #[inline]
     pub fn lo(self) -> f64 {
         self.lo
     }
 
     /// The upper bound.
     #[must_use]
+    #[inline]
     pub fn hi(self) -> f64 {
         self.hi
     }
 
     /// Whether both bounds are finite.
     #[must_use]
+    #[inline]
     pub fn is_bounded(self) -> bool {
         self.lo.is_finite() && self.hi.is_finite()
     }
 
     /// Whether `x` lies in the interval.
     #[must_use]
+    #[inline]
     pub fn contains(self, x: f64) -> bool {
         self.lo <= x && x <= self.hi
     }
 
     /// The largest magnitude `max(|lo|, |hi|)`: every element's absolute value is at most this.
     #[must_use]
+    #[inline]
     pub fn mag(self) -> f64 {
         self.lo.abs().max(self.hi.abs())
     }
 
     /// An upper bound of the width `hi − lo`.
     #[must_use]
+    #[inline]
     pub fn width(self) -> f64 {
         up(self.hi - self.lo)
     }
 
     /// The smallest interval holding both.
     #[must_use]
+    #[inline]
     pub fn hull(self, other: Interval) -> Self {
         Self { lo: self.lo.min(other.lo), hi: self.hi.max(other.hi) }
     }
 
     /// `|x|` (exact: no rounding).
     #[must_use]
+    #[inline]
     pub fn abs(self) -> Self {
         if self.lo >= 0.0 {
             self
@@ -149,24 +162,28 @@ impl Interval {
 
     /// `max(x, y)` over both intervals (exact).
     #[must_use]
+    #[inline]
     pub fn max(self, other: Interval) -> Self {
         Self::new(self.lo.max(other.lo), self.hi.max(other.hi))
     }
 
     /// `min(x, y)` over both intervals (exact).
     #[must_use]
+    #[inline]
     pub fn min(self, other: Interval) -> Self {
         Self::new(self.lo.min(other.lo), self.hi.min(other.hi))
     }
 
     /// Whether every element is `≥` every element of `other` (`lo ≥ other.hi`).
     #[must_use]
+    #[inline]
     pub fn certainly_ge(self, other: Interval) -> bool {
         self.lo >= other.hi
     }
 
     /// `x²` (tighter than `x * x` when the interval holds 0).
     #[must_use]
+    #[inline]
     pub fn sqr(self) -> Self {
         let (a, b) = (self.lo.abs(), self.hi.abs());
         let big = up(a.max(b) * a.max(b));
@@ -205,7 +222,14 @@ impl Interval {
     #[must_use]
     pub fn atan(self) -> Self {
         let limit = up(FRAC_PI_2);
-        Self::new(down_n(self.lo.atan(), LIBM_ULPS).max(-limit), up_n(self.hi.atan(), LIBM_ULPS).min(limit))
+        // A point needs one evaluation (atan is increasing).
+        let (lo, hi) = if self.lo == self.hi {
+            let v = self.lo.atan();
+            (v, v)
+        } else {
+            (self.lo.atan(), self.hi.atan())
+        };
+        Self::new(down_n(lo, LIBM_ULPS).max(-limit), up_n(hi, LIBM_ULPS).min(limit))
     }
 
     /// `tanh x`.
@@ -214,34 +238,46 @@ impl Interval {
         Self::new(down_n(self.lo.tanh(), LIBM_ULPS).max(-1.0), up_n(self.hi.tanh(), LIBM_ULPS).min(1.0))
     }
 
-    /// `sin x`.
+    /// `sin x`: the extremes inside the interval (`+1` at `π/2 + 2kπ`, `−1` at `−π/2 + 2kπ`), else
+    /// the end values.
     #[must_use]
     pub fn sin(self) -> Self {
-        // sin x = cos(x − π/2): shift with outward rounding (π/2 is not exact either).
-        (self - Interval::new(down(FRAC_PI_2), up(FRAC_PI_2))).cos()
+        self.periodic(f64::sin, FRAC_PI_2, -FRAC_PI_2)
     }
 
-    /// `cos x`.
+    /// `cos x`: the extremes inside the interval (`+1` at `2kπ`, `−1` at `π + 2kπ`), else the end
+    /// values.
     #[must_use]
     pub fn cos(self) -> Self {
+        self.periodic(f64::cos, 0.0, PI)
+    }
+
+    /// A `2π`-periodic function with values in `[−1, 1]`, its maxima at `max_at + 2kπ` and minima
+    /// at `min_at + 2kπ`, monotone between them.
+    fn periodic(self, g: fn(f64) -> f64, max_at: f64, min_at: f64) -> Self {
         if !self.is_bounded() || self.width() >= TAU {
             return Self::new(-1.0, 1.0);
         }
         let (a, b) = (self.lo, self.hi);
-        let (ca, cb) = (a.cos(), b.cos());
-        let mut lo = down_n(ca.min(cb), LIBM_ULPS).max(-1.0);
-        let mut hi = up_n(ca.max(cb), LIBM_ULPS).min(1.0);
-        // Extremes inside: cos = 1 at 2kπ, −1 at (2k+1)π. Tested with a margin, so that a point
-        // near a bound counts as inside (an enclosure may only grow).
+        let (ga, gb) = if a == b {
+            let v = g(a);
+            (v, v)
+        } else {
+            (g(a), g(b))
+        };
+        let mut lo = down_n(ga.min(gb), LIBM_ULPS).max(-1.0);
+        let mut hi = up_n(ga.max(gb), LIBM_ULPS).min(1.0);
+        // Extremes inside, tested with a margin, so that a point near a bound counts as inside
+        // (an enclosure may only grow; the shifts by π/2, π are not exact either).
         let margin = 1e-9 * (1.0 + a.abs().max(b.abs()));
         let holds = |offset: f64| {
             let k = ((a - offset - margin) / TAU).ceil();
             k * TAU + offset <= b + margin
         };
-        if holds(0.0) {
+        if holds(max_at) {
             hi = 1.0;
         }
-        if holds(PI) {
+        if holds(min_at) {
             lo = -1.0;
         }
         Self::new(lo, hi)
@@ -262,6 +298,7 @@ impl From<f64> for Interval {
 
 impl Neg for Interval {
     type Output = Interval;
+    #[inline]
     fn neg(self) -> Interval {
         Interval { lo: -self.hi, hi: -self.lo }
     }
@@ -269,6 +306,7 @@ impl Neg for Interval {
 
 impl Add for Interval {
     type Output = Interval;
+    #[inline]
     fn add(self, o: Interval) -> Interval {
         Interval::new(down(self.lo + o.lo), up(self.hi + o.hi))
     }
@@ -276,6 +314,7 @@ impl Add for Interval {
 
 impl Sub for Interval {
     type Output = Interval;
+    #[inline]
     fn sub(self, o: Interval) -> Interval {
         Interval::new(down(self.lo - o.hi), up(self.hi - o.lo))
     }
@@ -283,26 +322,53 @@ impl Sub for Interval {
 
 impl Mul for Interval {
     type Output = Interval;
+    #[inline]
     fn mul(self, o: Interval) -> Interval {
         // 0 × ∞ is taken as 0 (an infinite bound stands for "unbounded", and the other factor
-        // is exactly 0 there).
+        // is exactly 0 there). The signs of the bounds say which products are the extremes.
         let p = |x: f64, y: f64| if x == 0.0 || y == 0.0 { 0.0 } else { x * y };
-        let c = [p(self.lo, o.lo), p(self.lo, o.hi), p(self.hi, o.lo), p(self.hi, o.hi)];
-        let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (a, b, c, d) = (self.lo, self.hi, o.lo, o.hi);
+        let (lo, hi) = if a >= 0.0 {
+            if c >= 0.0 {
+                (p(a, c), p(b, d))
+            } else if d <= 0.0 {
+                (p(b, c), p(a, d))
+            } else {
+                (p(b, c), p(b, d))
+            }
+        } else if b <= 0.0 {
+            if c >= 0.0 {
+                (p(a, d), p(b, c))
+            } else if d <= 0.0 {
+                (p(b, d), p(a, c))
+            } else {
+                (p(a, d), p(a, c))
+            }
+        } else if c >= 0.0 {
+            (p(a, d), p(b, d))
+        } else if d <= 0.0 {
+            (p(b, c), p(a, c))
+        } else {
+            (p(a, d).min(p(b, c)), p(a, c).max(p(b, d)))
+        };
         Interval::new(down(lo), up(hi))
     }
 }
 
 impl Div for Interval {
     type Output = Interval;
+    #[inline]
     fn div(self, o: Interval) -> Interval {
-        if o.lo <= 0.0 && o.hi >= 0.0 {
+        let (a, b, c, d) = (self.lo, self.hi, o.lo, o.hi);
+        // The divisor's sign is fixed: the signs of the dividend's bounds say which quotients are
+        // the extremes.
+        let (lo, hi) = if c > 0.0 {
+            (if a >= 0.0 { a / d } else { a / c }, if b >= 0.0 { b / c } else { b / d })
+        } else if d < 0.0 {
+            (if b >= 0.0 { b / d } else { b / c }, if a >= 0.0 { a / c } else { a / d })
+        } else {
             return Interval::ENTIRE;
-        }
-        let c = [self.lo / o.lo, self.lo / o.hi, self.hi / o.lo, self.hi / o.hi];
-        let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        };
         Interval::new(down(lo), up(hi))
     }
 }
@@ -311,12 +377,14 @@ macro_rules! with_f64 {
     ($($tr:ident $f:ident),*) => {$(
         impl $tr<f64> for Interval {
             type Output = Interval;
+            #[inline]
             fn $f(self, o: f64) -> Interval {
                 $tr::$f(self, Interval::point(o))
             }
         }
         impl $tr<Interval> for f64 {
             type Output = Interval;
+            #[inline]
             fn $f(self, o: Interval) -> Interval {
                 $tr::$f(Interval::point(self), o)
             }

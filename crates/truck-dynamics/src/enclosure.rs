@@ -29,42 +29,44 @@ use crate::tyre::MagicFormula;
 /// A function of the state `[V_x, V_y, γ]` with its gradient, enclosed over a box.
 type D3 = Dual<STATE_DIM>;
 
-/// Interval enclosures of a Magic Formula curve's coefficients.
+/// Interval enclosures of a Magic Formula curve's coefficients, with the slip's unit and the
+/// lumping folded in.
 struct Curve {
-    b: Interval,
+    /// `B·unit` (unit: degrees per radian or percent per unit slip).
+    b_unit: Interval,
+    /// `B·S_H`.
+    b_sh: Interval,
     c: Interval,
-    d: Interval,
     /// `1 − E`.
     one_minus_e: Interval,
     e: Interval,
-    sh: Interval,
-    sv: Interval,
-    /// `n·k`: tyres at the position times the fade below the load clamp.
-    scale: Interval,
+    /// `n·k·D` (`n·k`: tyres at the position times the fade below the load clamp).
+    d_scaled: Interval,
+    /// `n·k·S_V`.
+    sv_scaled: Interval,
 }
 
 impl Curve {
-    fn new((mf, scale): (MagicFormula, f64)) -> Self {
-        let e = Interval::point(mf.e);
+    fn new((mf, scale): (MagicFormula, f64), unit: Interval) -> Self {
+        let (b, e, scale) = (Interval::point(mf.b), Interval::point(mf.e), Interval::point(scale));
         Self {
-            b: Interval::point(mf.b),
+            b_unit: b * unit,
+            b_sh: b * mf.sh,
             c: Interval::point(mf.c),
-            d: Interval::point(mf.d),
             one_minus_e: Interval::point(1.0) - e,
             e,
-            sh: Interval::point(mf.sh),
-            sv: Interval::point(mf.sv),
-            scale: Interval::point(scale),
+            d_scaled: scale * mf.d,
+            sv_scaled: scale * mf.sv,
         }
     }
 
     /// `n·k·(D·sin(C·atan θ) + S_V)`, `θ = (1 − E)·B·x + E·atan(B·x)` (= `B·x − E·(B·x −
-    /// atan(B·x))`, eq (3)–(4)), `x = X + S_H`: one occurrence of `B·x` fewer, so a tighter
-    /// enclosure of the same function.
+    /// atan(B·x))`, eq (3)–(4)), `B·x = B·unit·slip + B·S_H`: the same function as tyre.rs with
+    /// fewer occurrences of the variables, so a tighter enclosure.
     fn force(&self, slip: D3) -> D3 {
-        let bx = (slip + self.sh) * self.b;
+        let bx = slip * self.b_unit + self.b_sh;
         let theta = bx * self.one_minus_e + bx.atan() * self.e;
-        ((theta.atan() * self.c).sin() * self.d + self.sv) * self.scale
+        (theta.atan() * self.c).sin() * self.d_scaled + self.sv_scaled
     }
 }
 
@@ -100,11 +102,16 @@ impl TruckEkfModel {
         let (sin_d, cos_d) = (delta.sin(), delta.cos());
         let zero = D3::from(0.0);
         let mut out = BodyForces { fx: zero, fy: zero, mz: zero };
+        let mut curves: Option<((u32, f64), Curve, Curve)> = None;
         for j in 0..WHEELS {
-            let lateral = Curve::new(p.tyre.lateral_lumped_curve(g.tyres[j], loads[j])?);
-            let longitudinal = Curve::new(p.tyre.longitudinal_lumped_curve(g.tyres[j], loads[j])?);
-            let (delta_j, s, c) =
-                if g.steered[j] { (delta, sin_d, cos_d) } else { (Interval::ZERO, Interval::ZERO, Interval::point(1.0)) };
+            // The curves at the position's load (left and right of an axle usually share them).
+            let key = (g.tyres[j], loads[j]);
+            if curves.as_ref().is_none_or(|(k, _, _)| *k != key) {
+                let lateral = Curve::new(p.tyre.lateral_lumped_curve(key.0, key.1)?, deg);
+                let percent = Interval::point(100.0);
+                curves = Some((key, lateral, Curve::new(p.tyre.longitudinal_lumped_curve(key.0, key.1)?, percent)));
+            }
+            let Some((_, lateral, longitudinal)) = curves.as_ref() else { continue };
             // Wheel-centre velocities and slips (kinematics.rs).
             let u = vx - gamma * g.y[j];
             let v = vy + gamma * g.x[j];
@@ -112,16 +119,16 @@ impl TruckEkfModel {
                 // atan2(v, u) ≠ atan(v/u) there, and V_x ≤ 0 is outside the model.
                 return Ok(BodyForces { fx: unbounded(), fy: unbounded(), mz: unbounded() });
             }
-            let alpha = delta_j - (v / u).atan();
-            let vl = u * c + v * s;
             let omega_re = Interval::point(input.omega[j]) * p.rolling_radius;
+            // Steered: δ_j = δ; otherwise δ_j = 0 exactly (cos 1, sin 0: no products).
+            let (alpha, vl) = if g.steered[j] { (delta - (v / u).atan(), u * cos_d + v * sin_d) } else { (-(v / u).atan(), u) };
             let denominator = D3::constant(omega_re.abs().max(v_min)).max(vl.abs());
             let slip = (omega_re - vl) / denominator;
             // Pac89 in degrees and percent (tyre.rs), lumped.
-            let fy = lateral.force(alpha * deg);
-            let fx = longitudinal.force(slip * 100.0);
-            let big_x = fx * c - fy * s;
-            let big_y = fx * s + fy * c;
+            let fy = lateral.force(alpha);
+            let fx = longitudinal.force(slip);
+            let (big_x, big_y) =
+                if g.steered[j] { (fx * cos_d - fy * sin_d, fx * sin_d + fy * cos_d) } else { (fx, fy) };
             out.fx = out.fx + big_x;
             out.fy = out.fy + big_y;
             out.mz = out.mz + big_y * g.x[j] - big_x * g.y[j];
