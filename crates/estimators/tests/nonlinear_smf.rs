@@ -278,7 +278,8 @@ fn the_truck_set_contains_the_truth_through_a_slalom_with_every_noise_on_its_bou
     let model = TruckEkfModel::paper(TruckParams::digest_preset()).unwrap();
     let re = model.planar().params().rolling_radius;
     let s = truck_setup(model.ts(), [0.1, 0.1, 0.01]);
-    let slalom = Slalom { start: 0.0, frequency: 2.0, first_amplitude: 1.5f64.to_radians(), amplitude: 3f64.to_radians() };
+    let slalom =
+        Slalom { start: 0.0, frequency: 2.0, first_amplitude: 1.5f64.to_radians(), amplitude: 3f64.to_radians() };
     let mut rng = Xoshiro256StarStar::seed_from_u64(21);
     let w = Noise::ellipsoid_boundary(s.process_noise.clone()).unwrap();
     let v = Noise::ellipsoid_boundary(s.measurement_noise.clone()).unwrap();

@@ -121,7 +121,8 @@ impl TruckEkfModel {
             }
             let omega_re = Interval::point(input.omega[j]) * p.rolling_radius;
             // Steered: δ_j = δ; otherwise δ_j = 0 exactly (cos 1, sin 0: no products).
-            let (alpha, vl) = if g.steered[j] { (delta - (v / u).atan(), u * cos_d + v * sin_d) } else { (-(v / u).atan(), u) };
+            let (alpha, vl) =
+                if g.steered[j] { (delta - (v / u).atan(), u * cos_d + v * sin_d) } else { (-(v / u).atan(), u) };
             let denominator = D3::constant(omega_re.abs().max(v_min)).max(vl.abs());
             let slip = (omega_re - vl) / denominator;
             // Pac89 in degrees and percent (tyre.rs), lumped.

@@ -2,7 +2,9 @@
 //! points of random boxes around realistic states, `f`, `h` and the analytic Jacobians `F` (13),
 //! `H` (15) of the compiled model lie in the box's enclosures.
 
-use models::{AnyModel, DifferentiableModel, DiscreteModel, Interval, SecondOrderModel, TaylorEnclosure, Xoshiro256StarStar};
+use models::{
+    AnyModel, DifferentiableModel, DiscreteModel, Interval, SecondOrderModel, TaylorEnclosure, Xoshiro256StarStar,
+};
 use nalgebra::{DMatrix, DVector};
 use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams, wheel_kinematics};
 
@@ -23,7 +25,8 @@ fn f_h_and_the_analytic_jacobians_lie_in_the_enclosures() {
         let centre = [rng.uniform(5.0, 25.0), rng.uniform(-1.0, 1.0), rng.uniform(-0.5, 0.5)];
         // Radii from tiny to a few per cent of the speed (a point box every tenth box).
         let scale = if b % 10 == 0 { 0.0 } else { 10f64.powf(rng.uniform(-4.0, -0.5)) };
-        let radius = [scale * rng.uniform(0.0, 1.0), 0.3 * scale * rng.uniform(0.0, 1.0), 0.05 * scale * rng.uniform(0.0, 1.0)];
+        let radius =
+            [scale * rng.uniform(0.0, 1.0), 0.3 * scale * rng.uniform(0.0, 1.0), 0.05 * scale * rng.uniform(0.0, 1.0)];
         let boxed: Vec<Interval> = (0..3).map(|i| Interval::centered(centre[i], radius[i])).collect();
         let input = TruckInput {
             delta: rng.uniform(-0.3, 0.3),
@@ -43,7 +46,9 @@ fn f_h_and_the_analytic_jacobians_lie_in_the_enclosures() {
         };
         kinked += usize::from((0..6).any(|j| (1..8).any(|c| slip_sign(j, c) != slip_sign(j, 0))));
         for _ in 0..12 {
-            let x = DVector::from_fn(3, |i, _| (centre[i] + radius[i] * rng.uniform(-1.0, 1.0)).clamp(boxed[i].lo(), boxed[i].hi()));
+            let x = DVector::from_fn(3, |i, _| {
+                (centre[i] + radius[i] * rng.uniform(-1.0, 1.0)).clamp(boxed[i].lo(), boxed[i].hi())
+            });
             m.f(&x, &u, &mut f).unwrap();
             m.h(&x, &u, &mut h).unwrap();
             m.f_jacobian(&x, &u, &mut fj).unwrap();
@@ -52,8 +57,18 @@ fn f_h_and_the_analytic_jacobians_lie_in_the_enclosures() {
                 assert!(fe.value(i).contains(f[i]), "box {b}: f{i} = {} not in {}", f[i], fe.value(i));
                 assert!(he.value(i).contains(h[i]), "box {b}: h{i} = {} not in {}", h[i], he.value(i));
                 for j in 0..3 {
-                    assert!(fe.jacobian(i, j).contains(fj[(i, j)]), "box {b}: F{i}{j} = {} not in {}", fj[(i, j)], fe.jacobian(i, j));
-                    assert!(he.jacobian(i, j).contains(hj[(i, j)]), "box {b}: H{i}{j} = {} not in {}", hj[(i, j)], he.jacobian(i, j));
+                    assert!(
+                        fe.jacobian(i, j).contains(fj[(i, j)]),
+                        "box {b}: F{i}{j} = {} not in {}",
+                        fj[(i, j)],
+                        fe.jacobian(i, j)
+                    );
+                    assert!(
+                        he.jacobian(i, j).contains(hj[(i, j)]),
+                        "box {b}: H{i}{j} = {} not in {}",
+                        hj[(i, j)],
+                        he.jacobian(i, j)
+                    );
                 }
             }
             points += 1;
@@ -96,4 +111,3 @@ fn point_boxes_are_tight_and_undefined_boxes_unbounded() {
     assert!(m.f_enclosure(&boxed, &bad, &mut e).is_err());
     assert!(m.f_enclosure(&boxed, &DVector::zeros(6), &mut e).is_err());
 }
-

@@ -376,7 +376,10 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         }
         model.h_enclosure(&ws.boxed, u, &mut ws.box_h)?;
         if !ws.box_h.is_bounded() {
-            return Err(guarantee_lost(step, "the Jacobian or Hessian of h is unbounded on the predicted set's bounding box"));
+            return Err(guarantee_lost(
+                step,
+                "the Jacobian or Hessian of h is unbounded on the predicted set's bounding box",
+            ));
         }
         for i in 0..m {
             let value = ws.point_h.value(i);

@@ -480,6 +480,18 @@ pub fn console(s: &Summary) -> String {
             sig3(c.timing.median_us)
         );
     }
+    let c = &s.certified;
+    let _ = writeln!(
+        out,
+        "Certified β (smf-nl, bounded noise): {} misses in {} steps, Monte Carlo {} misses in {} steps; median width {}° \
+         vs EKF ±3σ {}°",
+        c.misses + c.beta_misses,
+        c.steps,
+        c.monte_carlo.misses,
+        c.monte_carlo.steps,
+        sig3(c.median_beta_width_deg),
+        sig3(c.median_ekf_band_width_deg)
+    );
     let _ = writeln!(out, "Claims:");
     for c in &s.claims {
         let _ = writeln!(out, "  - {} → {}", c.claim, c.verdict);
