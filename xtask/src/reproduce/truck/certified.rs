@@ -189,7 +189,7 @@ fn run_seed(truth: &TruthTrajectory, model: &TruckEkfModel, seed: u64, record: b
         run.steps += 1;
         let d = distance(&est.center, &est.shape, &x);
         run.max_distance = run.max_distance.max(d);
-        run.misses += usize::from(!(d <= 1.0));
+        run.misses += usize::from(d.is_nan() || d > 1.0);
         let beta = beta_interval(&est.center, &est.shape);
         run.beta_misses += usize::from(!beta.contains((x[1] / x[0]).atan()));
         if record {
