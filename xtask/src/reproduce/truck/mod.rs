@@ -297,6 +297,20 @@ impl Summary {
             "paper_numbers": self.paper_numbers,
             "cases": cases,
             "figures": self.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
+            "certified": {
+                "steps": self.certified.steps,
+                "misses": self.certified.misses,
+                "beta_misses": self.certified.beta_misses,
+                "guarantee_lost": self.certified.guarantee_lost,
+                "median_beta_width_deg": r(self.certified.median_beta_width_deg),
+                "median_ekf_band_width_deg": r(self.certified.median_ekf_band_width_deg),
+                "monte_carlo": {
+                    "seeds": self.certified.monte_carlo.seeds,
+                    "steps": self.certified.monte_carlo.steps,
+                    "misses": self.certified.monte_carlo.misses,
+                    "guarantee_lost": self.certified.monte_carlo.guarantee_lost,
+                },
+            },
             "claims": self.claims.iter().map(|c| {
                 if c.timing_dependent {
                     json!({"claim": c.claim})
