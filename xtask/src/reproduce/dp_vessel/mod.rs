@@ -9,6 +9,7 @@
 //! beside the EKF and the UKF as baselines ([`run::ESTIMATORS`]). Every formula,
 //! Table 1 and Figs 2–3 of the paper are lost: no number here is the paper's.
 
+pub mod certified;
 pub mod figures;
 pub mod report;
 pub mod run;
@@ -132,6 +133,9 @@ pub struct Summary {
     pub build: String,
     /// `/proc/loadavg` when the run started.
     pub load_average: String,
+    /// The certified position and heading of `smf-nl` with bounded noise (not the paper's
+    /// experiment).
+    pub certified: certified::CertifiedVessel,
     /// Total wall-clock seconds.
     pub total_seconds: f64,
 }
@@ -200,6 +204,8 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
     let figures = figures::comparison_figures(&out.join("figures"), &results)
         .map_err(|e| format!("writing the comparison figures: {e}"))?;
     let claims = report::claims(&results);
+    eprintln!("dp-vessel: certified position and heading (smf-nl) …");
+    let certified = certified::run(seed, quick)?;
     let summary = Summary {
         quick,
         seed,
@@ -214,9 +220,11 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         machine: outputs::machine(),
         build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
         load_average,
+        certified,
         total_seconds: t0.elapsed().as_secs_f64(),
     };
-    outputs::write_summary_and_report(out, &summary, &report::markdown(&summary))?;
+    let report = format!("{}\n{}", report::markdown(&summary), certified::markdown(&summary.certified));
+    outputs::write_summary_and_report(out, &summary, &report)?;
     Ok(summary)
 }
 
@@ -263,6 +271,14 @@ impl Summary {
             "results": results,
             "figures": self.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
             "claims": self.claims.iter().map(|c| json!({"claim": c.claim, "verdict": c.verdict})).collect::<Vec<_>>(),
+            "certified": {
+                "seeds": self.certified.seeds,
+                "steps": self.certified.steps,
+                "misses": self.certified.misses,
+                "guarantee_lost": self.certified.guarantee_lost,
+                "median_x_width_m": r(self.certified.median_x_width_m),
+                "median_psi_width_deg": r(self.certified.median_psi_width_deg),
+            },
         })
     }
 }
