@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "python" / "port_estimation"
 
 
 def test_vehicle_models_have_their_dimensions_and_capabilities():
-    assert pe.Model.truck().dims == (3, 7, 3) and pe.Model.truck().capability == "differentiable"
+    assert pe.Model.truck().dims == (3, 7, 3) and pe.Model.truck().capability == "second-order"
     assert pe.Model.vessel().dims == (6, 3, 3) and pe.Model.vessel().A is None
     assert pe.Model.carrier(load=2, speed=8.0).dims == (4, 8, 4)
     assert pe.Model.car().dims == (4, 1, 1) and pe.Model.car().capability == "linear"
