@@ -16,16 +16,15 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The counting allocator; install it with `#[global_allocator]` in a test binary.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Counting;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
 thread_local! {
     static COUNTING: Cell<bool> = const { Cell::new(false) };
+    /// This thread's allocations while counting.
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
     /// The largest request (bytes) this thread made while counting, since its last [`measure`].
     static LARGEST: Cell<usize> = const { Cell::new(0) };
 }
@@ -33,7 +32,7 @@ thread_local! {
 fn note(size: usize) {
     // `try_with`: the thread-local may be gone while a thread shuts down.
     if COUNTING.try_with(|c| c.get()).unwrap_or(false) {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
         let _ = LARGEST.try_with(|l| l.set(l.get().max(size)));
     }
 }
@@ -64,11 +63,11 @@ unsafe impl GlobalAlloc for Counting {
 /// Runs `f` and returns its result with the number of allocations the current thread made
 /// meanwhile (0 unless [`Counting`] is the global allocator).
 pub fn count<R>(f: impl FnOnce() -> R) -> (R, usize) {
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = ALLOCATIONS.with(Cell::get);
     COUNTING.with(|c| c.set(true));
     let r = f();
     COUNTING.with(|c| c.set(false));
-    (r, ALLOCATIONS.load(Ordering::Relaxed) - before)
+    (r, ALLOCATIONS.with(Cell::get) - before)
 }
 
 /// What [`measure`] saw.
