@@ -7,8 +7,8 @@
 //! Only first derivatives are enclosed: the Hessians are declared invalid, and the filter bounds
 //! the linearisation remainder by the mean-value form, valid also across the kinks of `abs`,
 //! `min`, `max`. A function undefined or discontinuous on the box gives unbounded enclosures,
-//! which the filter reports instead of publishing a set. Each call allocates its interval
-//! scratch (a few kilobytes).
+//! which the filter reports instead of publishing a set. The intervals live in the thread's
+//! scratch (module `scratch`): no allocation after a thread's first call.
 
 use intervals::Interval;
 use models::{DiscreteModel, ModelError, SecondOrderModel, TaylorEnclosure, check_enclosure_dims};
@@ -16,11 +16,12 @@ use nalgebra::DVector;
 
 use crate::file::{Discretization, TimeModel};
 use crate::model::{EquationModel, Rows};
+use crate::scratch::with_interval_scratch;
 
-/// Interval scratch: one value and `n` derivatives per node.
-struct Work {
-    values: Vec<Interval>,
-    grads: Vec<Interval>,
+/// Interval scratch of the graph: one value and `n` derivatives per node.
+struct Work<'a> {
+    values: &'a mut [Interval],
+    grads: &'a mut [Interval],
 }
 
 impl EquationModel {
@@ -53,7 +54,7 @@ impl EquationModel {
         for (v, &ui) in work.values[n..n + u.len()].iter_mut().zip(u) {
             *v = Interval::point(ui);
         }
-        self.graph.run_enclosure(&rows.schedule, n, &self.varies, &mut work.values, &mut work.grads);
+        self.graph.run_enclosure(&rows.schedule, n, &self.varies, work.values, work.grads);
         for (k, &r) in rows.roots.iter().enumerate() {
             let r = r as usize;
             value[k] = work.values[r];
@@ -66,10 +67,14 @@ impl EquationModel {
         }
     }
 
-    fn work(&self) -> Work {
-        let nodes = self.graph.len();
-        let n = self.dims().states;
-        Work { values: vec![Interval::ZERO; nodes], grads: vec![Interval::ZERO; nodes * n] }
+    /// Runs `f` on the graph's interval scratch and `extra` more intervals.
+    fn with_work<R>(&self, extra: usize, mut f: impl FnMut(Work<'_>, &mut [Interval]) -> R) -> R {
+        let (nodes, n) = (self.graph.len(), self.dims().states);
+        with_interval_scratch(nodes * (n + 1) + extra, |buf| {
+            let (values, rest) = buf.split_at_mut(nodes);
+            let (grads, rest) = rest.split_at_mut(nodes * n);
+            f(Work { values, grads }, rest)
+        })
     }
 }
 
@@ -89,83 +94,88 @@ impl SecondOrderModel for EquationModel {
         self.check_box("f enclosure", n, x, u, out)?;
         out.clear();
         out.set_hessian_invalid();
-        let mut value = vec![Interval::ZERO; n];
-        let mut jac = vec![Interval::ZERO; n * n];
-        match self.time {
-            TimeModel::Continuous { discretization: Discretization::Zoh, .. } => {
-                let (a, b) = self
-                    .zoh
-                    .as_ref()
-                    .ok_or_else(|| ModelError::Evaluation("zero-order hold without its matrices".to_owned()))?;
-                for i in 0..n {
-                    let mut s = Interval::ZERO;
-                    for j in 0..n {
-                        s = s + x[j] * a[(i, j)];
-                        jac[i * n + j] = Interval::point(a[(i, j)]);
-                    }
-                    for k in 0..u.len() {
-                        s = s + Interval::point(b[(i, k)]) * u[k];
-                    }
-                    value[i] = s;
+        if let TimeModel::Continuous { discretization: Discretization::Zoh, .. } = self.time {
+            let (a, b) = self
+                .zoh
+                .as_ref()
+                .ok_or_else(|| ModelError::Evaluation("zero-order hold without its matrices".to_owned()))?;
+            for i in 0..n {
+                let mut s = Interval::ZERO;
+                for j in 0..n {
+                    s = s + x[j] * a[(i, j)];
+                    out.set_jacobian(i, j, Interval::point(a[(i, j)]));
                 }
+                for k in 0..u.len() {
+                    s = s + Interval::point(b[(i, k)]) * u[k];
+                }
+                out.set_value(i, s);
             }
-            TimeModel::Discrete => {
-                let mut work = self.work();
-                self.enclose(&self.rhs, x, u.as_slice(), &mut work, &mut value, &mut jac);
-            }
-            TimeModel::Continuous { ts, discretization } => {
-                let mut work = self.work();
-                let ts = Interval::point(ts);
-                let (mut g, mut jg) = (vec![Interval::ZERO; n], vec![Interval::ZERO; n * n]);
-                self.enclose(&self.rhs, x, u.as_slice(), &mut work, &mut g, &mut jg);
-                if discretization == Discretization::Euler {
-                    for i in 0..n {
-                        value[i] = x[i] + ts * g[i];
-                    }
-                    identity_plus(n, ts, &jg, &mut jac);
-                } else {
-                    // RK4: stages k_s, their points x_s = x + c_s k_{s−1}, the chain rule.
-                    let offsets = [Interval::ZERO, ts * 0.5, ts * 0.5, ts];
-                    let weights = [1.0, 2.0, 2.0, 1.0];
-                    let (mut prev, mut tmp, mut sum) = (jg.clone(), vec![Interval::ZERO; n * n], jg.clone());
-                    let mut acc: Vec<Interval> = g.clone();
-                    let mut k = g.clone();
-                    let mut xs = vec![Interval::ZERO; n];
-                    for s in 1..4 {
+            return Ok(());
+        }
+        self.with_work(5 * n + 5 * n * n, |mut work, rest| {
+            let (value, rest) = rest.split_at_mut(n);
+            let (jac, rest) = rest.split_at_mut(n * n);
+            let (g, rest) = rest.split_at_mut(n);
+            let (jg, rest) = rest.split_at_mut(n * n);
+            let (prev, rest) = rest.split_at_mut(n * n);
+            let (tmp, rest) = rest.split_at_mut(n * n);
+            let (sum, rest) = rest.split_at_mut(n * n);
+            let (acc, rest) = rest.split_at_mut(n);
+            let (k, xs) = rest.split_at_mut(n);
+            match self.time {
+                TimeModel::Continuous { ts, discretization } => {
+                    let ts = Interval::point(ts);
+                    self.enclose(&self.rhs, x, u.as_slice(), &mut work, g, jg);
+                    if discretization == Discretization::Euler {
                         for i in 0..n {
-                            xs[i] = x[i] + offsets[s] * k[i];
+                            value[i] = x[i] + ts * g[i];
                         }
-                        self.enclose(&self.rhs, &xs, u.as_slice(), &mut work, &mut g, &mut jg);
-                        identity_plus(n, offsets[s], &prev, &mut tmp);
-                        for i in 0..n {
-                            for c in 0..n {
-                                let mut d = Interval::ZERO;
-                                for l in 0..n {
-                                    d = d + jg[i * n + l] * tmp[l * n + c];
-                                }
-                                prev[i * n + c] = d;
-                                sum[i * n + c] = sum[i * n + c] + d * weights[s];
+                        identity_plus(n, ts, jg, jac);
+                    } else {
+                        // RK4: stages k_s, their points x_s = x + c_s k_{s−1}, the chain rule.
+                        let offsets = [Interval::ZERO, ts * 0.5, ts * 0.5, ts];
+                        let weights = [1.0, 2.0, 2.0, 1.0];
+                        prev.copy_from_slice(jg);
+                        sum.copy_from_slice(jg);
+                        acc.copy_from_slice(g);
+                        k.copy_from_slice(g);
+                        for s in 1..4 {
+                            for i in 0..n {
+                                xs[i] = x[i] + offsets[s] * k[i];
                             }
+                            self.enclose(&self.rhs, xs, u.as_slice(), &mut work, g, jg);
+                            identity_plus(n, offsets[s], prev, tmp);
+                            for i in 0..n {
+                                for c in 0..n {
+                                    let mut d = Interval::ZERO;
+                                    for l in 0..n {
+                                        d = d + jg[i * n + l] * tmp[l * n + c];
+                                    }
+                                    prev[i * n + c] = d;
+                                    sum[i * n + c] = sum[i * n + c] + d * weights[s];
+                                }
+                            }
+                            for i in 0..n {
+                                acc[i] = acc[i] + g[i] * weights[s];
+                            }
+                            k.copy_from_slice(g);
                         }
+                        let sixth = ts / 6.0;
                         for i in 0..n {
-                            acc[i] = acc[i] + g[i] * weights[s];
+                            value[i] = x[i] + sixth * acc[i];
                         }
-                        k.copy_from_slice(&g);
+                        identity_plus(n, sixth, sum, jac);
                     }
-                    let sixth = ts / 6.0;
-                    for i in 0..n {
-                        value[i] = x[i] + sixth * acc[i];
-                    }
-                    identity_plus(n, sixth, &sum, &mut jac);
+                }
+                _ => self.enclose(&self.rhs, x, u.as_slice(), &mut work, value, jac),
+            }
+            for i in 0..n {
+                out.set_value(i, value[i]);
+                for j in 0..n {
+                    out.set_jacobian(i, j, jac[i * n + j]);
                 }
             }
-        }
-        for i in 0..n {
-            out.set_value(i, value[i]);
-            for j in 0..n {
-                out.set_jacobian(i, j, jac[i * n + j]);
-            }
-        }
+        });
         Ok(())
     }
 
@@ -175,15 +185,16 @@ impl SecondOrderModel for EquationModel {
         self.check_box("h enclosure", m, x, u, out)?;
         out.clear();
         out.set_hessian_invalid();
-        let (mut value, mut jac) = (vec![Interval::ZERO; m], vec![Interval::ZERO; m * n]);
-        let mut work = self.work();
-        self.enclose(&self.out, x, u.as_slice(), &mut work, &mut value, &mut jac);
-        for i in 0..m {
-            out.set_value(i, value[i]);
-            for j in 0..n {
-                out.set_jacobian(i, j, jac[i * n + j]);
+        self.with_work(m + m * n, |mut work, rest| {
+            let (value, jac) = rest.split_at_mut(m);
+            self.enclose(&self.out, x, u.as_slice(), &mut work, value, jac);
+            for i in 0..m {
+                out.set_value(i, value[i]);
+                for j in 0..n {
+                    out.set_jacobian(i, j, jac[i * n + j]);
+                }
             }
-        }
+        });
         Ok(())
     }
 }

@@ -1,9 +1,10 @@
 //! Evaluations allocate nothing once a thread has evaluated the model (the scratch buffer is
-//! per thread): `f`, `h`, their Jacobians, for `[f]`, Euler, RK4 and the zero-order hold.
+//! per thread): `f`, `h`, their Jacobians and their interval enclosures over a box, for `[f]`,
+//! Euler, RK4 and the zero-order hold.
 
 use counting_allocator::{Counting, count};
 use equation_models::EquationModel;
-use models::{DifferentiableModel, DiscreteModel};
+use models::{DifferentiableModel, DiscreteModel, Interval, SecondOrderModel, TaylorEnclosure};
 use nalgebra::{DMatrix, DVector};
 
 #[global_allocator]
@@ -36,6 +37,8 @@ fn evaluations_allocate_nothing_after_the_first() {
         let u = DVector::from_fn(d.inputs, |i, _| if i == 0 { 0.01 } else { 20.0 });
         let (mut f, mut fj, mut h, mut hj) =
             (DVector::zeros(n), DMatrix::zeros(n, n), DVector::zeros(mo), DMatrix::zeros(mo, n));
+        let boxed: Vec<Interval> = x.iter().map(|c| Interval::centered(*c, 0.01)).collect();
+        let (mut fe, mut he) = (TaylorEnclosure::new(n, n), TaylorEnclosure::new(mo, n));
         let mut all = || {
             m.f(&x, &u, &mut f).unwrap();
             m.f_jacobian(&x, &u, &mut fj).unwrap();
@@ -44,6 +47,8 @@ fn evaluations_allocate_nothing_after_the_first() {
             m.f_with_jacobian(&x, &u, &mut f, &mut fj).unwrap();
             m.h_with_jacobian(&x, &u, &mut h, &mut hj).unwrap();
             m.rhs(&x, &u, &mut f).unwrap();
+            m.f_enclosure(&boxed, &u, &mut fe).unwrap();
+            m.h_enclosure(&boxed, &u, &mut he).unwrap();
         };
         all();
         let ((), allocations) = count(&mut all);

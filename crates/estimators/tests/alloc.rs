@@ -304,3 +304,29 @@ fn inconsistent_steps_do_not_allocate_under_any_policy() {
         assert_eq!(r.ok(), if policy == InconsistencyPolicy::Error { None } else { Some(false) }, "{policy:?}");
     }
 }
+
+#[test]
+fn nonlinear_set_membership_steps_do_not_allocate() {
+    use models::DiscreteModel;
+    use vessel_dynamics::{DiscreteVessel, VesselParams};
+    let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let mut smf = estimators::NonlinearSetMembershipFilter::new(Setup {
+        x0: DVector::zeros(6),
+        p0: DMatrix::identity(6, 6),
+        process_noise: DMatrix::identity(6, 6) * 1e-2,
+        measurement_noise: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1])),
+        inputs: vessel.dims().inputs,
+    })
+    .unwrap();
+    let u = DVector::from_vec(vec![1e5, 0.0, 1e5]);
+    let y = DVector::from_vec(vec![0.01, 0.0, 0.001]);
+    smf.step(&vessel, &u, &y).unwrap();
+    let (_, n) = count(|| {
+        for _ in 0..20 {
+            smf.step(&vessel, &u, &y).unwrap();
+            smf.predict(&vessel, &u).unwrap();
+            smf.update(&vessel, &y).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "smf-nl step on the vessel allocated");
+}

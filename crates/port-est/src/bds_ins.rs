@@ -137,10 +137,7 @@ fn read_config(path: Option<&Path>, limits: &Limits) -> Result<Settings, Error> 
 /// they come from).
 pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Settings, Error> {
     let span = |v: &Option<Spanned<f64>>| v.as_ref().map(Spanned::span);
-    let positive = |key: &str, v: &Option<Spanned<f64>>, default: f64| match v {
-        Some(v) => settings::positive(source, key, v),
-        None => Ok(default),
-    };
+    let positive = |key: &str, v: &Option<Spanned<f64>>, default: f64| settings::positive_or(source, key, v, default);
     let non_negative = |key: &str, v: &Option<Spanned<f64>>, default: f64| match v {
         Some(v) => settings::non_negative(source, key, v),
         None => Ok(default),

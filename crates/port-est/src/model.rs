@@ -185,11 +185,6 @@ impl Model {
         }
         let file = self.path().display();
         Some(match (&self.dynamics, needs) {
-            (Dynamics::Equations(m), Capability::Differentiable) => format!(
-                "needs {}; in {file}, {}",
-                needs.requirement(),
-                m.not_differentiable().unwrap_or("the equations have no derivatives")
-            ),
             (Dynamics::Builtin { vehicle, .. }, Capability::SecondOrder) => {
                 format!("needs {}; the compiled {} model does not offer them yet", needs.requirement(), vehicle.name)
             }

@@ -81,6 +81,19 @@ impl SettingsFile {
 }
 
 /// A number that must be positive and finite.
+/// The positive finite value of an optional `key`, or `default` when it is absent.
+pub(crate) fn positive_or(
+    file: &SettingsFile,
+    key: &str,
+    v: &Option<Spanned<f64>>,
+    default: f64,
+) -> Result<f64, Error> {
+    match v {
+        Some(v) => positive(file, key, v),
+        None => Ok(default),
+    }
+}
+
 pub(crate) fn positive(file: &SettingsFile, key: &str, v: &Spanned<f64>) -> Result<f64, Error> {
     let x = *v.get_ref();
     if x.is_finite() && x > 0.0 {

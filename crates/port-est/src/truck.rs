@@ -145,10 +145,7 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
         let span = file.ts.as_ref().map(Spanned::span);
         source.derived_error(&[("ts", span)], format!("truck model: {e}"))
     })?;
-    let limit = |key, v: &Option<Spanned<f64>>, default| match v {
-        Some(v) => settings::positive(source, key, v),
-        None => Ok(default),
-    };
+    let limit = |key, v: &Option<Spanned<f64>>, default| settings::positive_or(source, key, v, default);
     let steering = Limit {
         key: "max_steering",
         bound: limit("max_steering", &file.max_steering, defaults::MAX_STEERING)?,
