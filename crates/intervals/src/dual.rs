@@ -48,56 +48,77 @@ impl<const N: usize> Dual<N> {
         d
     }
 
+    /// `g(self)` for a scalar function `g` written on [`Dual`]`<1>`: `g` is evaluated once on
+    /// the variable `self.value` (its derivative enclosed over the value), then the chain rule
+    /// `∇(g∘a) = [g']·∇a` (D2) is applied once — an enclosure as tight as carrying the `N`
+    /// gradient entries through each of `g`'s operations or tighter (interval arithmetic is
+    /// subdistributive; equal up to rounding where nothing is shared), for about `1/N` of the
+    /// work.
+    #[must_use]
+    #[inline]
+    pub fn map_scalar(self, g: impl FnOnce(Dual<1>) -> Dual<1>) -> Self {
+        let outer = g(Dual::variable(self.value, 0));
+        let slope = outer.grad[0];
+        Self { value: outer.value, grad: self.grad.map(|d| scale(d, slope)) }
+    }
+
     /// Whether the value and every gradient entry are bounded.
     #[must_use]
     pub fn is_bounded(&self) -> bool {
         self.value.is_bounded() && self.grad.iter().all(|g| g.is_bounded())
     }
 
-    /// `g(self)` with `g'` enclosed by `slope` over the value (D2).
-    fn chain(self, value: Interval, slope: Interval) -> Self {
+    /// `g(self)` with `g'` enclosed by `slope()` over the value (D2); `slope` is not evaluated
+    /// for `N = 0` (a value-only enclosure).
+    #[inline]
+    fn chain(self, value: Interval, slope: impl FnOnce() -> Interval) -> Self {
+        if N == 0 {
+            return Self::constant(value);
+        }
+        let slope = slope();
         Self { value, grad: self.grad.map(|g| scale(g, slope)) }
     }
 
     /// `x²`.
     #[must_use]
     pub fn sqr(self) -> Self {
-        self.chain(self.value.sqr(), self.value * 2.0)
+        self.chain(self.value.sqr(), || self.value * 2.0)
     }
 
     /// `√x` (unbounded if the value can be ≤ 0, where the derivative is).
     #[must_use]
     pub fn sqrt(self) -> Self {
         let s = self.value.sqrt();
-        self.chain(s, Interval::point(0.5) / s)
+        self.chain(s, || Interval::point(0.5) / s)
     }
 
     /// `sin x`.
     #[must_use]
     pub fn sin(self) -> Self {
-        self.chain(self.value.sin(), self.value.cos())
+        self.chain(self.value.sin(), || self.value.cos())
     }
 
     /// `cos x`.
     #[must_use]
     pub fn cos(self) -> Self {
-        self.chain(self.value.cos(), -self.value.sin())
+        self.chain(self.value.cos(), || -self.value.sin())
     }
 
     /// `atan x`, `atan' = 1/(1 + x²)`.
     #[must_use]
     pub fn atan(self) -> Self {
-        let slope = Interval::point(1.0) / (Interval::point(1.0) + self.value.sqr());
-        // 1/(1 + x²) ∈ (0, 1]: clamp what the rounding may have added.
-        let slope = Interval::new(slope.lo().max(0.0), slope.hi().min(1.0));
-        self.chain(self.value.atan(), slope)
+        self.chain(self.value.atan(), || {
+            let slope = Interval::point(1.0) / (Interval::point(1.0) + self.value.sqr());
+            // 1/(1 + x²) ∈ (0, 1]: clamp what the rounding may have added.
+            Interval::new(slope.lo().max(0.0), slope.hi().min(1.0))
+        })
     }
 
     /// `e^x`.
     #[must_use]
     pub fn exp(self) -> Self {
         let e = self.value.exp();
-        self.chain(e, e)
+        self.chain(e, || e)
     }
 
     /// `|x|`: the sign's enclosure times the gradient, `[−1, 1]·x'` where 0 can be inside (D3).
@@ -110,7 +131,7 @@ impl<const N: usize> Dual<N> {
         } else {
             Interval::new(-1.0, 1.0)
         };
-        self.chain(self.value.abs(), sign)
+        self.chain(self.value.abs(), || sign)
     }
 
     /// `max(a, b)`: the branch that is certainly larger, else the hull of both gradients (D3).
@@ -139,11 +160,13 @@ impl<const N: usize> Dual<N> {
 }
 
 /// `g·c`, keeping an exact zero gradient entry exact (no outward rounding of `0·c`).
+#[inline]
 fn scale(g: Interval, c: Interval) -> Interval {
     if g == Interval::ZERO { g } else { g * c }
 }
 
 /// `a + b`, exact when either is an exact zero.
+#[inline]
 fn sum(a: Interval, b: Interval) -> Interval {
     if a == Interval::ZERO {
         b
@@ -237,8 +260,7 @@ macro_rules! with_scalar {
         impl<const N: usize> Mul<$t> for Dual<N> {
             type Output = Dual<N>;
             fn mul(self, o: $t) -> Dual<N> {
-                let c: Interval = $conv(o);
-                Dual { value: self.value * c, grad: self.grad.map(|g| scale(g, c)) }
+                Dual { value: self.value * o, grad: self.grad.map(|g| if g == Interval::ZERO { g } else { g * o }) }
             }
         }
         impl<const N: usize> Mul<Dual<N>> for $t {

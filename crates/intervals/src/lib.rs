@@ -29,6 +29,10 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 /// Ulps by which the bounds of a math-library function are widened (twice its assumed accuracy).
 pub const LIBM_ULPS: u32 = 2;
 
+/// The distance kept from an extremum of `sin`, `cos` before an interval counts as lying where
+/// the function is monotone (far above the rounding of the bounds and of `π/2`, `π`).
+const MONOTONE_MARGIN: f64 = 1e-6;
+
 /// The next `f64` above `x` (`+∞` stays; NaN stays NaN).
 #[must_use]
 #[inline]
@@ -50,18 +54,28 @@ pub fn down(x: f64) -> f64 {
     -up(-x)
 }
 
+/// `n` ulps above `x` (`n ≤ 4`).
+#[inline]
 fn up_n(mut x: f64, n: u32) -> f64 {
+    debug_assert!(n <= 4);
+    if x.is_finite() && x.abs() >= 16.0 * f64::MIN_POSITIVE {
+        // Away from 0 the bits of a finite `f64` are ordered as its magnitude: `n` ulps are `n`
+        // steps of the bits (past `f64::MAX` they reach +∞, then NaN patterns, which `min` maps
+        // to +∞).
+        let bits = x.to_bits();
+        let stepped = if x > 0.0 { bits + u64::from(n) } else { bits - u64::from(n) };
+        return f64::from_bits(stepped).min(f64::INFINITY);
+    }
     for _ in 0..n {
         x = up(x);
     }
     x
 }
 
-fn down_n(mut x: f64, n: u32) -> f64 {
-    for _ in 0..n {
-        x = down(x);
-    }
-    x
+/// `n` ulps below `x` (`n ≤ 4`).
+#[inline]
+fn down_n(x: f64, n: u32) -> f64 {
+    -up_n(-x, n)
 }
 
 /// A closed interval `[lo, hi]` (`lo ≤ hi`, either may be infinite).
@@ -242,6 +256,10 @@ impl Interval {
     /// the end values.
     #[must_use]
     pub fn sin(self) -> Self {
+        // Within (−π/2, π/2), with a margin, sin increases: no extreme inside.
+        if self.lo > -FRAC_PI_2 + MONOTONE_MARGIN && self.hi < FRAC_PI_2 - MONOTONE_MARGIN {
+            return self.monotone(f64::sin, true);
+        }
         self.periodic(f64::sin, FRAC_PI_2, -FRAC_PI_2)
     }
 
@@ -249,7 +267,27 @@ impl Interval {
     /// values.
     #[must_use]
     pub fn cos(self) -> Self {
+        // Within (0, π), with a margin, cos decreases; within (−π, 0) it increases.
+        if self.lo > MONOTONE_MARGIN && self.hi < PI - MONOTONE_MARGIN {
+            return self.monotone(f64::cos, false);
+        }
+        if self.lo > -PI + MONOTONE_MARGIN && self.hi < -MONOTONE_MARGIN {
+            return self.monotone(f64::cos, true);
+        }
         self.periodic(f64::cos, 0.0, PI)
+    }
+
+    /// `g` over an interval on which it is monotone (increasing or not), values in `[−1, 1]`.
+    #[inline]
+    fn monotone(self, g: fn(f64) -> f64, increasing: bool) -> Self {
+        let (ga, gb) = if self.lo == self.hi {
+            let v = g(self.lo);
+            (v, v)
+        } else {
+            (g(self.lo), g(self.hi))
+        };
+        let (lo, hi) = if increasing { (ga, gb) } else { (gb, ga) };
+        Self::new(down_n(lo, LIBM_ULPS).max(-1.0), up_n(hi, LIBM_ULPS).min(1.0))
     }
 
     /// A `2π`-periodic function with values in `[−1, 1]`, its maxima at `max_at + 2kπ` and minima
@@ -392,4 +430,77 @@ macro_rules! with_f64 {
     )*};
 }
 
-with_f64!(Add add, Sub sub, Mul mul, Div div);
+with_f64!(Add add, Sub sub, Div div);
+
+impl Interval {
+    /// `x·c` for a number `c` known exactly: two products, ordered by the sign of `c` (the common
+    /// case of a model's constants, cheaper than `x * Interval::point(c)`, the same enclosure).
+    #[must_use]
+    #[inline]
+    pub fn times(self, c: f64) -> Interval {
+        if c > 0.0 {
+            Interval::new(down(self.lo * c), up(self.hi * c))
+        } else if c < 0.0 {
+            Interval::new(down(self.hi * c), up(self.lo * c))
+        } else if c == 0.0 {
+            // 0 × an unbounded bound is 0, as in `Mul`.
+            Interval::ZERO
+        } else {
+            Interval::ENTIRE
+        }
+    }
+}
+
+impl Mul<f64> for Interval {
+    type Output = Interval;
+    #[inline]
+    fn mul(self, c: f64) -> Interval {
+        self.times(c)
+    }
+}
+
+impl Mul<Interval> for f64 {
+    type Output = Interval;
+    #[inline]
+    fn mul(self, x: Interval) -> Interval {
+        x.times(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{down, down_n, up, up_n};
+
+    #[test]
+    fn steps_of_the_bits_are_steps_of_up_and_down() {
+        let mut values = vec![
+            1.0,
+            -1.0,
+            f64::MAX,
+            -f64::MAX,
+            f64::MIN_POSITIVE,
+            16.0 * f64::MIN_POSITIVE,
+            -16.0 * f64::MIN_POSITIVE,
+            1e-310,
+            0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut x = 0.7f64;
+        for _ in 0..200 {
+            x = (x * 3.9 * (1.0 - x)).abs();
+            values.push((x - 0.5) * 10f64.powi((x * 600.0) as i32 - 300));
+        }
+        for &v in &values {
+            for n in 0..=4 {
+                let (mut u, mut d) = (v, v);
+                for _ in 0..n {
+                    u = up(u);
+                    d = down(d);
+                }
+                assert_eq!(up_n(v, n).to_bits(), u.to_bits(), "up_n({v:e}, {n})");
+                assert_eq!(down_n(v, n).to_bits(), d.to_bits(), "down_n({v:e}, {n})");
+            }
+        }
+    }
+}

@@ -102,3 +102,35 @@ fn closed_forms_and_the_clarke_hull_at_kinks() {
     assert!(z.grad[0].contains(3.0) && z.grad[0].width() < 1e-14);
     assert_eq!(D::variable(b, 5).grad, [Interval::ZERO; 2]);
 }
+
+#[test]
+fn a_scalar_function_mapped_once_encloses_as_forward_mode_does_or_tighter() {
+    let g1 = |s: Dual<1>| (s.atan() * 1.3).sin() * 2.0 + s * 0.1;
+    let g2 = |s: D| (s.atan() * 1.3).sin() * 2.0 + s * 0.1;
+    let (bx, by) = (Interval::new(0.2, 0.5), Interval::new(-1.0, -0.4));
+    let a = D::variable(bx, 0) * D::variable(by, 1) + D::variable(bx, 0);
+    let (mapped, forward) = (a.map_scalar(g1), g2(a));
+    assert_eq!(mapped.value, forward.value);
+    for j in 0..2 {
+        let (m, f) = (mapped.grad[j], forward.grad[j]);
+        // Within the forward-mode enclosure up to the rounding of the final products.
+        let slack = 1e-14 * (1.0 + f.mag());
+        assert!(f.lo() - slack <= m.lo() && m.hi() <= f.hi() + slack, "∂{j}: {m} not within {f}");
+    }
+    // Central differences at a grid of the box lie in the mapped gradient.
+    let g = |x: f64, y: f64| {
+        let s = x * y + x;
+        (s.atan() * 1.3).sin() * 2.0 + s * 0.1
+    };
+    for k in 0..=10 {
+        for l in 0..=10 {
+            let x = 0.2 + 0.3 * f64::from(k) / 10.0;
+            let y = -1.0 + 0.6 * f64::from(l) / 10.0;
+            let h = 1e-7;
+            let dx = (g(x + h, y) - g(x - h, y)) / (2.0 * h);
+            let dy = (g(x, y + h) - g(x, y - h)) / (2.0 * h);
+            assert!(within(mapped.grad[0], dx, 1e-6) && within(mapped.grad[1], dy, 1e-6), "({x}, {y})");
+            assert!(mapped.value.contains(g(x, y)));
+        }
+    }
+}

@@ -24,9 +24,22 @@ proptest! {
                 prop_assert!((a + b).contains(x + y));
                 prop_assert!((a - b).contains(x - y));
                 prop_assert!((a * b).contains(x * y));
+                // A number known exactly: the same enclosure as the interval product.
+                prop_assert_eq!(a * y, a * Interval::point(y));
+                prop_assert!((a * y).contains(x * y) && (y * a).contains(x * y));
                 let q = a / b;
                 prop_assert!(!q.is_bounded() || q.contains(x / y), "{a} / {b} at {x}, {y}");
             }
+        }
+    }
+
+    #[test]
+    fn sin_and_cos_of_narrow_intervals_contain_the_pointwise_results(lo in -7.0f64..7.0, w in 0.0f64..0.5) {
+        // Narrow intervals: the monotone pieces, and the extrema near their ends.
+        let a = Interval::new(lo, lo + w);
+        for x in points(a) {
+            prop_assert!(a.sin().contains(x.sin()), "sin {a} at {x}");
+            prop_assert!(a.cos().contains(x.cos()), "cos {a} at {x}");
         }
     }
 
@@ -70,6 +83,8 @@ fn undefined_operations_are_unbounded_not_narrowed() {
     assert!(!(Interval::ENTIRE * Interval::point(2.0)).is_bounded());
     let z = Interval::ENTIRE * Interval::ZERO;
     assert!(z.contains(0.0) && z.mag() < 1e-300, "{z}");
+    assert_eq!(Interval::ENTIRE * 0.0, Interval::ZERO);
+    assert!(!(Interval::ENTIRE * -2.0).is_bounded() && !(Interval::point(1.0) * f64::NAN).is_bounded());
 }
 
 #[test]

@@ -106,6 +106,13 @@ impl TaylorEnclosure {
         self.hessian[(i * n + k) * n + j] = v;
     }
 
+    /// Whether every value enclosure is bounded (what [`SecondOrderModel::f_value_enclosure`]
+    /// promises).
+    #[must_use]
+    pub fn values_bounded(&self) -> bool {
+        self.value.iter().all(|v| v.is_bounded())
+    }
+
     /// Whether every enclosure is bounded (an undefined or overflowing operation somewhere on the
     /// box makes one unbounded).
     #[must_use]
@@ -132,6 +139,26 @@ pub trait SecondOrderModel: DifferentiableModel {
     /// # Errors
     /// As [`SecondOrderModel::f_enclosure`].
     fn h_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError>;
+
+    /// Encloses `f(x, u)` alone over the box: `out`'s values as
+    /// [`SecondOrderModel::f_enclosure`]'s, its derivative entries unspecified. The filter asks
+    /// for it at the set's centre when the Hessians do not hold on the box (the mean-value bound
+    /// needs the value there and the Jacobian over the box only). The default computes the whole
+    /// enclosure; a model overrides it where the value alone is cheaper.
+    ///
+    /// # Errors
+    /// As [`SecondOrderModel::f_enclosure`].
+    fn f_value_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        self.f_enclosure(x, u, out)
+    }
+
+    /// As [`SecondOrderModel::f_value_enclosure`], for `h(x, u)`.
+    ///
+    /// # Errors
+    /// As [`SecondOrderModel::f_enclosure`].
+    fn h_value_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        self.h_enclosure(x, u, out)
+    }
 }
 
 fn mismatch(what: &str, expected: (usize, usize), found: (usize, usize)) -> ModelError {

@@ -6,9 +6,9 @@
 //! ([`crate::kinematics`]), Pac89 curves at static loads with dual tyres lumped
 //! ([`crate::tyre`]), body forces (1), the Euler step (12) and `a_y = ΣF_Y/m` (14) — is
 //! evaluated in interval forward-mode AD ([`Dual`]`<3>` in `[V_x, V_y, γ]`), which gives the
-//! value and the Jacobian enclosures over the box at once. Inputs (`δ`, wheel speeds) and
-//! parameters are points; `sin δ`, `cos δ`, `ω·R_e` and `180/π` are enclosed, so the enclosures
-//! hold the exact real model.
+//! value and the Jacobian enclosures over the box at once ([`Dual`]`<0>`: the value alone).
+//! Inputs (`δ`, wheel speeds) and parameters are points; `sin δ`, `cos δ`, `ω·R_e` and `180/π`
+//! are enclosed, so the enclosures hold the exact real model.
 //!
 //! The slip ratio `s = (ωR_e − v_l)/max(|ωR_e|, |v_l|, v_min)` has a kink at free rolling
 //! `|ωR_e| = |v_l|`, where the model is Lipschitz but not differentiable: [`Dual::max`] encloses
@@ -23,15 +23,14 @@ use models::{Interval, ModelError, SecondOrderModel, TaylorEnclosure, check_encl
 use nalgebra::DVector;
 
 use crate::kinematics::WHEELS;
-use crate::planar::{INPUT_DIM, OUTPUT_DIM, STATE_DIM, TruckEkfModel, TruckInput};
+use crate::planar::{INPUT_DIM, OUTPUT_DIM, PlanarTruck, STATE_DIM, TruckEkfModel, TruckInput};
 use crate::tyre::MagicFormula;
 
-/// A function of the state `[V_x, V_y, γ]` with its gradient, enclosed over a box.
-type D3 = Dual<STATE_DIM>;
 
 /// Interval enclosures of a Magic Formula curve's coefficients, with the slip's unit and the
 /// lumping folded in.
-struct Curve {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Curve {
     /// `B·unit` (unit: degrees per radian or percent per unit slip).
     b_unit: Interval,
     /// `B·S_H`.
@@ -47,8 +46,8 @@ struct Curve {
 }
 
 impl Curve {
-    fn new((mf, scale): (MagicFormula, f64), unit: Interval) -> Self {
-        let (b, e, scale) = (Interval::point(mf.b), Interval::point(mf.e), Interval::point(scale));
+    fn new(mf: &MagicFormula, scale: Interval, unit: Interval) -> Self {
+        let (b, e) = (Interval::point(mf.b), Interval::point(mf.e));
         Self {
             b_unit: b * unit,
             b_sh: b * mf.sh,
@@ -63,18 +62,48 @@ impl Curve {
     /// `n·k·(D·sin(C·atan θ) + S_V)`, `θ = (1 − E)·B·x + E·atan(B·x)` (= `B·x − E·(B·x −
     /// atan(B·x))`, eq (3)–(4)), `B·x = B·unit·slip + B·S_H`: the same function as tyre.rs with
     /// fewer occurrences of the variables, so a tighter enclosure.
-    fn force(&self, slip: D3) -> D3 {
+    fn force<const N: usize>(&self, slip: Dual<N>) -> Dual<N> {
+        if N == 0 {
+            return Dual::constant(self.curve(Dual::<0>::constant(slip.value)).value);
+        }
+        // One derivative through the curve, then the chain rule once (`Dual::map_scalar`).
+        slip.map_scalar(|s| self.curve(s))
+    }
+
+    /// The curve of [`Curve::force`] on any number of gradient entries.
+    fn curve<const M: usize>(&self, slip: Dual<M>) -> Dual<M> {
         let bx = slip * self.b_unit + self.b_sh;
         let theta = bx * self.one_minus_e + bx.atan() * self.e;
         (theta.atan() * self.c).sin() * self.d_scaled + self.sv_scaled
     }
 }
 
+/// The enclosed curves of one wheel position at its static load.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct EnclosedWheel {
+    lateral: Curve,
+    longitudinal: Curve,
+}
+
+/// The enclosed curves of every wheel position of `planar` (computed once, with the model).
+pub(crate) fn enclosed_curves(planar: &PlanarTruck) -> [EnclosedWheel; WHEELS] {
+    let (deg, percent) = (degrees_per_radian(), Interval::point(100.0));
+    std::array::from_fn(|j| {
+        let c = &planar.curves()[j];
+        // n·k, the lumping and the fade, enclosed.
+        let scale = Interval::point(c.n) * c.k;
+        EnclosedWheel {
+            lateral: Curve::new(&c.lateral, scale, deg),
+            longitudinal: Curve::new(&c.longitudinal, scale, percent),
+        }
+    })
+}
+
 /// `ΣF_X`, `ΣF_Y` \[N\] and `M_z = Σ(x_j F_Yj − y_j F_Xj)` \[N m\] (1) over the box.
-struct BodyForces {
-    fx: D3,
-    fy: D3,
-    mz: D3,
+struct BodyForces<const N: usize> {
+    fx: Dual<N>,
+    fy: Dual<N>,
+    mz: Dual<N>,
 }
 
 /// `180/π` enclosed (`π` lies within one ulp of `f64`'s `PI`).
@@ -91,27 +120,25 @@ impl TruckEkfModel {
         Ok(input)
     }
 
-    /// The body forces over the box `x` (interval forward-mode AD, Jacobian included).
-    fn enclosed_forces(&self, x: &[Interval], input: &TruckInput) -> Result<BodyForces, ModelError> {
+    /// The body forces over the box `x` (interval forward-mode AD: with the Jacobian for
+    /// `N = 3`, the value alone for `N = 0`). With `lateral_only`, `ΣF_Y` alone (`fx`, `mz` are
+    /// left at 0): the measurement (14) needs no more, and the longitudinal force of an
+    /// unsteered wheel does not enter `ΣF_Y`.
+    fn enclosed_forces<const N: usize>(
+        &self,
+        x: &[Interval],
+        input: &TruckInput,
+        lateral_only: bool,
+    ) -> Result<BodyForces<N>, ModelError> {
         let planar = self.planar();
-        let (p, g, loads) = (planar.params(), planar.geometry(), planar.static_loads());
-        let [vx, vy, gamma] = std::array::from_fn(|i| D3::variable(x[i], i));
-        let deg = degrees_per_radian();
+        let (p, g) = (planar.params(), planar.geometry());
+        let [vx, vy, gamma] = std::array::from_fn(|i| Dual::<N>::variable(x[i], i));
         let v_min = Interval::point(p.min_speed);
         let delta = Interval::point(input.delta);
         let (sin_d, cos_d) = (delta.sin(), delta.cos());
-        let zero = D3::from(0.0);
+        let zero = Dual::<N>::from(0.0);
         let mut out = BodyForces { fx: zero, fy: zero, mz: zero };
-        let mut curves: Option<((u32, f64), Curve, Curve)> = None;
-        for j in 0..WHEELS {
-            // The curves at the position's load (left and right of an axle usually share them).
-            let key = (g.tyres[j], loads[j]);
-            if curves.as_ref().is_none_or(|(k, _, _)| *k != key) {
-                let lateral = Curve::new(p.tyre.lateral_lumped_curve(key.0, key.1)?, deg);
-                let percent = Interval::point(100.0);
-                curves = Some((key, lateral, Curve::new(p.tyre.longitudinal_lumped_curve(key.0, key.1)?, percent)));
-            }
-            let Some((_, lateral, longitudinal)) = curves.as_ref() else { continue };
+        for (j, EnclosedWheel { lateral, longitudinal }) in self.enclosed_curves().iter().enumerate() {
             // Wheel-centre velocities and slips (kinematics.rs).
             let u = vx - gamma * g.y[j];
             let v = vy + gamma * g.x[j];
@@ -119,64 +146,98 @@ impl TruckEkfModel {
                 // atan2(v, u) ≠ atan(v/u) there, and V_x ≤ 0 is outside the model.
                 return Ok(BodyForces { fx: unbounded(), fy: unbounded(), mz: unbounded() });
             }
-            let omega_re = Interval::point(input.omega[j]) * p.rolling_radius;
             // Steered: δ_j = δ; otherwise δ_j = 0 exactly (cos 1, sin 0: no products).
-            let (alpha, vl) =
-                if g.steered[j] { (delta - (v / u).atan(), u * cos_d + v * sin_d) } else { (-(v / u).atan(), u) };
-            let denominator = D3::constant(omega_re.abs().max(v_min)).max(vl.abs());
-            let slip = (omega_re - vl) / denominator;
+            let alpha = if g.steered[j] { delta - (v / u).atan() } else { -(v / u).atan() };
             // Pac89 in degrees and percent (tyre.rs), lumped.
             let fy = lateral.force(alpha);
+            if lateral_only && !g.steered[j] {
+                out.fy = out.fy + fy;
+                continue;
+            }
+            let omega_re = Interval::point(input.omega[j]) * p.rolling_radius;
+            let vl = if g.steered[j] { u * cos_d + v * sin_d } else { u };
+            // The slip ratio is a function of v_l alone: one derivative, the chain rule once.
+            let floor = omega_re.abs().max(v_min);
+            let slip = vl.map_scalar(|w| (omega_re - w) / Dual::constant(floor).max(w.abs()));
             let fx = longitudinal.force(slip);
             let (big_x, big_y) =
                 if g.steered[j] { (fx * cos_d - fy * sin_d, fx * sin_d + fy * cos_d) } else { (fx, fy) };
             out.fx = out.fx + big_x;
             out.fy = out.fy + big_y;
-            out.mz = out.mz + big_y * g.x[j] - big_x * g.y[j];
+            if !lateral_only {
+                out.mz = out.mz + big_y * g.x[j] - big_x * g.y[j];
+            }
         }
         Ok(out)
     }
 }
 
-fn unbounded() -> D3 {
-    D3 { value: Interval::ENTIRE, grad: [Interval::ENTIRE; STATE_DIM] }
+fn unbounded<const N: usize>() -> Dual<N> {
+    Dual { value: Interval::ENTIRE, grad: [Interval::ENTIRE; N] }
 }
 
-fn write(out: &mut TaylorEnclosure, rows: [D3; 3]) {
+/// Writes the values and, for `N = 3`, the Jacobian (for `N = 0` it stays zero).
+fn write<const N: usize>(out: &mut TaylorEnclosure, rows: [Dual<N>; 3]) {
     out.clear();
     for (i, r) in rows.iter().enumerate() {
         out.set_value(i, r.value);
-        for j in 0..STATE_DIM {
-            out.set_jacobian(i, j, r.grad[j]);
+        for (j, g) in r.grad.iter().enumerate() {
+            out.set_jacobian(i, j, *g);
         }
     }
     // The slip ratio's max has its kink at free rolling: first order only (N2').
     out.set_hessian_invalid();
 }
 
+impl TruckEkfModel {
+    /// `F(x) = x + T·f_c(x, u)` (12) over the box.
+    fn enclosed_step<const N: usize>(&self, x: &[Interval], u: &DVector<f64>) -> Result<[Dual<N>; 3], ModelError> {
+        let input = Self::read_input(u)?;
+        let f = self.enclosed_forces::<N>(x, &input, false)?;
+        let p = self.planar().params();
+        let t = Interval::point(self.ts());
+        let [vx, vy, gamma] = std::array::from_fn(|i| Dual::<N>::variable(x[i], i));
+        let dvx = vy * gamma + f.fx / p.mass;
+        let dvy = f.fy / p.mass - vx * gamma;
+        let dgamma = f.mz / p.yaw_inertia;
+        Ok([vx + dvx * t, vy + dvy * t, gamma + dgamma * t])
+    }
+
+    /// `h(x) = [V_x, ΣF_Y/m, γ]` (14) over the box.
+    fn enclosed_output<const N: usize>(&self, x: &[Interval], u: &DVector<f64>) -> Result<[Dual<N>; 3], ModelError> {
+        let input = Self::read_input(u)?;
+        let f = self.enclosed_forces::<N>(x, &input, true)?;
+        let mass = self.planar().params().mass;
+        Ok([Dual::variable(x[0], 0), f.fy / mass, Dual::variable(x[2], 2)])
+    }
+}
+
 impl SecondOrderModel for TruckEkfModel {
     /// `F(x) = x + T·f_c(x, u)` (12) and `∂F/∂x` over the box; Hessians invalid.
     fn f_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
         check_enclosure_dims("f enclosure", STATE_DIM, STATE_DIM, x, out)?;
-        let input = Self::read_input(u)?;
-        let f = self.enclosed_forces(x, &input)?;
-        let p = self.planar().params();
-        let t = Interval::point(self.ts());
-        let [vx, vy, gamma] = std::array::from_fn(|i| D3::variable(x[i], i));
-        let dvx = vy * gamma + f.fx / p.mass;
-        let dvy = f.fy / p.mass - vx * gamma;
-        let dgamma = f.mz / p.yaw_inertia;
-        write(out, [vx + dvx * t, vy + dvy * t, gamma + dgamma * t]);
+        write(out, self.enclosed_step::<STATE_DIM>(x, u)?);
         Ok(())
     }
 
     /// `h(x) = [V_x, ΣF_Y/m, γ]` (14) and `∂h/∂x` over the box; Hessians invalid.
     fn h_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
         check_enclosure_dims("h enclosure", OUTPUT_DIM, STATE_DIM, x, out)?;
-        let input = Self::read_input(u)?;
-        let f = self.enclosed_forces(x, &input)?;
-        let mass = self.planar().params().mass;
-        write(out, [D3::variable(x[0], 0), f.fy / mass, D3::variable(x[2], 2)]);
+        write(out, self.enclosed_output::<STATE_DIM>(x, u)?);
+        Ok(())
+    }
+
+    /// (12) over the box, without the Jacobian (about a quarter of the work).
+    fn f_value_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        check_enclosure_dims("f enclosure", STATE_DIM, STATE_DIM, x, out)?;
+        write::<0>(out, self.enclosed_step::<0>(x, u)?);
+        Ok(())
+    }
+
+    /// (14) over the box, without the Jacobian.
+    fn h_value_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        check_enclosure_dims("h enclosure", OUTPUT_DIM, STATE_DIM, x, out)?;
+        write::<0>(out, self.enclosed_output::<0>(x, u)?);
         Ok(())
     }
 }

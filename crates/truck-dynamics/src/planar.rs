@@ -10,6 +10,8 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use crate::error::{TruckError, finite_input};
 use crate::kinematics::{Geometry, WHEELS, wheel_gradients, wheel_kinematics};
 use crate::params::TruckParams;
+use crate::enclosure::{EnclosedWheel, enclosed_curves};
+use crate::tyre::LumpedCurves;
 
 /// States: `x = [V_x, V_y, γ]` (m/s, m/s, rad/s).
 pub const STATE_DIM: usize = 3;
@@ -152,16 +154,28 @@ pub struct PlanarTruck {
     params: TruckParams,
     geometry: Geometry,
     loads: [f64; WHEELS],
+    curves: [LumpedCurves; WHEELS],
 }
 
 impl PlanarTruck {
-    /// Validates `params` and precomputes the geometry and static loads.
+    /// Validates `params` and precomputes the geometry, the static loads and the tyre curves at
+    /// those loads.
     ///
     /// # Errors
     /// The validation error naming the parameter ([`TruckParams::validate`]).
     pub fn new(params: TruckParams) -> Result<Self, TruckError> {
         params.validate()?;
-        Ok(Self { geometry: Geometry::new(&params), loads: params.static_loads(), params })
+        let (geometry, loads) = (Geometry::new(&params), params.static_loads());
+        let mut curves = [params.tyre.lumped_curves(geometry.tyres[0], loads[0])?; WHEELS];
+        for (j, c) in curves.iter_mut().enumerate().skip(1) {
+            *c = params.tyre.lumped_curves(geometry.tyres[j], loads[j])?;
+        }
+        Ok(Self { geometry, loads, curves, params })
+    }
+
+    /// The tyre curves of each wheel position at its static load.
+    pub(crate) fn curves(&self) -> &[LumpedCurves; WHEELS] {
+        &self.curves
     }
 
     /// The validated parameters.
@@ -190,8 +204,8 @@ impl PlanarTruck {
         let mut out = BodyForces::default();
         for j in 0..WHEELS {
             let k = wheel_kinematics(g, j, x, input.delta, input.omega[j], p.rolling_radius, p.min_speed);
-            let fx = p.tyre.longitudinal_lumped(g.tyres[j], self.loads[j], k.slip)?;
-            let fy = p.tyre.lateral_lumped(g.tyres[j], self.loads[j], k.alpha)?;
+            let fx = self.curves[j].longitudinal(k.slip)?;
+            let fy = self.curves[j].lateral(k.alpha)?;
             let (c, s) = (k.cos_delta, k.sin_delta);
             let big_x = fx.force * c - fy.force * s;
             let big_y = fx.force * s + fy.force * c;
@@ -351,6 +365,8 @@ impl DifferentiableContinuousModel for PlanarTruck {
 pub struct TruckEkfModel {
     planar: PlanarTruck,
     ts: f64,
+    /// The tyre curves enclosed in intervals, for [`models::SecondOrderModel`].
+    enclosed: [EnclosedWheel; WHEELS],
 }
 
 impl TruckEkfModel {
@@ -363,7 +379,8 @@ impl TruckEkfModel {
         if !(ts.is_finite() && ts > 0.0) {
             return Err(ModelError::InvalidSamplingPeriod(ts).into());
         }
-        Ok(Self { planar: PlanarTruck::new(params)?, ts })
+        let planar = PlanarTruck::new(params)?;
+        Ok(Self { enclosed: enclosed_curves(&planar), planar, ts })
     }
 
     /// At the paper's period `T = 1 ms` ([`PAPER_SAMPLE_PERIOD`]).
@@ -384,6 +401,11 @@ impl TruckEkfModel {
     #[must_use]
     pub fn ts(&self) -> f64 {
         self.ts
+    }
+
+    /// The tyre curves of each wheel position, enclosed.
+    pub(crate) fn enclosed_curves(&self) -> &[EnclosedWheel; WHEELS] {
+        &self.enclosed
     }
 
     /// One Euler step `x + T·f_c(x, u)` (12).

@@ -258,9 +258,7 @@ impl Pac89Tyre {
     pub fn lateral(&self, fz: f64, alpha: f64) -> Result<TyreForce, TruckError> {
         finite_input("alpha (tyre slip angle)", alpha)?;
         let (fz_kn, k) = self.clamp(fz)?;
-        let curve = self.lateral_curve(fz_kn)?;
-        let (f, df) = curve.evaluate(alpha.to_degrees());
-        Ok(TyreForce { force: f, slope: df.to_degrees(), peak: curve.d }.scaled(k))
+        Ok(lateral_force(&self.lateral_curve(fz_kn)?, alpha, k))
     }
 
     /// Longitudinal force of one tyre at load `fz` \[N\] and slip ratio `slip` (unit slip,
@@ -271,9 +269,7 @@ impl Pac89Tyre {
     pub fn longitudinal(&self, fz: f64, slip: f64) -> Result<TyreForce, TruckError> {
         finite_input("s (tyre slip ratio)", slip)?;
         let (fz_kn, k) = self.clamp(fz)?;
-        let curve = self.longitudinal_curve(fz_kn)?;
-        let (f, df) = curve.evaluate(100.0 * slip);
-        Ok(TyreForce { force: f, slope: 100.0 * df, peak: curve.d }.scaled(k))
+        Ok(longitudinal_force(&self.longitudinal_curve(fz_kn)?, slip, k))
     }
 
     /// `n` identical tyres sharing the load `fz` \[N\] of one wheel position (dual tyres,
@@ -296,20 +292,54 @@ impl Pac89Tyre {
     }
 }
 
-impl Pac89Tyre {
-    /// The lateral curve of one of `tyres` tyres sharing the load `fz` \[N\] and the factor
-    /// `n·k` (tyres times the fade below the clamp) that [`Pac89Tyre::lateral_lumped`] applies.
-    pub(crate) fn lateral_lumped_curve(&self, tyres: u32, fz: f64) -> Result<(MagicFormula, f64), TruckError> {
-        let n = tyre_count(tyres)?;
-        let (fz_kn, k) = self.clamp(fz / n)?;
-        Ok((self.lateral_curve(fz_kn)?, n * k))
+/// `F_y` at slip angle `alpha` \[rad\] on `curve` (in degrees), times the fade `k`.
+fn lateral_force(curve: &MagicFormula, alpha: f64, k: f64) -> TyreForce {
+    let (f, df) = curve.evaluate(alpha.to_degrees());
+    TyreForce { force: f, slope: df.to_degrees(), peak: curve.d }.scaled(k)
+}
+
+/// `F_x` at slip ratio `slip` on `curve` (in percent), times the fade `k`.
+fn longitudinal_force(curve: &MagicFormula, slip: f64, k: f64) -> TyreForce {
+    let (f, df) = curve.evaluate(100.0 * slip);
+    TyreForce { force: f, slope: 100.0 * df, peak: curve.d }.scaled(k)
+}
+
+/// The curves of one wheel position at a fixed load, computed once: `n` tyres sharing the load,
+/// each on the curves at its share with the fade `k` below the clamp. Evaluations give what
+/// [`Pac89Tyre::lateral_lumped`] and [`Pac89Tyre::longitudinal_lumped`] give at that load, bit
+/// for bit, without deriving the coefficients again.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LumpedCurves {
+    /// The lateral curve of one tyre.
+    pub(crate) lateral: MagicFormula,
+    /// The longitudinal curve of one tyre.
+    pub(crate) longitudinal: MagicFormula,
+    /// The fade below the load clamp.
+    pub(crate) k: f64,
+    /// Tyres at the position.
+    pub(crate) n: f64,
+}
+
+impl LumpedCurves {
+    /// As [`Pac89Tyre::lateral_lumped`] at the curves' load.
+    pub(crate) fn lateral(&self, alpha: f64) -> Result<TyreForce, TruckError> {
+        finite_input("alpha (tyre slip angle)", alpha)?;
+        Ok(lateral_force(&self.lateral, alpha, self.k).scaled(self.n))
     }
 
-    /// As [`Pac89Tyre::lateral_lumped_curve`], for the longitudinal curve.
-    pub(crate) fn longitudinal_lumped_curve(&self, tyres: u32, fz: f64) -> Result<(MagicFormula, f64), TruckError> {
+    /// As [`Pac89Tyre::longitudinal_lumped`] at the curves' load.
+    pub(crate) fn longitudinal(&self, slip: f64) -> Result<TyreForce, TruckError> {
+        finite_input("s (tyre slip ratio)", slip)?;
+        Ok(longitudinal_force(&self.longitudinal, slip, self.k).scaled(self.n))
+    }
+}
+
+impl Pac89Tyre {
+    /// The curves of `tyres` tyres sharing the load `fz` \[N\] of one wheel position.
+    pub(crate) fn lumped_curves(&self, tyres: u32, fz: f64) -> Result<LumpedCurves, TruckError> {
         let n = tyre_count(tyres)?;
         let (fz_kn, k) = self.clamp(fz / n)?;
-        Ok((self.longitudinal_curve(fz_kn)?, n * k))
+        Ok(LumpedCurves { lateral: self.lateral_curve(fz_kn)?, longitudinal: self.longitudinal_curve(fz_kn)?, k, n })
     }
 }
 

@@ -8,10 +8,12 @@
 //! 2. the model's enclosures ([`SecondOrderModel`]) at the point `x̂` give `f̂ ≈ f(x̂)` and
 //!    `Â ≈ ∂f/∂x(x̂)` with their errors, and over `B` the Hessians; for every `x` of the set
 //!    `|f_i(x) − f̂_i − Â_i (x − x̂)| ≤ ρ_i = |f_i(x̂) − f̂_i| + Σ_j |J_ij − Â_ij| s_j +
-//!    ½ Σ_jk |H_ijk| s_j s_k` (N2), all in outward-rounded interval arithmetic;
+//!    ½ Σ_jk |H_ijk| s_j s_k` (N2), all in outward-rounded interval arithmetic; where the
+//!    Hessians do not hold on `B`, `Â` is the midpoint of the Jacobian's enclosure over `B` and
+//!    `ρ_i = |f_i(x̂) − f̂_i| + Σ_j |[J]_ij(B) − Â_ij| s_j` (N2');
 //! 3. so `x_{k+1} = Â x_k + b + e + w` with `b = f̂ − Â x̂` and `e` in the box `|e_i| ≤ ρ_i`
-//!    (plus the rounding of `b`), which lies in `𝓔(0, k·diag ρ²)` (`k` non-zero entries), and
-//!    `e + w ∈ 𝓔(0, Q')`, `Q' = (1 + 1/β) Q + (1 + β) k diag ρ²` (N3);
+//!    (plus the rounding of `b`), which lies in `𝓔(0, D)`, `D = diag(ρ_i Σ_j ρ_j)`, and
+//!    `e + w ∈ 𝓔(0, Q')`, `Q' = (1 + 1/β) Q + (1 + β) D` (N3);
 //! 4. the same for `h` about the predicted centre `x̄ = Â x̂ + b` over the predicted box `x̄ ± t`,
 //!    `t_i = √(Â P Âᵀ)_ii + ρ_i + √Q_ii` (N4): `y' = y − ĥ + Ĉ x̄ = Ĉ x_{k+1} + v'` with
 //!    `v' ∈ 𝓔(0, R')` (N5);
@@ -122,7 +124,7 @@ fn mid(v: Interval) -> f64 {
 /// `x̂ ± radius` (`ĝ_i` the value used, `ℓ` the row of the linearisation): the smaller of the
 /// second-order (Lagrange) bound, when the Hessians hold on the box, and the mean-value bound
 /// `|g_i(x̂) − ĝ_i| + Σ_j |[J]_ij(box) − ℓ_j| s_j` (N2'), valid for every Lipschitz function —
-/// both are bounds, so their minimum is one.
+/// both are bounds, so their minimum is one. Without Hessians only `point`'s values are read.
 fn remainder(
     point: &TaylorEnclosure,
     boxed: &TaylorEnclosure,
@@ -132,12 +134,13 @@ fn remainder(
     value_used: f64,
 ) -> Interval {
     let at_centre = Interval::point((point.value(i) - value_used).mag());
+    let second_order = boxed.hessian_valid();
     let (mut second, mut mean_value) = (at_centre, at_centre);
     let n = radius.len();
     for (j, l) in row.enumerate() {
-        second = second + Interval::point((point.jacobian(i, j) - l).mag()) * radius[j];
         mean_value = mean_value + Interval::point((boxed.jacobian(i, j) - l).mag()) * radius[j];
-        if boxed.hessian_valid() {
+        if second_order {
+            second = second + Interval::point((point.jacobian(i, j) - l).mag()) * radius[j];
             for k in 0..n {
                 let h = boxed.hessian(i, j, k).mag();
                 if h != 0.0 {
@@ -146,22 +149,75 @@ fn remainder(
             }
         }
     }
-    if boxed.hessian_valid() && second.hi() < mean_value.hi() { second } else { mean_value }
+    if second_order && second.hi() < mean_value.hi() { second } else { mean_value }
 }
 
-/// `Q' ⪰ Q ⊕ box(ρ)` (N3): `(1 + 1/β) Q + (1 + β) k diag ρ²`, rounding covered. `Q'` is `Q`
-/// itself when `ρ = 0`.
+/// Encloses a function over the box `centre ± radius` (`enclose` into `boxed`) and at the centre
+/// (into `point`, through `boxes`): the whole enclosure at the centre when the Hessians hold on
+/// the box, for the second-order bound, the value alone (`enclose_value`) otherwise — the
+/// mean-value bound (N2') needs no Jacobian at the centre, and the linearisation is then the
+/// midpoint of the box's Jacobian, which makes that bound least. Returns whether the
+/// linearisation comes from the centre's Jacobian; `what` names the function and `centre_name`
+/// the point in a [`EstimatorError::GuaranteeLost`].
+#[allow(clippy::too_many_arguments)]
+fn enclose_about<E, V>(
+    step: u64,
+    what: &str,
+    centre_name: &str,
+    (centre, radius): (&DVector<f64>, &DVector<f64>),
+    boxes: &mut [Interval],
+    (point, boxed): (&mut TaylorEnclosure, &mut TaylorEnclosure),
+    enclose: E,
+    enclose_value: V,
+) -> Result<bool, EstimatorError>
+where
+    E: Fn(&[Interval], &mut TaylorEnclosure) -> Result<(), models::ModelError>,
+    V: Fn(&[Interval], &mut TaylorEnclosure) -> Result<(), models::ModelError>,
+{
+    for (b, (c, r)) in boxes.iter_mut().zip(centre.iter().zip(radius.iter())) {
+        *b = Interval::centered(*c, *r);
+    }
+    enclose(boxes, boxed)?;
+    if !boxed.is_bounded() {
+        return Err(guarantee_lost(
+            step,
+            format!(
+                "the Jacobian or Hessian of {what} is unbounded on the bounding box about {centre_name} (a function \
+                 undefined there, or an overflow)"
+            ),
+        ));
+    }
+    for (b, c) in boxes.iter_mut().zip(centre.iter()) {
+        *b = Interval::point(*c);
+    }
+    let at_centre = boxed.hessian_valid();
+    let bounded = if at_centre {
+        enclose(boxes, point)?;
+        point.is_bounded()
+    } else {
+        enclose_value(boxes, point)?;
+        point.values_bounded()
+    };
+    if !bounded {
+        return Err(guarantee_lost(step, format!("{what} or its Jacobian is undefined or overflows at {centre_name}")));
+    }
+    Ok(at_centre)
+}
+
+/// `Q' ⪰ Q ⊕ box(ρ)` (N3): `(1 + 1/β) Q + (1 + β) D`, `D = diag(ρ_i Σ_j ρ_j)` the least-trace
+/// diagonal ellipsoid holding the box, rounding covered. `Q'` is `Q` itself when `ρ = 0`.
 fn inflate(q: &DMatrix<f64>, rho: &DVector<f64>, out: &mut DMatrix<f64>) {
     out.copy_from(q);
-    let k = rho.iter().filter(|r| **r > 0.0).count();
-    if k == 0 {
+    let mut sum = Interval::ZERO;
+    for r in rho.iter() {
+        sum = sum + Interval::point(*r);
+    }
+    let sum = sum.hi();
+    if sum <= 0.0 {
         return;
     }
-    let kf = k as f64;
-    let mut trace_d = Interval::ZERO;
-    for r in rho.iter() {
-        trace_d = trace_d + Interval::point(*r).sqr() * kf;
-    }
+    // A corner e of the box: Σ e_i²/(ρ_i S) = Σ ρ_i/S = 1 (S = Σ ρ_j, rounded up).
+    let trace_d = Interval::point(sum).sqr();
     // The trace-optimal weight: tr((1 + 1/β) Q + (1 + β) D) is least at β = √(tr Q / tr D). Any
     // β > 0 gives an outer bound, so its rounding does not matter; the factors are rounded up.
     let trace_q = q.trace().max(f64::MIN_POSITIVE);
@@ -175,7 +231,7 @@ fn inflate(q: &DMatrix<f64>, rho: &DVector<f64>, out: &mut DMatrix<f64>) {
         biggest = biggest.max(o.abs());
     }
     for (i, r) in rho.iter().enumerate() {
-        let box_part = (Interval::point(*r).sqr() * kf * f2).hi();
+        let box_part = (Interval::point(*r) * sum * f2).hi();
         out[(i, i)] += box_part;
         biggest = biggest.max(out[(i, i)].abs());
     }
@@ -289,29 +345,24 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         let ws = &mut self.ws;
         for j in 0..n {
             ws.radius[j] = Interval::point(est.shape[(j, j)].max(0.0)).sqrt().hi();
-            ws.boxed[j] = Interval::point(est.center[j]);
         }
-        model.f_enclosure(&ws.boxed, u, &mut ws.point_f)?;
-        if !ws.point_f.is_bounded() {
-            return Err(guarantee_lost(step, "f or its Jacobian is undefined or overflows at the set's centre"));
-        }
-        for j in 0..n {
-            ws.boxed[j] = Interval::centered(est.center[j], ws.radius[j]);
-        }
-        model.f_enclosure(&ws.boxed, u, &mut ws.box_f)?;
-        if !ws.box_f.is_bounded() {
-            return Err(guarantee_lost(
-                step,
-                "the Jacobian or Hessian of f is unbounded on the set's bounding box (a function undefined there, or an \
-                 overflow)",
-            ));
-        }
+        let at_centre = enclose_about(
+            step,
+            "f",
+            "the set's centre",
+            (&est.center, &ws.radius),
+            &mut ws.boxed,
+            (&mut ws.point_f, &mut ws.box_f),
+            |x, out| model.f_enclosure(x, u, out),
+            |x, out| model.f_value_enclosure(x, u, out),
+        )?;
+        let jacobian = if at_centre { &ws.point_f } else { &ws.box_f };
         for i in 0..n {
             let value = ws.point_f.value(i);
             let f_hat = mid(value);
             let mut b = Interval::point(f_hat);
             for j in 0..n {
-                let a = mid(ws.point_f.jacobian(i, j));
+                let a = mid(jacobian.jacobian(i, j));
                 ws.lin.a[(i, j)] = a;
                 b = b - Interval::point(a) * est.center[j];
             }
@@ -364,29 +415,23 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         let step = self.inner.steps() + 1;
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
-        for j in 0..n {
-            ws.boxed[j] = Interval::point(ws.xbar[j]);
-        }
-        model.h_enclosure(&ws.boxed, u, &mut ws.point_h)?;
-        if !ws.point_h.is_bounded() {
-            return Err(guarantee_lost(step, "h or its Jacobian is undefined or overflows at the predicted centre"));
-        }
-        for j in 0..n {
-            ws.boxed[j] = Interval::centered(ws.xbar[j], ws.radius[j]);
-        }
-        model.h_enclosure(&ws.boxed, u, &mut ws.box_h)?;
-        if !ws.box_h.is_bounded() {
-            return Err(guarantee_lost(
-                step,
-                "the Jacobian or Hessian of h is unbounded on the predicted set's bounding box",
-            ));
-        }
+        let at_centre = enclose_about(
+            step,
+            "h",
+            "the predicted centre",
+            (&ws.xbar, &ws.radius),
+            &mut ws.boxed,
+            (&mut ws.point_h, &mut ws.box_h),
+            |x, out| model.h_enclosure(x, u, out),
+            |x, out| model.h_value_enclosure(x, u, out),
+        )?;
+        let jacobian = if at_centre { &ws.point_h } else { &ws.box_h };
         for i in 0..m {
             let value = ws.point_h.value(i);
             let h_hat = mid(value);
             let mut y_lin = Interval::point(y[i]) - h_hat;
             for j in 0..n {
-                let c = mid(ws.point_h.jacobian(i, j));
+                let c = mid(jacobian.jacobian(i, j));
                 ws.lin.c[(i, j)] = c;
                 y_lin = y_lin + Interval::point(c) * ws.xbar[j];
             }
