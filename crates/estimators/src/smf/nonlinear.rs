@@ -388,10 +388,14 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             let mut xbar = Interval::point(ws.lin.b[(i, 0)]);
             let mut apa = Interval::ZERO;
             for j in 0..n {
-                xbar = xbar + Interval::point(ws.lin.a[(i, j)]) * est.center[j];
+                let a_ij = ws.lin.a[(i, j)];
+                xbar = xbar + Interval::point(est.center[j]) * a_ij;
+                // (P Aᵀ)_ji, then its product with a_ij: n² + n products per row, not 2n².
+                let mut pa = Interval::ZERO;
                 for k in 0..n {
-                    apa = apa + Interval::point(ws.lin.a[(i, j)]) * est.shape[(j, k)] * ws.lin.a[(i, k)];
+                    pa = pa + Interval::point(est.shape[(j, k)]) * ws.lin.a[(i, k)];
                 }
+                apa = apa + pa * a_ij;
             }
             let centre = mid(xbar);
             ws.xbar[i] = centre;
