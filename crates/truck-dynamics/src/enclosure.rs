@@ -26,7 +26,6 @@ use crate::kinematics::WHEELS;
 use crate::planar::{INPUT_DIM, OUTPUT_DIM, PlanarTruck, STATE_DIM, TruckEkfModel, TruckInput};
 use crate::tyre::MagicFormula;
 
-
 /// Interval enclosures of a Magic Formula curve's coefficients, with the slip's unit and the
 /// lumping folded in.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -7,10 +7,10 @@ use models::error::check_dims;
 use models::{ContinuousModel, DifferentiableContinuousModel, DifferentiableModel, Dims, DiscreteModel, ModelError};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
+use crate::enclosure::{EnclosedWheel, enclosed_curves};
 use crate::error::{TruckError, finite_input};
 use crate::kinematics::{Geometry, WHEELS, wheel_gradients, wheel_kinematics};
 use crate::params::TruckParams;
-use crate::enclosure::{EnclosedWheel, enclosed_curves};
 use crate::tyre::LumpedCurves;
 
 /// States: `x = [V_x, V_y, γ]` (m/s, m/s, rad/s).

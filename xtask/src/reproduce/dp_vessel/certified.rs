@@ -1,22 +1,28 @@
 //! Certified position and heading: the nonlinear set-membership filter `smf-nl`
 //! (docs/nonlinear-smf.md, Lagrange remainder with the vessel's Hessians) on the paper's Euler
-//! model (16)–(20), a Monte Carlo count of the steps whose truth leaves the published set.
+//! model (16)–(20), beside the EKF on the same data, with a Monte Carlo count of the steps whose
+//! truth leaves the published set.
 //!
 //! Not the paper's experiment. The truth is the filter's own model (what the guarantee covers),
 //! driven open loop by smooth thrusts (`τ_i = τ̂_i sin(t/(5 + i))`, `τ̂ = (2e5 N, 5e4 N, 1e6 N m)`),
 //! with every noise on the boundary of its ellipsoid: `w ∈ 𝓔(0, diag(1e−2, 1e−2, 1e−4, 1e−4,
 //! 1e−4, 1e−6))`, `v ∈ 𝓔(0, diag(1 m², 1 m², 1e−2 rad²))`, `x0` on the boundary of
 //! `𝓔(0, diag(4, 4, 1e−2, 1e−2, 1e−2, 1e−4))`. The certified intervals of `x`, `y`, `ψ` are the
-//! published set's bounding box (N1).
+//! published set's bounding box (N1). The EKF (first seed, for the figure) takes each shape as
+//! nine covariances (its ±3σ box is the ellipsoid's box, as on the truck).
 
 use std::fmt::Write as _;
+use std::path::Path;
 use std::time::Instant;
 
-use estimators::{EstimatorError, NonlinearSetMembershipFilter, Setup};
+use estimators::{EstimatorError, ExtendedKalmanFilter, NonlinearSetMembershipFilter, Setup};
 use models::{DiscreteModel, Interval, Noise, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+use svg_plot::{Chart, Grid, PALETTE, Series};
 use vessel_dynamics::{DiscreteVessel, VesselParams};
+
+use super::outputs::WriteFigure as _;
 
 /// Seeds and steps per seed of the full run and of `--quick`.
 const SIZES: [(usize, usize); 2] = [(20, 5000), (2, 1000)];
@@ -28,16 +34,27 @@ pub struct CertifiedVessel {
     pub seeds: usize,
     /// Certified steps taken.
     pub steps: usize,
-    /// Steps whose truth is outside the published ellipsoid (must be 0).
+    /// Steps whose truth is outside the published ellipsoid or a box interval (must be 0).
     pub misses: usize,
     /// Runs stopped by `GuaranteeLost`.
     pub guarantee_lost: usize,
-    /// Median width of the certified `x` interval \[m\].
+    /// Median width of the certified `x` interval over every step \[m\].
     pub median_x_width_m: f64,
     /// Median width of the certified `y` interval \[m\].
     pub median_y_width_m: f64,
     /// Median width of the certified `ψ` interval \[°\].
     pub median_psi_width_deg: f64,
+    /// Median `x` width over the first fifth of every run's steps and over the last fifth \[m\]:
+    /// whether the sets grow with the horizon.
+    pub x_width_first_last_fifth_m: (f64, f64),
+    /// The same for `ψ` \[°\].
+    pub psi_width_first_last_fifth_deg: (f64, f64),
+    /// Median width of the EKF's ±3σ band of `x` \[m\] and `ψ` \[°\] (first seed).
+    pub ekf_band_width: (f64, f64),
+    /// Steps where the EKF's ±3σ band of `x`, `y` or `ψ` misses the truth, of the first seed's.
+    pub ekf_band_misses: (usize, usize),
+    /// The figure `(file, caption)`.
+    pub figure: (String, String),
     /// Wall-clock seconds.
     pub seconds: f64,
 }
@@ -51,11 +68,16 @@ fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
 }
 
-/// Runs the Monte Carlo count.
+/// One step of the figure run: `t`, then per coordinate (`x`, `y`, `ψ`) the certified interval
+/// and the EKF's band `[x̂ − 3σ, x̂ + 3σ]`, both relative to the truth.
+type Row = [f64; 13];
+
+/// Runs the Monte Carlo count and writes the figure into `figures`.
 ///
 /// # Errors
-/// The model cannot be built, or a filter error other than `GuaranteeLost`.
-pub fn run(seed: u64, quick: bool) -> Result<CertifiedVessel, String> {
+/// The model cannot be built, a filter error other than `GuaranteeLost`, or the figure cannot be
+/// written.
+pub fn run(seed: u64, quick: bool, figures: &Path) -> Result<CertifiedVessel, String> {
     let (seeds, horizon) = SIZES[usize::from(quick)];
     let model = DiscreteVessel::paper(VesselParams::paper()).map_err(|e| format!("vessel: {e}"))?;
     let setup = Setup {
@@ -65,25 +87,26 @@ pub fn run(seed: u64, quick: bool) -> Result<CertifiedVessel, String> {
         measurement_noise: diag(&[1.0, 1.0, 1e-2]),
         inputs: 3,
     };
+    let ninth = |m: &DMatrix<f64>| m / 9.0;
+    let ekf_setup = Setup {
+        p0: ninth(&setup.p0),
+        process_noise: ninth(&setup.process_noise),
+        measurement_noise: ninth(&setup.measurement_noise),
+        ..setup.clone()
+    };
     let noise = |shape: &DMatrix<f64>| Noise::ellipsoid_boundary(shape.clone()).map_err(|e| format!("noise: {e}"));
     let (w, v, x0) = (noise(&setup.process_noise)?, noise(&setup.measurement_noise)?, noise(&setup.p0)?);
     let t0 = Instant::now();
-    let mut out = CertifiedVessel {
-        seeds,
-        steps: 0,
-        misses: 0,
-        guarantee_lost: 0,
-        median_x_width_m: f64::NAN,
-        median_y_width_m: f64::NAN,
-        median_psi_width_deg: f64::NAN,
-        seconds: 0.0,
-    };
+    let (mut steps, mut misses, mut lost) = (0, 0, 0);
     let mut widths: [Vec<f64>; 3] = Default::default();
+    let (mut x_ends, mut psi_ends): ([Vec<f64>; 2], [Vec<f64>; 2]) = Default::default();
+    let mut rows: Vec<Row> = Vec::new();
     let (mut u, mut next, mut y) = (DVector::zeros(3), DVector::zeros(6), DVector::zeros(3));
     for i in 0..seeds {
         let mut rng = Xoshiro256StarStar::seed_from_u64(seed.wrapping_add(2000 + i as u64));
         let mut x = &setup.x0 + x0.sample(&mut rng);
         let mut smf = NonlinearSetMembershipFilter::new(setup.clone()).map_err(|e| format!("smf-nl: {e}"))?;
+        let mut ekf = ExtendedKalmanFilter::new(ekf_setup.clone()).map_err(|e| format!("EKF: {e}"))?;
         for k in 0..horizon {
             let t = k as f64 * model.ts();
             for (j, amp) in [2e5, 5e4, 1e6].into_iter().enumerate() {
@@ -96,52 +119,136 @@ pub fn run(seed: u64, quick: bool) -> Result<CertifiedVessel, String> {
             let est = match smf.step(&model, &u, &y) {
                 Ok(est) => est,
                 Err(EstimatorError::GuaranteeLost { .. }) => {
-                    out.guarantee_lost += 1;
+                    lost += 1;
                     break;
                 }
                 Err(e) => return Err(format!("smf-nl, seed {i}, step {k}: {e}")),
             };
-            out.steps += 1;
+            steps += 1;
             let e = &x - &est.center;
             let d = est.shape.clone().cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)));
-            out.misses += usize::from(d.is_nan() || d > 1.0);
-            for (j, width) in widths.iter_mut().enumerate() {
-                let b = Interval::centered(est.center[j], Interval::point(est.shape[(j, j)].max(0.0)).sqrt().hi());
-                if !b.contains(x[j]) {
-                    out.misses += 1;
+            misses += usize::from(d.is_nan() || d > 1.0);
+            let boxes: [Interval; 3] = std::array::from_fn(|j| {
+                Interval::centered(est.center[j], Interval::point(est.shape[(j, j)].max(0.0)).sqrt().hi())
+            });
+            for (j, b) in boxes.iter().enumerate() {
+                misses += usize::from(!b.contains(x[j]));
+                widths[j].push(b.width());
+            }
+            let fifth = if 5 * k < horizon {
+                Some(0)
+            } else if 5 * k >= 4 * horizon {
+                Some(1)
+            } else {
+                None
+            };
+            if let Some(end) = fifth {
+                x_ends[end].push(boxes[0].width());
+                psi_ends[end].push(boxes[2].width());
+            }
+            if i == 0 {
+                let e = ekf.step(&model, &u, &y).map_err(|e| format!("EKF, step {k}: {e}"))?;
+                let mut row = [0.0; 13];
+                row[0] = t + model.ts();
+                for j in 0..3 {
+                    let s = 3.0 * e.covariance[(j, j)].max(0.0).sqrt();
+                    row[1 + 4 * j..5 + 4 * j].copy_from_slice(&[
+                        boxes[j].lo() - x[j],
+                        boxes[j].hi() - x[j],
+                        e.center[j] - s - x[j],
+                        e.center[j] + s - x[j],
+                    ]);
                 }
-                width.push(b.width());
+                rows.push(row);
             }
         }
     }
+    let ekf_misses = rows.iter().filter(|r| (0..3).any(|j| r[3 + 4 * j] > 0.0 || r[4 + 4 * j] < 0.0)).count();
+    let ekf_width = |j: usize| median(rows.iter().map(|r| r[4 + 4 * j] - r[3 + 4 * j]).collect());
+    let figure = figure(figures, &rows, seed).map_err(|e| format!("writing the certified vessel figure: {e}"))?;
     let [wx, wy, wpsi] = widths;
-    out.median_x_width_m = median(wx);
-    out.median_y_width_m = median(wy);
-    out.median_psi_width_deg = median(wpsi).to_degrees();
-    out.seconds = t0.elapsed().as_secs_f64();
-    Ok(out)
+    let [x_first, x_last] = x_ends;
+    let [psi_first, psi_last] = psi_ends;
+    Ok(CertifiedVessel {
+        seeds,
+        steps,
+        misses,
+        guarantee_lost: lost,
+        median_x_width_m: median(wx),
+        median_y_width_m: median(wy),
+        median_psi_width_deg: median(wpsi).to_degrees(),
+        x_width_first_last_fifth_m: (median(x_first), median(x_last)),
+        psi_width_first_last_fifth_deg: (median(psi_first).to_degrees(), median(psi_last).to_degrees()),
+        ekf_band_width: (ekf_width(0), ekf_width(2).to_degrees()),
+        ekf_band_misses: (ekf_misses, rows.len()),
+        figure,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Per coordinate, the certified interval and the EKF's ±3σ band minus the truth (a band holds the
+/// truth where it holds 0), over the first seed.
+fn figure(dir: &Path, rows: &[Row], seed: u64) -> std::io::Result<(String, String)> {
+    let col = |c: usize, scale: f64| rows.iter().map(|r| r[c] * scale).collect::<Vec<f64>>();
+    let t = col(0, 1.0);
+    let mut grid = Grid::new(1);
+    grid.title = format!(
+        "Supply vessel, bounded noise: certified intervals (smf-nl) and the EKF's ±3σ band, minus the truth \
+         (seed {})",
+        seed + 2000
+    );
+    for (j, (name, unit, scale)) in
+        [("x", "m", 1.0), ("y", "m", 1.0), ("ψ", "°", 180.0 / std::f64::consts::PI)].into_iter().enumerate()
+    {
+        let mut c = Chart::new(format!("{name} − truth"), "time t [s]", format!("{name} − {name}_true [{unit}]"));
+        c.width = 900;
+        let base = 1 + 4 * j;
+        c.add(Series::band("EKF ±3σ band", t.clone(), col(base + 2, scale), col(base + 3, scale), PALETTE[1]));
+        c.add(Series::band("certified interval", t.clone(), col(base, scale), col(base + 1, scale), PALETTE[2]));
+        c.add(Series::line("truth", t.clone(), vec![0.0; t.len()], PALETTE[0]));
+        grid.add(c);
+    }
+    let file = "certified_vessel.svg".to_owned();
+    grid.write(&dir.join(&file))?;
+    Ok((file, "Certified x, y, ψ intervals of smf-nl beside the EKF's ±3σ band, minus the truth (first seed)".into()))
 }
 
 /// The report's section.
 #[must_use]
 pub fn markdown(c: &CertifiedVessel) -> String {
     let mut md = String::from("## Certified position and heading (smf-nl, bounded noise)\n\n");
+    let (x_first, x_last) = c.x_width_first_last_fifth_m;
+    let (psi_first, psi_last) = c.psi_width_first_last_fifth_deg;
+    let trend = if x_last > 1.5 * x_first {
+        "the sets grow with the horizon"
+    } else if x_last < x_first / 1.5 {
+        "the sets contract over the horizon"
+    } else {
+        "the widths stay of one size over the horizon"
+    };
     let _ = writeln!(
         md,
         "Not the paper's experiment: the nonlinear set-membership filter `smf-nl` on the Euler model (16)–(20) \
          (Lagrange remainder: the vessel encloses its Hessians). The truth is the filter's own model driven open \
          loop by smooth thrusts, every noise on the boundary of its ellipsoid (w: diag(1e−2, 1e−2, 1e−4, 1e−4, \
          1e−4, 1e−6), v: diag(1 m², 1 m², 1e−2 rad²)); the certified intervals of x, y, ψ are the published set's \
-         bounding box.\n\n\
+         bounding box. The EKF beside it (first seed) takes each shape as nine covariances, so that its ±3σ box \
+         is the ellipsoid's box.\n\n\
          | quantity | value |\n|---|---|\n\
          | seeds × steps | {} seeds, {} steps |\n\
          | truth outside the published ellipsoid or a box interval | **{}** |\n\
          | runs stopped by GuaranteeLost | {} |\n\
          | median certified width of x / y / ψ | {:.3} m / {:.3} m / {:.3}° |\n\
+         | median certified x width, first / last fifth of the steps | {:.3} m / {:.3} m |\n\
+         | median certified ψ width, first / last fifth of the steps | {:.3}° / {:.3}° |\n\
+         | median EKF ±3σ band width of x / ψ (first seed) | {:.3} m / {:.3}° |\n\
+         | steps where the EKF's band misses x, y or ψ (first seed) | {} of {} |\n\
          | wall time | {:.1} s |\n\n\
-         The count is the point here; the intervals are wide and grow with the horizon (in a 5000-step run the \
-         median x width was 76 m against 34 m over 1000 steps, with ±1 m position noise): the published \
-         ellipsoids of this setting do not contract to the measurements, which the count does not hide.\n",
+         The count is the point here: {trend} (x: {x_first:.2} m → {x_last:.2} m, with ±1 m position noise). The \
+         certified intervals are {:.1} times as wide as the EKF's ±3σ band in x. Where the certified ψ interval is \
+         far wider than the heading measurement's ±5.7°, the trace objective of (29), which adds m² to rad², \
+         spends nothing on the heading, and the heading's width feeds the position's remainder through the \
+         Hessians (docs/nonlinear-smf.md, \"The vessel\").\n\n![{}](figures/{})\n",
         c.seeds,
         c.steps,
         c.misses,
@@ -149,7 +256,18 @@ pub fn markdown(c: &CertifiedVessel) -> String {
         c.median_x_width_m,
         c.median_y_width_m,
         c.median_psi_width_deg,
-        c.seconds
+        x_first,
+        x_last,
+        psi_first,
+        psi_last,
+        c.ekf_band_width.0,
+        c.ekf_band_width.1,
+        c.ekf_band_misses.0,
+        c.ekf_band_misses.1,
+        c.seconds,
+        c.median_x_width_m / c.ekf_band_width.0,
+        c.figure.1,
+        c.figure.0
     );
     md
 }

@@ -205,7 +205,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         .map_err(|e| format!("writing the comparison figures: {e}"))?;
     let claims = report::claims(&results);
     eprintln!("dp-vessel: certified position and heading (smf-nl) …");
-    let certified = certified::run(seed, quick)?;
+    let certified = certified::run(seed, quick, &out.join("figures"))?;
     let summary = Summary {
         quick,
         seed,
@@ -278,6 +278,7 @@ impl Summary {
                 "guarantee_lost": self.certified.guarantee_lost,
                 "median_x_width_m": r(self.certified.median_x_width_m),
                 "median_psi_width_deg": r(self.certified.median_psi_width_deg),
+                "ekf_band_misses": self.certified.ekf_band_misses,
             },
         })
     }
