@@ -245,10 +245,8 @@ pub fn markdown(c: &CertifiedVessel) -> String {
          | steps where the EKF's band misses x, y or ψ (first seed) | {} of {} |\n\
          | wall time | {:.1} s |\n\n\
          The count is the point here: {trend} (x: {x_first:.2} m → {x_last:.2} m, with ±1 m position noise). The \
-         certified intervals are {:.1} times as wide as the EKF's ±3σ band in x. Where the certified ψ interval is \
-         far wider than the heading measurement's ±5.7°, the trace objective of (29), which adds m² to rad², \
-         spends nothing on the heading, and the heading's width feeds the position's remainder through the \
-         Hessians (docs/nonlinear-smf.md, \"The vessel\").\n\n![{}](figures/{})\n",
+         certified intervals are {:.1} times as wide as the EKF's ±3σ band in x. Why the sets grow is not yet \
+         explained (docs/nonlinear-smf.md, \"The vessel\": one hypothesis tested and refuted).\n\n![{}](figures/{})\n",
         c.seeds,
         c.steps,
         c.misses,
