@@ -150,6 +150,28 @@ pub enum EstimatorError {
         /// Why, naming the function and the bound.
         reason: String,
     },
+    /// The nonlinear set-membership filter's set lies wholly outside the state's declared bounds
+    /// ([`NonlinearSetMembershipFilter::with_state_bounds`](crate::NonlinearSetMembershipFilter::with_state_bounds)):
+    /// the data, the noise bounds or the state bounds contradict each other. The filter is
+    /// unchanged.
+    #[error(
+        "step {step}: the set's interval [{set_lower:e}, {set_upper:e}] of state {state} lies outside its declared \
+         bounds [{bound_lower:e}, {bound_upper:e}]: the data, the noise bounds or the state bounds are wrong"
+    )]
+    OutsideStateBounds {
+        /// The step (1 for the first).
+        step: u64,
+        /// The state's index (0-based).
+        state: usize,
+        /// The set's interval of that state (its bounding box).
+        set_lower: f64,
+        /// Its upper end.
+        set_upper: f64,
+        /// The declared bounds.
+        bound_lower: f64,
+        /// Their upper end.
+        bound_upper: f64,
+    },
     /// A scalar setting of an estimator is out of range (for example the UKF's `α`).
     #[error("invalid setting {what} = {value}: must be {requirement}")]
     InvalidSetting {

@@ -134,6 +134,10 @@ pub struct SetMembershipSettings {
     pub solver: SmfSolver,
     /// What a step does with data that contradict the noise bounds (default: an error).
     pub inconsistency: InconsistencyPolicy,
+    /// `(lower, upper)`: bounds the true state always respects (length `n` each, ±∞ where none),
+    /// for `smf-nl` only ([`NonlinearSetMembershipFilter::with_state_bounds`], docs/nonlinear-smf.md
+    /// (N1')); the linear filters refuse them.
+    pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
 }
 
 /// The known range of the input, `lower ≤ u ≤ upper` componentwise.
@@ -368,6 +372,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
+            no_state_bounds(e, &s)?;
             set_membership!(e, s.solver, s.inconsistency, |t| SetMembershipFilter::with_solver(setup, t))
         },
     },
@@ -401,6 +406,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
+            no_state_bounds(e, &s)?;
             set_membership!(e, s.solver, s.inconsistency, |t| yang_li::with_input(setup, t))
         },
     },
@@ -493,16 +499,17 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
             let checks = DataChecks::with_policy(s.inconsistency);
+            let bounds = s.state_bounds.as_ref();
             Ok(match solver(s.solver)? {
                 Solver::Two(t) => {
                     let mut f = NonlinearSetMembershipFilter::with_solver(setup, t)?;
                     f.set_data_checks(checks)?;
-                    on_second_order(e, f)
+                    on_second_order(e, with_state_bounds(f, bounds)?)
                 }
                 Solver::Sdp(t) => {
                     let mut f = NonlinearSetMembershipFilter::with_solver(setup, t)?;
                     f.set_data_checks(checks)?;
-                    on_second_order(e, f)
+                    on_second_order(e, with_state_bounds(f, bounds)?)
                 }
             })
         },
@@ -664,6 +671,32 @@ fn with_policy<S: crate::smf::UpdateSolver>(
 
 /// A row's build function given another row's settings (never: [`EstimatorEntry::build`] checks
 /// the kind first).
+/// The state bounds are `smf-nl`'s (N1'): a linear filter has no remainder for them to bound, so
+/// it refuses them rather than ignore them.
+fn no_state_bounds(e: &'static EstimatorEntry, s: &SetMembershipSettings) -> Result<(), EstimatorError> {
+    match s.state_bounds {
+        Some(_) => Err(EstimatorError::InvalidConfiguration {
+            estimator: e.name,
+            message: format!(
+                "state bounds are used by {} only (they bound its linearisation remainder); {} is linear",
+                names::SMF_NL,
+                e.name
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
+fn with_state_bounds<S: crate::smf::UpdateSolver>(
+    f: NonlinearSetMembershipFilter<S>,
+    bounds: Option<&(DVector<f64>, DVector<f64>)>,
+) -> Result<NonlinearSetMembershipFilter<S>, EstimatorError> {
+    match bounds {
+        Some((lower, upper)) => f.with_state_bounds(lower.as_slice(), upper.as_slice()),
+        None => Ok(f),
+    }
+}
+
 fn wrong_settings(e: &'static EstimatorEntry) -> EstimatorError {
     EstimatorError::WrongSettings { estimator: e.name, expected: e.settings.describe(), given: "other settings" }
 }

@@ -2,7 +2,9 @@
 //! its remainder bound exact on a quadratic map (closed form), containment with every noise on the
 //! boundary of its ellipsoid (the supply vessel and the quadratic map), honest refusals (a Hessian
 //! unbounded on the set, bad data) that leave the filter unchanged; the truck through a slalom
-//! (mean-value remainder: its slip ratio has a kink), and its refusal when `V_x` may be ≤ 0.
+//! (mean-value remainder: its slip ratio has a kink), and its refusal when `V_x` may be ≤ 0; declared
+//! state bounds: the vessel with speed limits stays bounded where it grows without them, bounds that
+//! do not cut the set change nothing, a set outside them is refused.
 
 use estimators::{EstimatorError, NonlinearSetMembershipFilter, SetEstimate, SetMembershipFilter, Setup, registry};
 use models::{
@@ -325,4 +327,103 @@ fn a_truck_set_that_may_hold_v_x_le_0_is_refused_and_the_filter_is_unchanged() {
     let mut f = NonlinearSetMembershipFilter::new(truck_setup(model.ts(), [0.1, 0.1, 0.01])).unwrap();
     f.step(&model, &u, &dvector![19.44, 0.0, 0.0]).unwrap();
     assert!(f.remainders().process.iter().all(|r| *r > 0.0 && *r < 1e-3), "{:?}", f.remainders());
+}
+
+/// The supply vessel's setup of the reproduction, its heading `psi0`.
+fn vessel_setup(psi0: f64) -> Setup {
+    let q = DMatrix::from_diagonal(&dvector![1e-2, 1e-2, 1e-4, 1e-4, 1e-4, 1e-6]);
+    let r = DMatrix::from_diagonal(&dvector![1.0, 1.0, 1e-2]);
+    let p0 = DMatrix::from_diagonal(&dvector![4.0, 4.0, 0.01, 0.01, 0.01, 1e-4]);
+    setup(dvector![0.0, 0.0, psi0, 0.0, 0.0, 0.0], p0, q, r, 3)
+}
+
+#[test]
+fn speed_limits_keep_the_vessel_set_from_growing_and_it_still_contains_the_truth() {
+    // At an oblique heading the unbounded velocity interval feeds the kinematics' remainder,
+    // which feeds the velocity interval (docs/nonlinear-smf.md, "The vessel"); declared speed
+    // limits (N1') cut the loop. Every noise on its boundary; both filters on the same data.
+    let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let s = vessel_setup(std::f64::consts::FRAC_PI_4);
+    let limits = [2.0, 2.0, 0.1];
+    let inf = f64::INFINITY;
+    let mut bounded = NonlinearSetMembershipFilter::new(s.clone())
+        .unwrap()
+        .with_state_bounds(&[-inf, -inf, -inf, -2.0, -2.0, -0.1], &[inf, inf, inf, 2.0, 2.0, 0.1])
+        .unwrap();
+    let mut free = NonlinearSetMembershipFilter::new(s.clone()).unwrap();
+    let mut rng = Xoshiro256StarStar::seed_from_u64(31);
+    let w = Noise::ellipsoid_boundary(s.process_noise.clone()).unwrap();
+    let v = Noise::ellipsoid_boundary(s.measurement_noise.clone()).unwrap();
+    let mut x = &s.x0 + Noise::ellipsoid_boundary(s.p0.clone()).unwrap().sample(&mut rng);
+    let (mut next, mut y) = (DVector::zeros(6), DVector::zeros(3));
+    for k in 0..400 {
+        let t = k as f64 * vessel.ts();
+        let u = DVector::from_fn(3, |i, _| [2e5, 5e4, 1e6][i] * (t / (5.0 + i as f64)).sin());
+        vessel.f(&x, &u, &mut next).unwrap();
+        x = &next + w.sample(&mut rng);
+        vessel.h(&x, &u, &mut y).unwrap();
+        y += v.sample(&mut rng);
+        assert!((0..3).all(|j| x[3 + j].abs() <= limits[j]), "step {k}: the truth breaks the speed limits");
+        for (name, f) in [("bounded", &mut bounded), ("free", &mut free)] {
+            let est = f.step(&vessel, &u, &y).unwrap_or_else(|e| panic!("{name}, step {k}: {e}"));
+            let d = distance(est, &x);
+            assert!(d <= 1.0, "{name}, step {k}: the truth is at distance {d} (> 1)");
+        }
+    }
+    let width = |f: &NonlinearSetMembershipFilter| 2.0 * f.estimate().shape[(0, 0)].sqrt();
+    let (wb, wf) = (width(&bounded), width(&free));
+    // Measured: 3.85 m with the limits (the linear filter at rest: 3.3 m), 26.8 m without.
+    assert!(wb < 5.0, "x width with the speed limits {wb} m");
+    assert!(wf > 3.0 * wb, "x width without them {wf} m, with them {wb} m");
+    assert!(bounded.remainders().process[0] < 0.2 * free.remainders().process[0]);
+}
+
+#[test]
+fn state_bounds_that_do_not_cut_the_set_change_nothing_and_a_set_outside_them_is_refused() {
+    let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let s = vessel_setup(0.3);
+    let far = NonlinearSetMembershipFilter::new(s.clone()).unwrap();
+    let mut far = far.with_state_bounds(&[-1e9; 6], &[1e9; 6]).unwrap();
+    let mut plain = NonlinearSetMembershipFilter::new(s).unwrap();
+    let u = dvector![1e5, 0.0, 0.0];
+    for k in 0..20 {
+        let y = dvector![0.01 * k as f64, 0.0, 0.3];
+        let a = far.step(&vessel, &u, &y).unwrap().clone();
+        let b = plain.step(&vessel, &u, &y).unwrap();
+        assert_eq!(a.center, b.center, "step {k}");
+        assert_eq!(a.shape, b.shape, "step {k}");
+    }
+    // A set about x₁ = 1 (±0.32) against the bound x₁ ∈ [5, 6].
+    let model = Quadratic { a: 0.2, reciprocal: false };
+    let s = setup(
+        dvector![0.0, 1.0],
+        DMatrix::identity(2, 2) * 0.1,
+        DMatrix::identity(2, 2) * 1e-3,
+        DMatrix::identity(2, 2) * 1e-2,
+        1,
+    );
+    let mut f =
+        NonlinearSetMembershipFilter::new(s.clone()).unwrap().with_state_bounds(&[-1.0, 5.0], &[1.0, 6.0]).unwrap();
+    let before = f.estimate().clone();
+    let e = f.step(&model, &dvector![0.0], &dvector![0.0, 0.9]).unwrap_err();
+    assert!(
+        matches!(e, EstimatorError::OutsideStateBounds { step: 1, state: 1, bound_lower: 5.0, bound_upper: 6.0, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("state 1"), "{e}");
+    assert_eq!(f.estimate().center, before.center);
+    assert_eq!(f.estimate().shape, before.shape);
+    // Bad bounds.
+    let new = || NonlinearSetMembershipFilter::new(s.clone()).unwrap();
+    let e = new().with_state_bounds(&[0.0], &[1.0]).unwrap_err();
+    assert!(
+        matches!(e, EstimatorError::DimensionMismatch { what: "state lower bounds", expected: 2, found: 1 }),
+        "{e}"
+    );
+    let e = new().with_state_bounds(&[0.0, 2.0], &[1.0, 1.0]).unwrap_err();
+    assert!(matches!(e, EstimatorError::InvalidSetting { what: "state lower bound", value: 2.0, .. }), "{e}");
+    let e = new().with_state_bounds(&[0.0, 0.0], &[1.0, f64::NAN]).unwrap_err();
+    assert!(matches!(e, EstimatorError::InvalidSetting { what: "state upper bound", .. }), "{e}");
+    let e = new().with_state_bounds(&[f64::INFINITY, 0.0], &[f64::INFINITY, 1.0]).unwrap_err();
+    assert!(matches!(e, EstimatorError::InvalidSetting { .. }), "{e}");
 }

@@ -230,7 +230,9 @@ const FILE_FORMATS: &str = "\
 Files:
   MODEL.toml  the discrete-time model x_{k+1} = a x_k + b u_k + w_k, y_{k+1} = c x_{k+1} + v_{k+1}:
               `a` (n×n), `b` (n×p), `c` (m×n), `q` (n×n), `r` (m×m), `p0` (n×n) as arrays of rows and
-              `x0` (length n); optional `u_lower`, `u_upper` (length p), the input range (yang-li).
+              `x0` (length n); optional `u_lower`, `u_upper` (length p), the input range (yang-li),
+              and `x_lower`, `x_upper` (length n, inf where none), bounds the true state always
+              respects, such as speed limits (smf-nl: docs/nonlinear-smf.md (N1')).
               Set-membership filters read q, r, p0 as ellipsoid shapes, the Kalman filter as
               covariances. The moving-horizon estimators (rmhe, mhe) read them as weights (r
               diagonal) and need a table `[mhe]` with the noise boxes `w_lower`, `w_upper` (length

@@ -10,7 +10,7 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use estimators::registry::{
-    self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
+    self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver, names,
 };
 use estimators::{AnyEstimator, DataChecks, EstimatorError, Setup};
 use nalgebra::DVector;
@@ -169,7 +169,10 @@ fn settings(
         path: model.path().to_owned(),
         message: format!("--estimator {} needs {what} in the model file (see README)", entry.name),
     };
-    let smf = SetMembershipSettings { solver: solver.unwrap_or_default(), ..SetMembershipSettings::default() };
+    // The state's range is the vehicle's, like `u_lower`: used by the estimator that can use it.
+    let state_bounds = if entry.name == names::SMF_NL { model.state_bounds.clone() } else { None };
+    let smf =
+        SetMembershipSettings { solver: solver.unwrap_or_default(), state_bounds, ..SetMembershipSettings::default() };
     Ok(match entry.settings {
         SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(smf)),
         SettingsKind::Unscented => model.ukf.map(EstimatorSettings::Unscented),

@@ -20,10 +20,13 @@ use crate::builtin::Builtin;
 use crate::error::{Error, Location};
 use crate::limits::Limits;
 
+/// A `(lower, upper)` pair of bounds.
+type Bounds = (DVector<f64>, DVector<f64>);
+
 /// The top-level keys of a model file that `port-est` reads itself; the rest of a model written
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
-pub const NOISE_KEYS: [&str; 8] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "mhe", "ukf"];
+pub const NOISE_KEYS: [&str; 10] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf"];
 
 impl std::fmt::Debug for Dynamics {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -58,6 +61,8 @@ struct ModelFile {
     x0: Spanned<Vec<f64>>,
     u_lower: Option<Spanned<Vec<f64>>>,
     u_upper: Option<Spanned<Vec<f64>>>,
+    x_lower: Option<Spanned<Vec<f64>>>,
+    x_upper: Option<Spanned<Vec<f64>>>,
     mhe: Option<Spanned<crate::mhe_table::MheTable>>,
     ukf: Option<Spanned<UkfTable>>,
     // The equation tables, read by `equation-models`.
@@ -113,6 +118,9 @@ pub struct Model {
     pub x0: DVector<f64>,
     /// The known input range `(u_lower, u_upper)`, if given.
     pub input_range: Option<(DVector<f64>, DVector<f64>)>,
+    /// Bounds `(x_lower, x_upper)` the true state always respects (±inf where none), if given:
+    /// used by `smf-nl` (docs/nonlinear-smf.md (N1')).
+    pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
     /// The moving-horizon settings of the `[mhe]` table, if given (checked structurally; the
     /// estimator validates them when built, see [`Model::estimator_error`]).
     pub mhe: Option<estimators::MheSettings>,
@@ -313,14 +321,56 @@ impl Ctx<'_> {
     }
 
     fn vector(&self, name: &str, v: &Spanned<Vec<f64>>, len: usize) -> Result<DVector<f64>, Error> {
+        self.vector_with(name, v, len, false)
+    }
+
+    /// As `vector`; `infinite`: ±inf allowed (a bound that is not there), NaN never.
+    fn vector_with(
+        &self,
+        name: &str,
+        v: &Spanned<Vec<f64>>,
+        len: usize,
+        infinite: bool,
+    ) -> Result<DVector<f64>, Error> {
         let x = v.get_ref();
         if x.len() != len {
             return Err(Error::at(self.at(v.span()), format!("`{name}`: expected {len} entries, found {}", x.len())));
         }
-        if let Some(j) = x.iter().position(|x| !x.is_finite()) {
-            return Err(Error::at(self.at(v.span()), format!("`{name}`: entry {} is not finite", j + 1)));
+        let bad = |x: &f64| if infinite { x.is_nan() } else { !x.is_finite() };
+        if let Some(j) = x.iter().position(bad) {
+            let what = if infinite { "not a number" } else { "not finite" };
+            return Err(Error::at(self.at(v.span()), format!("`{name}`: entry {} is {what}", j + 1)));
         }
         Ok(DVector::from_column_slice(x))
+    }
+
+    /// A pair of bound keys (`u_lower`, `u_upper`, say): both or neither, `len` entries each, not
+    /// empty — checked for every estimator, not only those that use it: an empty range is a
+    /// mistake in the file whatever runs on it.
+    fn range(
+        &self,
+        (lo_name, lo): (&str, &Option<Spanned<Vec<f64>>>),
+        (hi_name, hi): (&str, &Option<Spanned<Vec<f64>>>),
+        len: usize,
+        what: &str,
+        infinite: bool,
+    ) -> Result<Option<Bounds>, Error> {
+        match (lo, hi) {
+            (Some(lo), Some(hi)) => {
+                let (l, u) =
+                    (self.vector_with(lo_name, lo, len, infinite)?, self.vector_with(hi_name, hi, len, infinite)?);
+                if let Some(i) = (0..len).find(|&i| l[i] > u[i] || l[i] == f64::INFINITY || u[i] == f64::NEG_INFINITY) {
+                    let rel = if l[i] > u[i] { ">" } else { "and" };
+                    let message = format!("{lo_name}[{i}] = {} {rel} {hi_name}[{i}] = {}: {what} is empty", l[i], u[i]);
+                    return Err(Error::at(self.at(lo.span()), message));
+                }
+                Ok(Some((l, u)))
+            }
+            (None, None) => Ok(None),
+            (Some(v), None) | (None, Some(v)) => {
+                Err(Error::at(self.at(v.span()), format!("give both `{lo_name}` and `{hi_name}`, or neither")))
+            }
+        }
     }
 }
 
@@ -385,27 +435,15 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
     let r = cx.matrix("r", &f.r, Some(m), Some(m))?;
     let p0 = cx.matrix("p0", &f.p0, Some(n), Some(n))?;
     let x0 = cx.vector("x0", &f.x0, n)?;
-    let input_range = match (&f.u_lower, &f.u_upper) {
-        (Some(lo), Some(hi)) => {
-            let (l, u) = (cx.vector("u_lower", lo, p)?, cx.vector("u_upper", hi, p)?);
-            // Checked for every estimator, not only those that use the range: an empty box is a
-            // mistake in the file whatever runs on it.
-            if let Some(i) = (0..p).find(|&i| l[i] > u[i]) {
-                let message = format!("u_lower[{i}] = {} > u_upper[{i}] = {}: the input range is empty", l[i], u[i]);
-                return Err(Error::at(cx.at(lo.span()), message));
-            }
-            Some((l, u))
-        }
-        (None, None) => None,
-        (Some(v), None) | (None, Some(v)) => {
-            return Err(Error::at(cx.at(v.span()), "give both `u_lower` and `u_upper`, or neither"));
-        }
-    };
+    let input_range = cx.range(("u_lower", &f.u_lower), ("u_upper", &f.u_upper), p, "the input range", false)?;
+    let state_bounds = cx.range(("x_lower", &f.x_lower), ("x_upper", &f.x_upper), n, "the state's range", true)?;
     let mut keys = Vec::with_capacity(12);
     for (k, span) in [("q", f.q.span()), ("r", f.r.span()), ("p0", f.p0.span()), ("x0", f.x0.span())]
         .into_iter()
         .chain(f.u_lower.as_ref().map(|v| ("u_lower", v.span())))
         .chain(f.u_upper.as_ref().map(|v| ("u_upper", v.span())))
+        .chain(f.x_lower.as_ref().map(|v| ("x_lower", v.span())))
+        .chain(f.x_upper.as_ref().map(|v| ("x_upper", v.span())))
         .chain(f.a.as_ref().map(|v| ("a", v.span())))
         .chain(f.b.as_ref().map(|v| ("b", v.span())))
         .chain(f.c.as_ref().map(|v| ("c", v.span())))
@@ -443,7 +481,7 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         params.weights(n).map_err(|e| Error::at(cx.at(t.span()), format!("`ukf`: {e}")))?;
     }
     let source = Source { path: path.to_owned(), keys };
-    Ok(Model { dynamics, q, r, p0, x0, input_range, mhe, ukf, source })
+    Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, mhe, ukf, source })
 }
 
 /// The dynamics of a model file: its matrices `a`, `b`, `c`, or its `[model]` of equations.
@@ -579,5 +617,20 @@ mod tests {
     fn an_empty_input_range_is_refused_for_every_estimator() {
         let e = err(&format!("{MODEL}u_lower = [1.0]\nu_upper = [0.0]\n"));
         assert!(e.starts_with("m.toml:8:11: u_lower[0] = 1 > u_upper[0] = 0: the input range is empty"), "{e}");
+        // The state's bounds: ±inf allowed (no bound), NaN and empty ranges not, both or neither.
+        let m = parse_model(Path::new("m.toml"), &format!("{MODEL}x_lower = [-inf, -1.0]\nx_upper = [inf, 2.0]\n"))
+            .unwrap();
+        let (lo, hi) = m.state_bounds.clone().unwrap();
+        assert_eq!((lo.as_slice(), hi.as_slice()), (&[f64::NEG_INFINITY, -1.0][..], &[f64::INFINITY, 2.0][..]));
+        let e = err(&format!("{MODEL}x_lower = [0.0, nan]\nx_upper = [1.0, 1.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: `x_lower`: entry 2 is not a number"), "{e}");
+        let e = err(&format!("{MODEL}x_lower = [0.0, 2.0]\nx_upper = [1.0, 1.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: x_lower[1] = 2 > x_upper[1] = 1: the state's range is empty"), "{e}");
+        let e = err(&format!("{MODEL}x_lower = [inf, 0.0]\nx_upper = [inf, 1.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: x_lower[0] = inf and x_upper[0] = inf: the state's range is empty"), "{e}");
+        let e = err(&format!("{MODEL}x_upper = [1.0, 1.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: give both `x_lower` and `x_upper`, or neither"), "{e}");
+        let e = err(&format!("{MODEL}x_lower = [0.0]\nx_upper = [1.0]\n"));
+        assert!(e.starts_with("m.toml:8:11: `x_lower`: expected 2 entries, found 1"), "{e}");
     }
 }

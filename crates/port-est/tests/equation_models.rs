@@ -248,4 +248,20 @@ fn the_nonlinear_set_membership_filter_bounds_a_pendulum_written_as_equations() 
     // And the set does not blow up: the angle's interval stays within a few sensor widths.
     let widest = out.iter().skip(20).map(|r| r[5] - r[3]).fold(0.0, f64::max);
     assert!(widest < 0.2, "widest angle interval {widest}");
+    // The state's range in the file (omega within ±3 rad/s; the truth stays within ±2): still
+    // contained, never wider than without it; a range the data contradict is an error at its row.
+    assert!(truth.iter().all(|x| x[1].abs() < 3.0));
+    let with_range = |lo: f64, hi: f64| {
+        PENDULUM
+            .replace("r = [[1e-4]]\n", &format!("r = [[1e-4]]\nx_lower = [-inf, {lo:?}]\nx_upper = [inf, {hi:?}]\n"))
+    };
+    let bounded = rows(&run(&with_range(-3.0, 3.0), &data, "smf-nl").unwrap());
+    for (k, ((r, free), x)) in bounded.iter().zip(&out).zip(&truth).enumerate() {
+        for i in 0..2 {
+            assert!(r[3 + i] <= x[i] && x[i] <= r[5 + i], "bounded, step {k}: state {i} = {}", x[i]);
+            assert!(r[5 + i] - r[3 + i] <= (free[5 + i] - free[3 + i]) * (1.0 + 1e-9), "step {k}, state {i}");
+        }
+    }
+    let e = run(&with_range(5.0, 6.0), &data, "smf-nl").unwrap_err().to_string();
+    assert!(e.starts_with("d.csv:2:") && e.contains("state 1 lies outside its declared bounds"), "{e}");
 }

@@ -104,6 +104,13 @@ pub fn estimator_error(py: Python<'_>, e: &EstimatorError, row: Option<usize>) -
             let _ = value.setattr("probability", *probability);
             err
         }
+        EstimatorError::OutsideStateBounds { step, state, .. } => {
+            let err = InconsistentDataError::new_err(message);
+            let value = err.value(py);
+            let _ = value.setattr("step", *step);
+            let _ = value.setattr("state", *state);
+            err
+        }
         EstimatorError::NumericalFailure(_) => NumericalError::new_err(message),
         EstimatorError::Model(m) if is_numerical_model_error(m) => NumericalError::new_err(message),
         e if is_bad_input(e) => PyValueError::new_err(message),

@@ -73,6 +73,7 @@ impl ModelFile {
         let initial = Initial { x0: Some(&x0), P0: Some(&p0), Q: Some(&q), R: Some(&r) };
         let file = FileSettings {
             input_range: self.file.input_range.as_ref(),
+            state_bounds: self.file.state_bounds.as_ref(),
             mhe: self.file.mhe.as_ref(),
             ukf: self.file.ukf,
             source: Some(&self.file),

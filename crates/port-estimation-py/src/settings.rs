@@ -25,6 +25,8 @@ use crate::errors::value_error;
 pub struct FileSettings<'a> {
     /// `u_lower`, `u_upper`.
     pub input_range: Option<&'a (DVector<f64>, DVector<f64>)>,
+    /// `x_lower`, `x_upper` (used by `smf-nl`).
+    pub state_bounds: Option<&'a (DVector<f64>, DVector<f64>)>,
     /// The `[mhe]` table.
     pub mhe: Option<&'a MheSettings>,
     /// The `[ukf]` table (keywords override its entries).
@@ -37,7 +39,7 @@ pub struct FileSettings<'a> {
 pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
     match kind {
         SettingsKind::None => &[],
-        SettingsKind::SetMembership => &["solver", "inconsistency"],
+        SettingsKind::SetMembership => &["solver", "inconsistency", "x_lower", "x_upper"],
         SettingsKind::SetMembershipInputBox => &["solver", "inconsistency", "u_lower", "u_upper"],
         SettingsKind::MovingHorizon => &[
             "w_lower",
@@ -148,7 +150,19 @@ impl<'py> Kwargs<'py> {
     }
 }
 
-fn set_membership(kw: &Kwargs<'_>) -> PyResult<SetMembershipSettings> {
+/// `x_lower`, `x_upper` (keywords over the model file's) for `smf-nl`; the linear filters refuse
+/// them given as keywords (the registry says why) and do not read the file's.
+fn set_membership(
+    kw: &Kwargs<'_>,
+    entry: &EstimatorEntry,
+    states: usize,
+    file: Option<&(DVector<f64>, DVector<f64>)>,
+) -> PyResult<SetMembershipSettings> {
+    let state_bounds = match kw.bounds("x_lower", "x_upper", states)? {
+        Some(b) => Some(b),
+        None if entry.name == estimators::registry::names::SMF_NL => file.cloned(),
+        None => None,
+    };
     let solver = match kw.extract::<String>("solver", "a string")? {
         Some(name) => SmfSolver::by_name(&name).map_err(|e| value_error(e.to_string()))?,
         None => SmfSolver::default(),
@@ -163,7 +177,7 @@ fn set_membership(kw: &Kwargs<'_>) -> PyResult<SetMembershipSettings> {
             ],
         )?
         .unwrap_or_default();
-    Ok(SetMembershipSettings { solver, inconsistency })
+    Ok(SetMembershipSettings { solver, inconsistency, state_bounds })
 }
 
 fn moving_horizon(kw: &Kwargs<'_>, dims: Dims, file: Option<&MheSettings>) -> PyResult<MheSettings> {
@@ -324,9 +338,11 @@ pub fn settings(
     let kw = Kwargs::new(py, given)?;
     let settings = match entry.settings {
         SettingsKind::None => None,
-        SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(set_membership(&kw)?)),
+        SettingsKind::SetMembership => {
+            Some(EstimatorSettings::SetMembership(set_membership(&kw, entry, dims.states, file.state_bounds)?))
+        }
         SettingsKind::SetMembershipInputBox => {
-            let smf = set_membership(&kw)?;
+            let smf = set_membership(&kw, entry, dims.states, None)?;
             let (lower, upper) = match (kw.bounds("u_lower", "u_upper", dims.inputs)?, file.input_range) {
                 (Some(b), _) => b,
                 (None, Some(b)) => b.clone(),

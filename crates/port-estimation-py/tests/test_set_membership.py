@@ -119,3 +119,41 @@ def test_the_nonlinear_filter_holds_the_vessels_state_with_noise_on_the_boundary
     a = pe.Estimator("smf", lin, **kw).run(us, ys).center
     b = pe.Estimator("smf-nl", lin, **kw).run(us, ys).center
     np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+def test_declared_speed_limits_keep_the_vessels_set_from_growing():
+    # At an oblique heading, without bounds on the (unmeasured) velocities, the remainder of the
+    # kinematics feeds the set's growth (docs/nonlinear-smf.md, "The vessel"); x_lower/x_upper
+    # declare the speed limits (N1'). Both filters on the same data, noise on the boundary.
+    vessel = pe.Model.vessel()
+    rng = np.random.default_rng(8)
+    q = np.diag([1e-2, 1e-2, 1e-4, 1e-4, 1e-4, 1e-6])
+    r = np.diag([1.0, 1.0, 1e-2])
+    p0 = np.diag([4.0, 4.0, 0.01, 0.01, 0.01, 1e-4])
+    x0 = np.array([0.0, 0.0, np.pi / 4, 0.0, 0.0, 0.0])
+    inf = np.inf
+    kw = dict(x0=x0, P0=p0, Q=q, R=r)
+    lo, hi = [-inf, -inf, -inf, -2.0, -2.0, -0.1], [inf, inf, inf, 2.0, 2.0, 0.1]
+    bounded = pe.Estimator("smf-nl", vessel, x_lower=lo, x_upper=hi, **kw)
+    free = pe.Estimator("smf-nl", vessel, **kw)
+    x = x0 + on_boundary(rng, p0)
+    for k in range(300):
+        u = np.array([2e5, 5e4, 1e6]) * np.sin(0.1 * k / np.array([5.0, 6.0, 7.0]))
+        x = vessel.f(x, u) + on_boundary(rng, q)
+        y = vessel.h(x, u) + on_boundary(rng, r)
+        assert np.all(np.abs(x[3:]) <= [2.0, 2.0, 0.1])
+        for est in (bounded, free):
+            e = est.step(u, y)
+            assert _contained(e.center, e.shape, x) <= 1.0, k
+    wb, wf = 2 * np.sqrt(bounded.P[0, 0]), 2 * np.sqrt(free.P[0, 0])
+    assert wb < 5.0 and wf > 3 * wb, (wb, wf)
+    # The linear filter refuses them (it has no remainder to bound); a set outside them is
+    # inconsistent data, named with its step and state.
+    lin = pe.Model(np.array([[1.0, 0.1], [0.0, 0.9]]), np.array([[0.0], [0.1]]), np.array([[1.0, 0.0]]))
+    small = dict(x0=np.zeros(2), P0=np.eye(2), Q=np.eye(2) * 0.01, R=np.eye(1) * 0.1)
+    with pytest.raises(ValueError, match="smf-nl only"):
+        pe.Estimator("smf", lin, x_lower=[-1, -1], x_upper=[1, 1], **small)
+    est = pe.Estimator("smf-nl", lin, x_lower=[-inf, 5.0], x_upper=[inf, 6.0], **small)
+    with pytest.raises(pe.InconsistentDataError) as info:
+        est.step([0.0], [0.0])
+    assert info.value.step == 1 and info.value.state == 1

@@ -4,7 +4,9 @@
 //!
 //! One step from `x_k ∈ 𝓔(x̂, P)` with `x_{k+1} = f(x_k, u) + w`, `y = h(x_{k+1}, u) + v`:
 //!
-//! 1. the box `B = x̂ ± s`, `s_j = √P_jj` (rounded up), holds the set (N1);
+//! 1. the box `B = x̂ ± s`, `s_j = √P_jj` (rounded up), holds the set (N1); with declared state
+//!    bounds ([`NonlinearSetMembershipFilter::with_state_bounds`]) the box cut by them and
+//!    widened to hold `x̂` (N1');
 //! 2. the model's enclosures ([`SecondOrderModel`]) at the point `x̂` give `f̂ ≈ f(x̂)` and
 //!    `Â ≈ ∂f/∂x(x̂)` with their errors, and over `B` the Hessians; for every `x` of the set
 //!    `|f_i(x) − f̂_i − Â_i (x − x̂)| ≤ ρ_i = |f_i(x̂) − f̂_i| + Σ_j |J_ij − Â_ij| s_j +
@@ -91,6 +93,8 @@ pub struct NonlinearSetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
     q: DMatrix<f64>,
     r: DMatrix<f64>,
     settings: NonlinearSmfSettings,
+    /// Declared bounds on the state (N1'); `ENTIRE` where none.
+    bounds: Vec<Interval>,
     ws: Work,
     /// The input of the pending prediction (for `h(x, u)` at the update).
     u_last: DVector<f64>,
@@ -164,7 +168,7 @@ fn enclose_about<E, V>(
     step: u64,
     what: &str,
     centre_name: &str,
-    (centre, radius): (&DVector<f64>, &DVector<f64>),
+    (centre, radius, bounds): (&DVector<f64>, &mut DVector<f64>, &[Interval]),
     boxes: &mut [Interval],
     (point, boxed): (&mut TaylorEnclosure, &mut TaylorEnclosure),
     enclose: E,
@@ -174,8 +178,26 @@ where
     E: Fn(&[Interval], &mut TaylorEnclosure) -> Result<(), models::ModelError>,
     V: Fn(&[Interval], &mut TaylorEnclosure) -> Result<(), models::ModelError>,
 {
-    for (b, (c, r)) in boxes.iter_mut().zip(centre.iter().zip(radius.iter())) {
-        *b = Interval::centered(*c, *r);
+    for (j, (b, (&c, r))) in boxes.iter_mut().zip(centre.iter().zip(radius.iter_mut())).enumerate() {
+        *b = Interval::centered(c, *r);
+        let bound = bounds[j];
+        if bound != Interval::ENTIRE {
+            // (N1'): the box ∩ the bounds, with the centre (the segments from it must stay inside).
+            let (lo, hi) = (b.lo().max(bound.lo()), b.hi().min(bound.hi()));
+            if lo > hi {
+                return Err(EstimatorError::OutsideStateBounds {
+                    step,
+                    state: j,
+                    set_lower: b.lo(),
+                    set_upper: b.hi(),
+                    bound_lower: bound.lo(),
+                    bound_upper: bound.hi(),
+                });
+            }
+            *b = Interval::new(lo.min(c), hi.max(c));
+            let point = Interval::point(c);
+            *r = (point - Interval::point(b.lo())).hi().max((Interval::point(b.hi()) - point).hi()).min(*r);
+        }
     }
     enclose(boxes, boxed)?;
     if !boxed.is_bounded() {
@@ -274,6 +296,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             q,
             r,
             settings: NonlinearSmfSettings::default(),
+            bounds: vec![Interval::ENTIRE; n],
             ws,
             u_last: DVector::zeros(p),
         })
@@ -292,6 +315,43 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             });
         }
         self.settings = settings;
+        Ok(self)
+    }
+
+    /// Declares bounds `lower ≤ x ≤ upper` that the true state always respects — physical limits
+    /// such as a vessel's largest speed (±∞ where there is none). The remainders (N2), (N5) are
+    /// then bounded over the set's box intersected with these bounds (N1'), which keeps a set from
+    /// feeding its own growth through a state it does not measure; the published set is
+    /// guaranteed under this assumption too. A set that lies wholly outside the bounds is an
+    /// [`EstimatorError::OutsideStateBounds`].
+    ///
+    /// # Errors
+    /// [`EstimatorError::DimensionMismatch`] unless both have one entry per state;
+    /// [`EstimatorError::InvalidSetting`] for a NaN or a lower bound above its upper bound.
+    pub fn with_state_bounds(mut self, lower: &[f64], upper: &[f64]) -> Result<Self, EstimatorError> {
+        let n = self.dims.states;
+        for (what, found) in [("state lower bounds", lower.len()), ("state upper bounds", upper.len())] {
+            if found != n {
+                return Err(EstimatorError::DimensionMismatch { what, expected: n, found });
+            }
+        }
+        for (&lo, &hi) in lower.iter().zip(upper) {
+            for (what, value) in [("state lower bound", lo), ("state upper bound", hi)] {
+                if value.is_nan() {
+                    return Err(EstimatorError::InvalidSetting { what, value, requirement: "a number" });
+                }
+            }
+            if lo > hi || lo == f64::INFINITY || hi == f64::NEG_INFINITY {
+                return Err(EstimatorError::InvalidSetting {
+                    what: "state lower bound",
+                    value: lo,
+                    requirement: "finite or -inf, and not above its upper bound",
+                });
+            }
+        }
+        for (b, (&lo, &hi)) in self.bounds.iter_mut().zip(lower.iter().zip(upper)) {
+            *b = Interval::new(lo, hi);
+        }
         Ok(self)
     }
 
@@ -350,7 +410,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             step,
             "f",
             "the set's centre",
-            (&est.center, &ws.radius),
+            (&est.center, &mut ws.radius, &self.bounds),
             &mut ws.boxed,
             (&mut ws.point_f, &mut ws.box_f),
             |x, out| model.f_enclosure(x, u, out),
@@ -423,7 +483,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             step,
             "h",
             "the predicted centre",
-            (&ws.xbar, &ws.radius),
+            (&ws.xbar, &mut ws.radius, &self.bounds),
             &mut ws.boxed,
             (&mut ws.point_h, &mut ws.box_h),
             |x, out| model.h_enclosure(x, u, out),

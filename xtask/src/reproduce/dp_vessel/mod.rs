@@ -276,6 +276,8 @@ impl Summary {
                 "steps": self.certified.steps,
                 "misses": self.certified.misses,
                 "guarantee_lost": self.certified.guarantee_lost,
+                "truth_beyond_speed_limits": self.certified.truth_beyond_speed_limits,
+                "without_limits_misses": self.certified.without_limits.misses,
                 "median_x_width_m": r(self.certified.median_x_width_m),
                 "median_psi_width_deg": r(self.certified.median_psi_width_deg),
                 "ekf_band_misses": self.certified.ekf_band_misses,
