@@ -51,6 +51,10 @@ impl Snapshot {
                 _ => None,
             },
             fallback: e.status().outcome == SolveOutcome::FallbackUsed,
+            iterations: match e.details() {
+                StepDetails::SetMembership(r) => Some(r.iterations),
+                _ => None,
+            },
         }
     }
 }
@@ -66,6 +70,8 @@ pub struct Snapshot {
     pub tau: Option<[f64; 3]>,
     /// Whether the step fell back to a feasible multiplier because the solver failed.
     pub fallback: bool,
+    /// The solver's iterations at the step (set-membership filters).
+    pub iterations: Option<u32>,
 }
 
 /// The recorded run of one estimator: `k = 0` is the initial estimate.

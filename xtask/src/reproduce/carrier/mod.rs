@@ -64,6 +64,9 @@ pub struct ScenarioSummary {
     /// 99th percentile of the wall-clock step time per estimator, microseconds (over the same
     /// timed steps as the median in `estimators`): the tail that matters for a 1 ms loop.
     pub step_p99_us: Vec<(String, f64)>,
+    /// The SDP-backed filters' tail taken apart: the first step of a run (no previous solution
+    /// to warm-start from; it also builds (28) and sets the backend up) against the later ones.
+    pub sdp_tails: Vec<SdpTail>,
     /// Largest relative difference of `tr P` between the filter driven by each SDP backend and
     /// the one driven by the two-multiplier solver, along their own runs (their `P_k` histories
     /// are independent, so this measures trajectory divergence; per-step agreement of the solvers
@@ -199,12 +202,49 @@ fn run_scenario(sc: &Scenario, out: &Path) -> Result<(ScenarioSummary, Vec<Run>)
         notes: sc.notes.clone(),
         estimators: runs.iter().map(|r| metrics(r, &traj.states)).collect(),
         step_p99_us: runs.iter().map(|r| (r.label.clone(), quantile_us(&r.step_ns, 0.99))).collect(),
+        sdp_tails: runs.iter().filter(|r| r.label.starts_with(filters::PROPOSED_VIA)).map(SdpTail::of).collect(),
         solver_agreement,
         proposed_inside_reference17: inside as f64 / total.max(1) as f64,
         width_ratio_reference17: ratio_sum / total.max(1) as f64,
         figures,
     };
     Ok((summary, runs))
+}
+
+/// Where an SDP-backed filter's step times come from.
+#[derive(Debug, Clone, Serialize)]
+pub struct SdpTail {
+    /// The estimator's label.
+    pub estimator: String,
+    /// Median time of the runs' first steps \[µs\] (one per timing repeat).
+    pub first_step_median_us: f64,
+    /// 99th percentile over every later step \[µs\].
+    pub later_steps_p99_us: f64,
+    /// The solver's iterations per step (first run): median and largest.
+    pub iterations: (u32, u32),
+    /// Steps of the first run with more iterations than twice the median (restarts and the
+    /// transient).
+    pub long_steps: usize,
+}
+
+impl SdpTail {
+    fn of(run: &Run) -> Self {
+        // The timing repeats are appended one after the other, each of `per_run` steps.
+        let per_run = run.snapshots.len().saturating_sub(1).max(1);
+        let (first, later): (Vec<(usize, u64)>, Vec<(usize, u64)>) =
+            run.step_ns.iter().copied().enumerate().partition(|(i, _)| i % per_run == 0);
+        let ns = |v: Vec<(usize, u64)>| v.into_iter().map(|(_, t)| t).collect::<Vec<u64>>();
+        let mut its: Vec<u32> = run.snapshots.iter().skip(1).filter_map(|s| s.iterations).collect();
+        its.sort_unstable();
+        let median = its.get(its.len() / 2).copied().unwrap_or(0);
+        SdpTail {
+            estimator: run.label.clone(),
+            first_step_median_us: quantile_us(&ns(first), 0.5),
+            later_steps_p99_us: quantile_us(&ns(later), 0.99),
+            iterations: (median, its.last().copied().unwrap_or(0)),
+            long_steps: its.iter().filter(|&&i| i > 2 * median).count(),
+        }
+    }
 }
 
 /// The `p`-quantile (nearest rank) of a sample of nanoseconds, in microseconds.
