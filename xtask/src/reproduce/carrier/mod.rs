@@ -231,16 +231,17 @@ impl SdpTail {
     fn of(run: &Run) -> Self {
         // The timing repeats are appended one after the other, each of `per_run` steps.
         let per_run = run.snapshots.len().saturating_sub(1).max(1);
-        let (first, later): (Vec<(usize, u64)>, Vec<(usize, u64)>) =
-            run.step_ns.iter().copied().enumerate().partition(|(i, _)| i % per_run == 0);
-        let ns = |v: Vec<(usize, u64)>| v.into_iter().map(|(_, t)| t).collect::<Vec<u64>>();
+        let (mut first, mut later) = (Vec::new(), Vec::new());
+        for (i, &t) in run.step_ns.iter().enumerate() {
+            if i % per_run == 0 { first.push(t) } else { later.push(t) }
+        }
         let mut its: Vec<u32> = run.snapshots.iter().skip(1).filter_map(|s| s.iterations).collect();
         its.sort_unstable();
         let median = its.get(its.len() / 2).copied().unwrap_or(0);
         SdpTail {
             estimator: run.label.clone(),
-            first_step_median_us: quantile_us(&ns(first), 0.5),
-            later_steps_p99_us: quantile_us(&ns(later), 0.99),
+            first_step_median_us: quantile_us(&first, 0.5),
+            later_steps_p99_us: quantile_us(&later, 0.99),
             iterations: (median, its.last().copied().unwrap_or(0)),
             long_steps: its.iter().filter(|&&i| i > 2 * median).count(),
         }
