@@ -12,7 +12,7 @@ use models::{DifferentiableModel, DiscreteModel};
 use nalgebra::{DMatrix, DVector};
 
 /// The keys of a model file that `port-est` reads.
-const FOREIGN: &[&str] = &["x0", "p0", "q", "r", "u_lower", "u_upper", "mhe", "ukf"];
+const FOREIGN: &[&str] = &["x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf"];
 
 fn load(name: &str) -> EquationModel {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/models").join(name);

@@ -8,7 +8,7 @@ use equation_models::EquationModel;
 use models::{AnyModel, DifferentiableModel, Interval, SecondOrderModel, TaylorEnclosure, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
-const NOISE_KEYS: [&str; 8] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "mhe", "ukf"];
+const NOISE_KEYS: [&str; 10] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf"];
 
 fn vehicle(name: &str) -> EquationModel {
     let path = format!("{}/../../examples/models/{name}.toml", env!("CARGO_MANIFEST_DIR"));

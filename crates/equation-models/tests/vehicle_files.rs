@@ -12,7 +12,7 @@ use models::{AnyModel, DifferentiableModel, DiscreteModel, LinearModel, LinearTi
 use nalgebra::{DMatrix, DVector};
 
 /// The keys of a model file that `port-est` reads.
-const FOREIGN: &[&str] = &["x0", "p0", "q", "r", "u_lower", "u_upper", "mhe", "ukf"];
+const FOREIGN: &[&str] = &["x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf"];
 /// Random states and inputs per vehicle.
 const SAMPLES: usize = 64;
 /// Elementwise tolerance, relative to `max(|a|, |b|, largest entry of either matrix)`.
