@@ -139,7 +139,11 @@ pub struct UnscentedKalmanFilter {
     est: GaussianEstimate,
     report: UkfReport,
     // Buffers (allocated once).
+    /// The Cholesky factor of the published covariance when `chol_current`, else scratch.
     chol: DMatrix<f64>,
+    /// Whether `chol` is the factor of `est.covariance` (kept from the update that published it,
+    /// so the next prediction need not factorise it again).
+    chol_current: bool,
     sig: DMatrix<f64>,
     prop: DMatrix<f64>,
     zsig: DMatrix<f64>,
@@ -161,7 +165,12 @@ pub struct UnscentedKalmanFilter {
     x_new: DVector<f64>,
     p_new: DMatrix<f64>,
     p_new_chol: DMatrix<f64>,
-    dx: DVector<f64>,
+    /// Deviations of the sigma points (or their images) from a centre, one per column, and the
+    /// same columns times their weights `Wc_i`: the covariances are `dev_w devᵀ`.
+    dev_x: DMatrix<f64>,
+    dev_xw: DMatrix<f64>,
+    dev_z: DMatrix<f64>,
+    dev_zw: DMatrix<f64>,
     dz: DVector<f64>,
     innov: DVector<f64>,
     /// The input of the last prediction, for `h` in a following update.
@@ -178,12 +187,43 @@ fn factor_pd(src: &DMatrix<f64>, dst: &mut DMatrix<f64>) -> bool {
     dense::cholesky_in_place(dst).is_ok()
 }
 
-/// `out += w · a bᵀ` for vectors `a`, `b`.
-fn add_outer(out: &mut DMatrix<f64>, w: f64, a: &DVector<f64>, b: &DVector<f64>) {
-    for j in 0..b.len() {
-        let wb = w * b[j];
-        for i in 0..a.len() {
-            out[(i, j)] += wb * a[i];
+/// `dev = points − centre` column by column and `dev_w` = its columns times `Wc₀` (the first)
+/// and `Wc_i` (the others); `centre` is a vector (`Some`) or the first point (`None`, whose own
+/// deviation is then exactly 0, as the guard's sum leaves it out).
+fn deviations(
+    points: &DMatrix<f64>,
+    centre: Option<&DVector<f64>>,
+    (w0, wi): (f64, f64),
+    dev: &mut DMatrix<f64>,
+    dev_w: &mut DMatrix<f64>,
+) {
+    let rows = points.nrows();
+    let src = points.as_slice();
+    let (first, _) = src.split_at(rows);
+    let c = centre.map_or(first, |c| c.as_slice());
+    for (j, ((col, d), dw)) in src
+        .chunks_exact(rows)
+        .zip(dev.as_mut_slice().chunks_exact_mut(rows))
+        .zip(dev_w.as_mut_slice().chunks_exact_mut(rows))
+        .enumerate()
+    {
+        let w = if j == 0 { w0 } else { wi };
+        for (((d, dw), p), c) in d.iter_mut().zip(dw.iter_mut()).zip(col).zip(c) {
+            *d = p - c;
+            *dw = w * *d;
+        }
+    }
+}
+
+/// `out = Σ_j w_j points_j` (the weighted mean, `Wm₀` for the first point, `Wm_i` for the others).
+fn weighted_mean(points: &DMatrix<f64>, (w0, wi): (f64, f64), out: &mut DVector<f64>) {
+    let rows = points.nrows();
+    let out = out.as_mut_slice();
+    out.fill(0.0);
+    for (j, col) in points.as_slice().chunks_exact(rows).enumerate() {
+        let w = if j == 0 { w0 } else { wi };
+        for (o, p) in out.iter_mut().zip(col) {
+            *o += w * p;
         }
     }
 }
@@ -213,6 +253,7 @@ impl UnscentedKalmanFilter {
             est: GaussianEstimate::initial(x0, p0, StepDetails::Unscented(UkfReport::default())),
             report: UkfReport::default(),
             chol: nn(),
+            chol_current: false,
             sig: DMatrix::zeros(n, s),
             prop: DMatrix::zeros(n, s),
             zsig: DMatrix::zeros(m, s),
@@ -234,7 +275,10 @@ impl UnscentedKalmanFilter {
             x_new: DVector::zeros(n),
             p_new: nn(),
             p_new_chol: nn(),
-            dx: DVector::zeros(n),
+            dev_x: DMatrix::zeros(n, s),
+            dev_xw: DMatrix::zeros(n, s),
+            dev_z: DMatrix::zeros(m, s),
+            dev_zw: DMatrix::zeros(m, s),
             dz: DVector::zeros(m),
             innov: DVector::zeros(m),
             u_last: DVector::zeros(inputs),
@@ -303,20 +347,17 @@ impl UnscentedKalmanFilter {
     /// Sigma points (24) of `mean` with the lower factor `l` into `sig`.
     fn draw(sig: &mut DMatrix<f64>, mean: &DVector<f64>, l: &DMatrix<f64>, gamma: f64) {
         let n = mean.len();
-        for i in 0..n {
-            sig[(i, 0)] = mean[i];
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let d = gamma * l[(i, j)];
-                sig[(i, 1 + j)] = mean[i] + d;
-                sig[(i, 1 + n + j)] = mean[i] - d;
+        let (centre, rest) = sig.as_mut_slice().split_at_mut(n);
+        centre.copy_from_slice(mean.as_slice());
+        let (plus, minus) = rest.split_at_mut(n * n);
+        let mean = mean.as_slice();
+        for ((p, m), l) in plus.chunks_exact_mut(n).zip(minus.chunks_exact_mut(n)).zip(l.as_slice().chunks_exact(n)) {
+            for (((p, m), l), c) in p.iter_mut().zip(m.iter_mut()).zip(l).zip(mean) {
+                let d = gamma * l;
+                *p = c + d;
+                *m = c - d;
             }
         }
-    }
-
-    fn wm(&self, i: usize) -> f64 {
-        if i == 0 { self.wm0 } else { self.wi }
     }
 
     /// Time update into `x_pred`, `P⁻` (`p_pred`) and its factor `p_pred_chol`.
@@ -325,38 +366,31 @@ impl UnscentedKalmanFilter {
         model: &M,
         u: &DVector<f64>,
     ) -> Result<bool, EstimatorError> {
-        let (n, s) = (self.n, 2 * self.n + 1);
-        if !factor_pd(&self.est.covariance, &mut self.chol) {
-            return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
+        let s = 2 * self.n + 1;
+        if !self.chol_current {
+            if !factor_pd(&self.est.covariance, &mut self.chol) {
+                return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
+            }
+            self.chol_current = true;
         }
         Self::draw(&mut self.sig, &self.est.center, &self.chol, self.gamma);
         for j in 0..s {
-            self.xcol.copy_from(&self.sig.column(j));
+            let n = self.n;
+            self.xcol.as_mut_slice().copy_from_slice(&self.sig.as_slice()[j * n..(j + 1) * n]);
             model.f(&self.xcol, u, &mut self.fcol)?;
-            self.prop.set_column(j, &self.fcol);
+            self.prop.as_mut_slice()[j * n..(j + 1) * n].copy_from_slice(self.fcol.as_slice());
         }
-        if self.prop.iter().any(|v| !v.is_finite()) {
+        if self.prop.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's prediction of a sigma point is not finite"));
         }
-        self.x_pred.fill(0.0);
-        for j in 0..s {
-            let w = self.wm(j);
-            for i in 0..n {
-                self.x_pred[i] += w * self.prop[(i, j)];
-            }
-        }
+        weighted_mean(&self.prop, (self.wm0, self.wi), &mut self.x_pred);
         // P⁻ about the mean; the guard recomputes it about the central point.
         let mut guarded = false;
         for attempt in 0..2 {
+            let centre = (attempt == 0).then_some(&self.x_pred);
+            deviations(&self.prop, centre, (self.wc0, self.wi), &mut self.dev_x, &mut self.dev_xw);
             self.p_pred.copy_from(&self.q);
-            for j in usize::from(attempt == 1)..s {
-                for i in 0..n {
-                    let centre = if attempt == 0 { self.x_pred[i] } else { self.prop[(i, 0)] };
-                    self.dx[i] = self.prop[(i, j)] - centre;
-                }
-                let w = if j == 0 { self.wc0 } else { self.wi };
-                add_outer(&mut self.p_pred, w, &self.dx, &self.dx);
-            }
+            dense::mul_nt(1.0, &self.dev_xw, &self.dev_x, 1.0, &mut self.p_pred);
             dense::symmetrize(&mut self.p_pred);
             if factor_pd(&self.p_pred, &mut self.p_pred_chol) {
                 return Ok(guarded);
@@ -380,6 +414,7 @@ impl UnscentedKalmanFilter {
         let guarded = self.predict_into_buffers(model, u)?;
         std::mem::swap(&mut self.est.center, &mut self.x_pred);
         std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
+        self.chol_current = false;
         self.est.refresh_std_dev();
         self.report.guarded_prediction = guarded;
         self.report.guarded_innovation = false;
@@ -469,12 +504,15 @@ impl UnscentedKalmanFilter {
         if dense::max_asymmetry(covariance, dense::SYMMETRY_TOLERANCE).is_some() {
             return Err(EstimatorError::NotSymmetric { what: "covariance" });
         }
+        // `chol` is scratch here: it no longer holds the published covariance's factor.
+        self.chol_current = false;
         if !factor_pd(covariance, &mut self.chol) {
             return Err(EstimatorError::NotPositiveDefinite { what: "covariance" });
         }
         self.est.center.copy_from(mean);
         self.est.covariance.copy_from(covariance);
         dense::symmetrize(&mut self.est.covariance);
+        self.chol_current = false;
         self.est.refresh_std_dev();
         Ok(())
     }
@@ -508,44 +546,31 @@ impl UnscentedKalmanFilter {
         guarded_prediction: bool,
         step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        let (n, m, s) = (self.n, self.m, 2 * self.n + 1);
+        let s = 2 * self.n + 1;
         let u = u.unwrap_or(&self.u_last);
         // Redraw from (x⁻, P⁻) and map through h (29).
         Self::draw(&mut self.sig, &self.x_pred, &self.p_pred_chol, self.gamma);
         for j in 0..s {
-            self.xcol.copy_from(&self.sig.column(j));
+            let (n, m) = (self.n, self.m);
+            self.xcol.as_mut_slice().copy_from_slice(&self.sig.as_slice()[j * n..(j + 1) * n]);
             model.h(&self.xcol, u, &mut self.zcol)?;
-            self.zsig.set_column(j, &self.zcol);
+            self.zsig.as_mut_slice()[j * m..(j + 1) * m].copy_from_slice(self.zcol.as_slice());
         }
-        if self.zsig.iter().any(|v| !v.is_finite()) {
+        if self.zsig.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's output at a sigma point is not finite"));
         }
-        self.z_pred.fill(0.0);
-        for j in 0..s {
-            let w = self.wm(j);
-            for i in 0..m {
-                self.z_pred[i] += w * self.zsig[(i, j)];
-            }
-        }
-        // Pzz, Pxz (30)–(31); guard: about the central point.
+        weighted_mean(&self.zsig, (self.wm0, self.wi), &mut self.z_pred);
+        // Pzz, Pxz (30)–(31); guard: about the central point. X₀ = x⁻: the sigma points'
+        // centre is the same in both forms, and the first column of `dev_x` is exactly 0.
+        deviations(&self.sig, Some(&self.x_pred), (self.wc0, self.wi), &mut self.dev_x, &mut self.dev_xw);
         let mut guarded_innovation = false;
         let mut ok = false;
         for attempt in 0..2 {
+            let centre = (attempt == 0).then_some(&self.z_pred);
+            deviations(&self.zsig, centre, (self.wc0, self.wi), &mut self.dev_z, &mut self.dev_zw);
             self.pzz.copy_from(&self.r);
-            self.pxz.fill(0.0);
-            for j in usize::from(attempt == 1)..s {
-                for i in 0..m {
-                    let centre = if attempt == 0 { self.z_pred[i] } else { self.zsig[(i, 0)] };
-                    self.dz[i] = self.zsig[(i, j)] - centre;
-                }
-                for i in 0..n {
-                    // X₀ = x⁻: the centre is the same in both forms.
-                    self.dx[i] = self.sig[(i, j)] - self.x_pred[i];
-                }
-                let w = if j == 0 { self.wc0 } else { self.wi };
-                add_outer(&mut self.pzz, w, &self.dz, &self.dz);
-                add_outer(&mut self.pxz, w, &self.dx, &self.dz);
-            }
+            dense::mul_nt(1.0, &self.dev_zw, &self.dev_z, 1.0, &mut self.pzz);
+            dense::mul_nt(1.0, &self.dev_x, &self.dev_zw, 0.0, &mut self.pxz);
             dense::symmetrize(&mut self.pzz);
             if factor_pd(&self.pzz, &mut self.pzz_chol) {
                 ok = true;
@@ -565,6 +590,7 @@ impl UnscentedKalmanFilter {
             // The measurement is dropped: publish the prediction.
             std::mem::swap(&mut self.est.center, &mut self.x_pred);
             std::mem::swap(&mut self.est.covariance, &mut self.p_pred);
+            self.chol_current = false;
             self.est.refresh_std_dev();
             self.report.guarded_prediction = guarded_prediction;
             self.report.guarded_innovation = guarded_innovation;
@@ -606,6 +632,9 @@ impl UnscentedKalmanFilter {
         }
         std::mem::swap(&mut self.est.center, &mut self.x_new);
         std::mem::swap(&mut self.est.covariance, &mut self.p_new);
+        // `p_new_chol` is the factor of the covariance just published.
+        std::mem::swap(&mut self.chol, &mut self.p_new_chol);
+        self.chol_current = true;
         self.est.refresh_std_dev();
         self.report.guarded_prediction = guarded_prediction;
         self.report.guarded_innovation = guarded_innovation;

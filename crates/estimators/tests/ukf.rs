@@ -204,6 +204,37 @@ fn tracks_the_vessel_like_the_ekf_without_the_guard() {
     assert_eq!(ukf.report().guard_total, 0);
 }
 
+#[test]
+fn the_factor_kept_from_an_update_is_the_one_a_fresh_factorisation_gives() {
+    // A step keeps the Cholesky factor of the covariance it publishes for the next prediction.
+    // A second filter reset to its own estimate after every step (which drops that factor, so
+    // its next prediction factorises afresh) must stay equal bit for bit, through the paths that
+    // publish without an update (a prediction alone, an update alone after it) too.
+    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let (x0, p0, q, r) = vessel_setup();
+    let setup = Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 3 };
+    let mut kept = UnscentedKalmanFilter::new(setup.clone(), UkfParams::paper()).unwrap();
+    let mut fresh = UnscentedKalmanFilter::new(setup, UkfParams::paper()).unwrap();
+    for k in 0..60 {
+        let u = DVector::from_vec(vec![2e5, 5e4 * (k as f64 * 0.1).sin(), 3e6 * (k as f64 * 0.05).cos()]);
+        let y = DVector::from_vec(vec![0.01 * k as f64, -0.02 * k as f64, 0.005 * k as f64]);
+        for f in [&mut kept, &mut fresh] {
+            if k % 7 == 3 {
+                f.predict(&model, &u).unwrap();
+                f.update(&model, &y).unwrap();
+            } else if k % 11 == 5 {
+                f.predict(&model, &u).unwrap();
+            } else {
+                f.step(&model, &u, &y).unwrap();
+            }
+        }
+        let (c, p) = (fresh.estimate().center.clone(), fresh.estimate().covariance.clone());
+        fresh.reset(&c, &p).unwrap();
+        assert_eq!(kept.estimate().center, fresh.estimate().center, "step {k}");
+        assert_eq!(kept.estimate().covariance, fresh.estimate().covariance, "step {k}");
+    }
+}
+
 /// `f(x) = [x₀, x₁ + x₀², x₂]` with `β = −10 < −α²κ/n`: the unguarded `P⁻` is indefinite.
 struct Bend;
 impl DiscreteModel for Bend {
