@@ -33,6 +33,9 @@ pub(crate) struct GainWork {
     b2: DMatrix<f64>,
     b3: DMatrix<f64>,
     wn: DMatrix<f64>,
+    /// The `τ` (bits) whose gain `l`, `k` hold, after a successful [`GainWork::gain`] on the
+    /// data of the last [`GainWork::load`].
+    gain_tau: Option<[u64; 3]>,
 }
 
 impl GainWork {
@@ -56,11 +59,13 @@ impl GainWork {
             b2: nm(),
             b3: nm(),
             wn: nm(),
+            gain_tau: None,
         }
     }
 
     /// Precomputes the `τ`-independent products `X₁Cᵀ`, `QCᵀ`, `CX₁Cᵀ`, `CQCᵀ`.
     pub(crate) fn load(&mut self, x1: &DMatrix<f64>, q: &DMatrix<f64>, c: &DMatrix<f64>) {
+        self.gain_tau = None;
         dense_kernels::mul_nt(1.0, x1, c, 0.0, &mut self.x1c);
         dense_kernels::mul_nt(1.0, q, c, 0.0, &mut self.qc);
         dense_kernels::mul_nn(1.0, c, &self.x1c, 0.0, &mut self.cx1c);
@@ -70,6 +75,7 @@ impl GainWork {
     /// The gain (G1) for `τ` (after [`GainWork::load`]): fills `G`, `W`, `L`, `K`.
     /// `false` if `S` is not numerically positive definite or something is not finite.
     pub(crate) fn gain(&mut self, tau: [f64; 3], c: &DMatrix<f64>, r: &DMatrix<f64>) -> bool {
+        self.gain_tau = None;
         let [t1, t2, t3] = tau;
         // M Cᵀ = X₁Cᵀ/τ₁ + QCᵀ/τ₂ and N = C M Cᵀ without forming M.
         dense_kernels::lin2(self.mc.as_mut_slice(), 1.0 / t1, self.x1c.as_slice(), 1.0 / t2, self.qc.as_slice());
@@ -85,7 +91,17 @@ impl GainWork {
         dense_kernels::solve_right_lower(&mut self.w, &self.g);
         dense_kernels::lin2(self.l.as_mut_slice(), t3, self.w.as_slice(), 0.0, self.w.as_slice());
         dense_kernels::i_minus_lc(&self.l, c, &mut self.k);
-        self.w.iter().all(|v| v.is_finite())
+        let finite = self.w.as_slice().iter().all(|v| v.is_finite());
+        if finite {
+            self.gain_tau = Some(tau.map(f64::to_bits));
+        }
+        finite
+    }
+
+    /// Whether `l`, `k` already hold the gain for exactly this `τ` (same data, same `R`: the
+    /// caller passes the `R` of the last load throughout).
+    pub(crate) fn has_gain_for(&self, tau: [f64; 3]) -> bool {
+        self.gain_tau == Some(tau.map(f64::to_bits))
     }
 
     /// `g(τ)`, (D1) and (D2) after [`GainWork::load`]. `None` if the gain fails.

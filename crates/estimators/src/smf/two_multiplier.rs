@@ -521,7 +521,8 @@ impl UpdateSolver for TwoMultiplierSolver {
         let work = self.work.as_mut().expect("prepared");
         out.iterations = iters;
         out.tau = tau;
-        if work.gain(tau, pr.c, pr.r) {
+        // The last evaluation of the minimisation is usually at the returned τ: its gain stands.
+        if work.has_gain_for(tau) || work.gain(tau, pr.c, pr.r) {
             out.l.copy_from(&work.l);
             out.status = status;
         } else {
