@@ -196,7 +196,16 @@ impl PlanarTruck {
         self.loads
     }
 
-    fn body_forces(&self, x: [f64; 3], input: &TruckInput, gradients: bool) -> Result<BodyForces, TruckError> {
+    /// The body forces and (with `gradients`) their gradients. With `lateral_only` only `F_Y` and
+    /// its gradient are computed (`F_X`, `M_Z` stay 0): an unsteered wheel's longitudinal force
+    /// does not enter `ΣF_Y`, so its curve is not evaluated (its slip is still checked).
+    fn body_forces(
+        &self,
+        x: [f64; 3],
+        input: &TruckInput,
+        gradients: bool,
+        lateral_only: bool,
+    ) -> Result<BodyForces, TruckError> {
         check_body_state(x)?;
         input.validate()?;
         let p = &self.params;
@@ -204,6 +213,19 @@ impl PlanarTruck {
         let mut out = BodyForces::default();
         for j in 0..WHEELS {
             let k = wheel_kinematics(g, j, x, input.delta, input.omega[j], p.rolling_radius, p.min_speed);
+            if lateral_only && !g.steered[j] {
+                // sin δ = 0, cos δ = 1: F_Y = F_y, ∂F_Y = ∂F_y.
+                finite_input("s (tyre slip ratio)", k.slip)?;
+                let fy = self.curves[j].lateral(k.alpha)?;
+                out.fy += fy.force;
+                if gradients {
+                    let grad = wheel_gradients(g, j, &k, p.min_speed);
+                    for i in 0..3 {
+                        out.grad_fy[i] += fy.slope * grad.alpha[i];
+                    }
+                }
+                continue;
+            }
             let fx = self.curves[j].longitudinal(k.slip)?;
             let fy = self.curves[j].lateral(k.alpha)?;
             let (c, s) = (k.cos_delta, k.sin_delta);
@@ -234,7 +256,7 @@ impl PlanarTruck {
     /// [`TruckError::NonFiniteInput`] naming a non-finite state or input,
     /// [`TruckError::NonPositiveSpeed`] for `V_x ≤ 0`, [`TruckError::TyreOutOfRange`].
     pub fn derivative(&self, x: &Vector3<f64>, input: &TruckInput) -> Result<Vector3<f64>, TruckError> {
-        let f = self.body_forces([x[0], x[1], x[2]], input, false)?;
+        let f = self.body_forces([x[0], x[1], x[2]], input, false, false)?;
         Ok(self.derivative_from(x, &f))
     }
 
@@ -248,7 +270,7 @@ impl PlanarTruck {
     /// # Errors
     /// As [`PlanarTruck::derivative`].
     pub fn lateral_acceleration(&self, x: &Vector3<f64>, input: &TruckInput) -> Result<f64, TruckError> {
-        Ok(self.body_forces([x[0], x[1], x[2]], input, false)?.fy / self.params.mass)
+        Ok(self.body_forces([x[0], x[1], x[2]], input, false, true)?.fy / self.params.mass)
     }
 
     /// The measurement `h(x, u) = [V_x, a_y, γ]` (14).
@@ -272,7 +294,7 @@ impl PlanarTruck {
     /// # Errors
     /// As [`PlanarTruck::derivative`].
     pub fn jacobian(&self, x: &Vector3<f64>, input: &TruckInput) -> Result<Matrix3<f64>, TruckError> {
-        let f = self.body_forces([x[0], x[1], x[2]], input, true)?;
+        let f = self.body_forces([x[0], x[1], x[2]], input, true, false)?;
         Ok(self.jacobian_from(x, &f))
     }
 
@@ -297,7 +319,7 @@ impl PlanarTruck {
     /// # Errors
     /// As [`PlanarTruck::derivative`].
     pub fn measurement_jacobian(&self, x: &Vector3<f64>, input: &TruckInput) -> Result<Matrix3<f64>, TruckError> {
-        let f = self.body_forces([x[0], x[1], x[2]], input, true)?;
+        let f = self.body_forces([x[0], x[1], x[2]], input, true, true)?;
         Ok(self.measurement_jacobian_from(&f))
     }
 
@@ -459,7 +481,7 @@ impl DifferentiableModel for TruckEkfModel {
         jacobian: &mut DMatrix<f64>,
     ) -> Result<(), ModelError> {
         let (x, input) = read(x, u)?;
-        let forces = self.planar.body_forces([x[0], x[1], x[2]], &input, true)?;
+        let forces = self.planar.body_forces([x[0], x[1], x[2]], &input, true, false)?;
         let next = x + self.planar.derivative_from(&x, &forces) * self.ts;
         let jac = Matrix3::identity() + self.planar.jacobian_from(&x, &forces) * self.ts;
         check_dims("F", jacobian, 3, 3)?;
@@ -477,7 +499,7 @@ impl DifferentiableModel for TruckEkfModel {
         jacobian: &mut DMatrix<f64>,
     ) -> Result<(), ModelError> {
         let (x, input) = read(x, u)?;
-        let forces = self.planar.body_forces([x[0], x[1], x[2]], &input, true)?;
+        let forces = self.planar.body_forces([x[0], x[1], x[2]], &input, true, true)?;
         let y = Vector3::new(x[0], forces.fy / self.planar.params.mass, x[2]);
         let h = self.planar.measurement_jacobian_from(&forces);
         check_dims("H", jacobian, 3, 3)?;
