@@ -669,8 +669,6 @@ fn with_policy<S: crate::smf::UpdateSolver>(
     filter
 }
 
-/// A row's build function given another row's settings (never: [`EstimatorEntry::build`] checks
-/// the kind first).
 /// The state bounds are `smf-nl`'s (N1'): a linear filter has no remainder for them to bound, so
 /// it refuses them rather than ignore them.
 fn no_state_bounds(e: &'static EstimatorEntry, s: &SetMembershipSettings) -> Result<(), EstimatorError> {
@@ -687,6 +685,7 @@ fn no_state_bounds(e: &'static EstimatorEntry, s: &SetMembershipSettings) -> Res
     }
 }
 
+/// `f` with the settings' state bounds, if any.
 fn with_state_bounds<S: crate::smf::UpdateSolver>(
     f: NonlinearSetMembershipFilter<S>,
     bounds: Option<&(DVector<f64>, DVector<f64>)>,
@@ -697,6 +696,8 @@ fn with_state_bounds<S: crate::smf::UpdateSolver>(
     }
 }
 
+/// A row's build function given another row's settings (never: [`EstimatorEntry::build`] checks
+/// the kind first).
 fn wrong_settings(e: &'static EstimatorEntry) -> EstimatorError {
     EstimatorError::WrongSettings { estimator: e.name, expected: e.settings.describe(), given: "other settings" }
 }

@@ -366,7 +366,7 @@ impl UnscentedKalmanFilter {
         model: &M,
         u: &DVector<f64>,
     ) -> Result<bool, EstimatorError> {
-        let s = 2 * self.n + 1;
+        let (n, s) = (self.n, 2 * self.n + 1);
         if !self.chol_current {
             if !factor_pd(&self.est.covariance, &mut self.chol) {
                 return Err(EstimatorError::NumericalFailure("the covariance is not positive definite"));
@@ -375,7 +375,6 @@ impl UnscentedKalmanFilter {
         }
         Self::draw(&mut self.sig, &self.est.center, &self.chol, self.gamma);
         for j in 0..s {
-            let n = self.n;
             self.xcol.as_mut_slice().copy_from_slice(&self.sig.as_slice()[j * n..(j + 1) * n]);
             model.f(&self.xcol, u, &mut self.fcol)?;
             self.prop.as_mut_slice()[j * n..(j + 1) * n].copy_from_slice(self.fcol.as_slice());
@@ -512,7 +511,6 @@ impl UnscentedKalmanFilter {
         self.est.center.copy_from(mean);
         self.est.covariance.copy_from(covariance);
         dense::symmetrize(&mut self.est.covariance);
-        self.chol_current = false;
         self.est.refresh_std_dev();
         Ok(())
     }
@@ -546,12 +544,11 @@ impl UnscentedKalmanFilter {
         guarded_prediction: bool,
         step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        let s = 2 * self.n + 1;
+        let (n, m, s) = (self.n, self.m, 2 * self.n + 1);
         let u = u.unwrap_or(&self.u_last);
         // Redraw from (x⁻, P⁻) and map through h (29).
         Self::draw(&mut self.sig, &self.x_pred, &self.p_pred_chol, self.gamma);
         for j in 0..s {
-            let (n, m) = (self.n, self.m);
             self.xcol.as_mut_slice().copy_from_slice(&self.sig.as_slice()[j * n..(j + 1) * n]);
             model.h(&self.xcol, u, &mut self.zcol)?;
             self.zsig.as_mut_slice()[j * m..(j + 1) * m].copy_from_slice(self.zcol.as_slice());
