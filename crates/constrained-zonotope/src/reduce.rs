@@ -1,0 +1,404 @@
+//! Order reduction (docs/constrained-zonotopes.md (Z4)–(Z6)), as in Scott et al. (2016, §4) and
+//! CORA's `conZonotope/reduceConstraints`:
+//!
+//! 1. **Rescaling** (Z4): interval constraint propagation over `A ξ = b` gives, for every factor,
+//!    the range `E_j ⊆ [−1, 1]` it can take in the set and the range `R_j` that the constraints
+//!    alone imply for it (its own bound ignored); `ξ_j = m_j + r_j ξ'_j` maps `E_j` onto
+//!    `[−1, 1]` (the same set in exact arithmetic).
+//! 2. **Constraint elimination** (Z5): while there are too many constraints, one factor is
+//!    solved for from one row and substituted; the set can only grow (the factor's own bound is
+//!    dropped), by nothing when `R_j ⊆ E_j`. The factor is the one with the least estimate of
+//!    the Hausdorff error `H_j = ρ_j² / (K⁻¹)_jj`, `ρ_j = max(0, |R'_j| − 1)` its range's excess
+//!    and `K = [[GᵀG + I, Aᵀ], [A, 0]]` (CORA's measure: the least-norm move of the factors that
+//!    keeps `A ξ = b` and moves `ξ_j` by `ρ_j`); the row is the one where the factor's
+//!    coefficient is largest in magnitude (CORA takes the first), for a well-conditioned pivot.
+//! 3. **Generator reduction** (Z6): the lifted zonotope `⟨[c; −b], [G; A]⟩` keeps its largest
+//!    columns (2-norm, Combastel's order) and encloses the rest in a box, whose constraint rows
+//!    become slack factors: a superset, and at most `max_generators` factors.
+//!
+//! Every new entry's rounding is enclosed as in the other operations.
+
+use nalgebra::{DMatrix, DVector};
+
+use intervals::{Interval, down, up};
+
+use crate::enclose::{add_up, dot_error};
+use crate::{ConstrainedZonotope, SetError};
+
+/// The most generators and constraints a reduced set keeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReductionLimits {
+    max_generators: usize,
+    max_constraints: usize,
+}
+
+impl ReductionLimits {
+    /// At most `max_generators` factors and `max_constraints` constraints. A set of dimension
+    /// `n` can be reduced only when `max_generators ≥ n + max_constraints` (checked by
+    /// [`ConstrainedZonotope::reduce`]).
+    ///
+    /// # Errors
+    /// [`SetError::InvalidLimits`] for `max_generators = 0` or limits above the set size limits.
+    pub fn new(max_generators: usize, max_constraints: usize) -> Result<Self, SetError> {
+        if max_generators == 0 {
+            return Err(SetError::InvalidLimits("max_generators must be at least 1".into()));
+        }
+        crate::check_size("max_generators", max_generators, crate::MAX_GENERATORS)?;
+        crate::check_size("max_constraints", max_constraints, crate::MAX_CONSTRAINTS)?;
+        Ok(Self { max_generators, max_constraints })
+    }
+
+    /// The most factors.
+    #[must_use]
+    pub fn max_generators(&self) -> usize {
+        self.max_generators
+    }
+
+    /// The most constraints.
+    #[must_use]
+    pub fn max_constraints(&self) -> usize {
+        self.max_constraints
+    }
+}
+
+/// Factor ranges from interval constraint propagation: `e` the ranges within the box, `r` the
+/// ranges the constraints alone imply (`ENTIRE` for a factor in no constraint).
+pub(crate) struct FactorRanges {
+    pub(crate) e: Vec<Interval>,
+    pub(crate) r: Vec<Interval>,
+}
+
+/// Sweeps of the propagation (each visits every row once).
+const PROPAGATION_SWEEPS: usize = 3;
+
+/// Interval constraint propagation over `A ξ = b, ‖ξ‖∞ ≤ 1`; `None` when it proves the set empty
+/// (a range became empty: certified, the arithmetic is outward-rounded).
+pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRanges> {
+    let (nc, ng) = (a.nrows(), a.ncols());
+    let mut e = vec![Interval::new(-1.0, 1.0); ng];
+    let mut r = vec![Interval::ENTIRE; ng];
+    for _ in 0..PROPAGATION_SWEEPS {
+        let mut changed = false;
+        for i in 0..nc {
+            // Σ_k a_ik E_k as a lower and an upper sum of the terms' bounds.
+            let (mut lo, mut hi) = (0.0, 0.0);
+            let mut terms = Vec::with_capacity(ng);
+            for k in 0..ng {
+                let t = e[k] * a[(i, k)];
+                lo = down(lo + t.lo());
+                hi = up(hi + t.hi());
+                terms.push(t);
+            }
+            for j in 0..ng {
+                let aij = a[(i, j)];
+                if aij == 0.0 {
+                    continue;
+                }
+                let rest = Interval::new(down(lo - terms[j].lo()), up(hi - terms[j].hi()));
+                let implied = (Interval::point(b[i]) - rest) / aij;
+                if !implied.is_bounded() {
+                    continue;
+                }
+                let r_new = intersect(r[j], implied)?;
+                r[j] = r_new;
+                let e_new = intersect(e[j], implied)?;
+                if e_new != e[j] {
+                    changed = true;
+                    e[j] = e_new;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    Some(FactorRanges { e, r })
+}
+
+fn intersect(x: Interval, y: Interval) -> Option<Interval> {
+    let (lo, hi) = (x.lo().max(y.lo()), x.hi().min(y.hi()));
+    (lo <= hi).then(|| Interval::new(lo, hi))
+}
+
+/// Midpoint and radius of `[lo, hi]`, the radius rounded up so that `m ± r` covers it.
+fn mid_rad(x: Interval) -> (f64, f64) {
+    let m = 0.5 * x.lo() + 0.5 * x.hi();
+    (m, up(up(x.hi() - m).max(up(m - x.lo()))))
+}
+
+impl ConstrainedZonotope {
+    /// Reduces the set to at most `limits.max_generators()` factors and
+    /// `limits.max_constraints()` constraints (module documentation of the method); a set
+    /// within the limits is returned as it is.
+    ///
+    /// # Errors
+    /// [`SetError::InvalidLimits`] when `max_generators < n + max_constraints` and the set needs
+    /// generator reduction; overflow of an error bound.
+    pub fn reduce(&self, limits: &ReductionLimits) -> Result<Self, SetError> {
+        if self.generators() <= limits.max_generators && self.constraints() <= limits.max_constraints {
+            return Ok(self.clone());
+        }
+        let mut z = self.clone();
+        while z.constraints() > limits.max_constraints {
+            let Some(ranges) = propagate(&z.a, &z.b) else { break };
+            z = z.rescaled(&ranges)?;
+            let excess = z.range_excess(&ranges);
+            let Some((row, col)) = z.elimination_choice(&excess) else { break };
+            z = z.eliminate(row, col)?;
+        }
+        if z.constraints() > limits.max_constraints {
+            // No factor could be eliminated (every column of A zero): the rows say nothing about
+            // ξ beyond 0 = b and are dropped (a superset).
+            z.drop_constraints(limits.max_constraints);
+        }
+        if z.generators() > limits.max_generators {
+            let n = z.dim();
+            let nc = z.constraints();
+            if limits.max_generators < n + nc {
+                return Err(SetError::InvalidLimits(format!(
+                    "max_generators = {} is below n + constraints = {} + {}: the box of a generator reduction needs \
+                     that many",
+                    limits.max_generators, n, nc
+                )));
+            }
+            z = z.reduce_generators(limits.max_generators - n - nc)?;
+        }
+        Ok(z)
+    }
+
+    /// The same set with every factor's range `E_j` mapped onto `[−1, 1]` (Z4).
+    fn rescaled(&self, ranges: &FactorRanges) -> Result<Self, SetError> {
+        let (n, nc, ng) = (self.dim(), self.constraints(), self.generators());
+        let mut z = self.clone();
+        let mut box_err = vec![0.0; n];
+        let mut slack = vec![0.0; nc];
+        // c' = c + G m, b' = b − A m: dot products of length ng + 1.
+        let mids: Vec<(f64, f64)> = ranges.e.iter().map(|e| mid_rad(*e)).collect();
+        for i in 0..n {
+            let (mut s, mut abs) = (self.c[i], self.c[i].abs());
+            for j in 0..ng {
+                let t = self.g[(i, j)] * mids[j].0;
+                s += t;
+                abs += t.abs();
+            }
+            z.c[i] = s;
+            box_err[i] = dot_error(abs, ng + 1);
+        }
+        for i in 0..nc {
+            let (mut s, mut abs) = (self.b[i], self.b[i].abs());
+            for j in 0..ng {
+                let t = self.a[(i, j)] * mids[j].0;
+                s -= t;
+                abs += t.abs();
+            }
+            z.b[i] = s;
+            slack[i] = dot_error(abs, ng + 1);
+        }
+        // G'_j = r_j g_j, A'_j = r_j a_j: one rounding per entry.
+        for j in 0..ng {
+            let r = mids[j].1;
+            for i in 0..n {
+                let v = self.g[(i, j)] * r;
+                z.g[(i, j)] = v;
+                box_err[i] = add_up(box_err[i], dot_error(v.abs(), 1));
+            }
+            for i in 0..nc {
+                let v = self.a[(i, j)] * r;
+                z.a[(i, j)] = v;
+                slack[i] = add_up(slack[i], dot_error(v.abs(), 1));
+            }
+        }
+        if z.c.iter().chain(z.b.iter()).any(|v| !v.is_finite()) {
+            return Err(SetError::Overflow("rescaling"));
+        }
+        z.push_box(&box_err)?;
+        z.push_slack(&slack)?;
+        Ok(z)
+    }
+
+    /// `ρ_j = max(0, |R'_j| − 1)` for the rescaled factors (the implied range mapped as `E_j`
+    /// was); factors pushed by the rescaling itself (rounding) get `+∞` (never eliminated).
+    fn range_excess(&self, ranges: &FactorRanges) -> Vec<f64> {
+        let mut out = vec![f64::INFINITY; self.generators()];
+        for (j, (e, r)) in ranges.e.iter().zip(&ranges.r).enumerate() {
+            if !r.is_bounded() {
+                continue;
+            }
+            let (m, rad) = mid_rad(*e);
+            if rad == 0.0 {
+                // A factor fixed by the constraints: eliminating it loses nothing.
+                out[j] = 0.0;
+                continue;
+            }
+            let mag = ((r.lo() - m).abs().max((r.hi() - m).abs())) / rad;
+            out[j] = (mag - 1.0).max(0.0);
+        }
+        out
+    }
+
+    /// The factor to eliminate and the row to solve it from, `None` when none can be.
+    fn elimination_choice(&self, excess: &[f64]) -> Option<(usize, usize)> {
+        let (nc, ng) = (self.constraints(), self.generators());
+        let candidates: Vec<usize> = (0..ng)
+            .filter(|&j| excess[j].is_finite() && (0..nc).any(|i| self.a[(i, j)] != 0.0))
+            .collect();
+        if candidates.is_empty() {
+            return None;
+        }
+        // (K⁻¹)_jj of K = [[GᵀG + I, Aᵀ], [A, 0]], when K is non-singular.
+        let size = ng + nc;
+        let mut k = DMatrix::zeros(size, size);
+        let gtg = self.g.transpose() * &self.g;
+        k.view_mut((0, 0), (ng, ng)).copy_from(&gtg);
+        for j in 0..ng {
+            k[(j, j)] += 1.0;
+        }
+        k.view_mut((ng, 0), (nc, ng)).copy_from(&self.a);
+        k.view_mut((0, ng), (ng, nc)).copy_from(&self.a.transpose());
+        let lu = k.lu();
+        let mut best: Option<(f64, usize)> = None;
+        for &j in &candidates {
+            let h = if excess[j] == 0.0 {
+                0.0
+            } else {
+                let mut e = DVector::zeros(size);
+                e[j] = 1.0;
+                match lu.solve(&e) {
+                    Some(v) if v[j].is_finite() && v[j] > 0.0 => excess[j] * excess[j] / v[j],
+                    _ => excess[j] * excess[j] * (1.0 + self.g.column(j).norm_squared()),
+                }
+            };
+            if best.is_none_or(|(bh, _)| h < bh) {
+                best = Some((h, j));
+            }
+        }
+        let (_, col) = best?;
+        let row = (0..nc).max_by(|&p, &q| self.a[(p, col)].abs().total_cmp(&self.a[(q, col)].abs()))?;
+        Some((row, col))
+    }
+
+    /// Eliminates factor `col` with constraint `row` (Z5): `ξ_col = β − Σ_{k≠col} w_k ξ_k`,
+    /// `w = a_row / a_row,col`, `β = b_row / a_row,col`; the division's rounding (at most `d`)
+    /// becomes the factor that takes the freed column.
+    fn eliminate(&self, row: usize, col: usize) -> Result<Self, SetError> {
+        let (n, nc, ng) = (self.dim(), self.constraints(), self.generators());
+        let p = self.a[(row, col)];
+        let mut w = vec![0.0; ng];
+        let mut d_abs = 0.0;
+        for k in 0..ng {
+            if k == col {
+                w[k] = 1.0;
+                continue;
+            }
+            w[k] = self.a[(row, k)] / p;
+            d_abs = add_up(d_abs, w[k].abs());
+        }
+        let beta = self.b[row] / p;
+        d_abs = add_up(d_abs, beta.abs());
+        // Correctly rounded divisions: each off by at most EPS·|result| (and η below MIN_POSITIVE).
+        let d = up(up(f64::EPSILON * d_abs) + (ng + 1) as f64 * f64::from_bits(1));
+        let gcol: Vec<f64> = (0..n).map(|i| self.g[(i, col)]).collect();
+        let acol: Vec<f64> = (0..nc).map(|i| self.a[(i, col)]).collect();
+        let mut c = self.c.clone();
+        let mut g = self.g.clone();
+        let mut box_err = vec![0.0; n];
+        for i in 0..n {
+            let t = gcol[i] * beta;
+            c[i] = self.c[i] + t;
+            box_err[i] = dot_error(self.c[i].abs() + t.abs(), 2);
+            for k in 0..ng {
+                if k == col {
+                    let v = gcol[i] * d;
+                    g[(i, k)] = v;
+                    box_err[i] = add_up(box_err[i], dot_error(v.abs(), 1));
+                } else {
+                    let t = gcol[i] * w[k];
+                    let v = self.g[(i, k)] - t;
+                    g[(i, k)] = v;
+                    box_err[i] = add_up(box_err[i], dot_error(self.g[(i, k)].abs() + t.abs(), 2));
+                }
+            }
+        }
+        let rows: Vec<usize> = (0..nc).filter(|&l| l != row).collect();
+        let mut a = DMatrix::zeros(nc - 1, ng);
+        let mut b = DVector::zeros(nc - 1);
+        let mut slack = vec![0.0; nc - 1];
+        for (li, &l) in rows.iter().enumerate() {
+            let t = acol[l] * beta;
+            b[li] = self.b[l] - t;
+            slack[li] = dot_error(self.b[l].abs() + t.abs(), 2);
+            for k in 0..ng {
+                if k == col {
+                    let v = acol[l] * d;
+                    a[(li, k)] = v;
+                    slack[li] = add_up(slack[li], dot_error(v.abs(), 1));
+                } else {
+                    let t = acol[l] * w[k];
+                    let v = self.a[(l, k)] - t;
+                    a[(li, k)] = v;
+                    slack[li] = add_up(slack[li], dot_error(self.a[(l, k)].abs() + t.abs(), 2));
+                }
+            }
+        }
+        if c.iter().chain(g.iter()).chain(a.iter()).chain(b.iter()).any(|v| !v.is_finite()) {
+            return Err(SetError::Overflow("constraint elimination"));
+        }
+        let mut z = Self { c, g, a, b };
+        z.drop_zero_columns();
+        z.push_box(&box_err)?;
+        z.push_slack(&slack)?;
+        Ok(z)
+    }
+
+    /// Keeps the first `keep` constraint rows (a superset: constraints dropped).
+    fn drop_constraints(&mut self, keep: usize) {
+        let keep = keep.min(self.constraints());
+        self.a = self.a.rows(0, keep).into_owned();
+        self.b = self.b.rows(0, keep).into_owned();
+    }
+
+    /// Removes factors whose columns of `G` and `A` are both zero (they change nothing).
+    pub(crate) fn drop_zero_columns(&mut self) {
+        let keep: Vec<usize> = (0..self.generators())
+            .filter(|&j| self.g.column(j).iter().chain(self.a.column(j).iter()).any(|v| *v != 0.0))
+            .collect();
+        if keep.len() == self.generators() {
+            return;
+        }
+        self.g = self.g.select_columns(&keep);
+        self.a = self.a.select_columns(&keep);
+    }
+
+    /// Keeps the `keep` largest lifted columns `[g_j; a_j]` and boxes the rest (Z6).
+    fn reduce_generators(&self, keep: usize) -> Result<Self, SetError> {
+        let (n, nc, ng) = (self.dim(), self.constraints(), self.generators());
+        let mut order: Vec<(f64, usize)> = (0..ng)
+            .map(|j| (self.g.column(j).norm_squared() + self.a.column(j).norm_squared(), j))
+            .collect();
+        order.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let mut kept: Vec<usize> = order.iter().take(keep).map(|&(_, j)| j).collect();
+        kept.sort_unstable();
+        let mut sx = vec![0.0; n];
+        let mut sa = vec![0.0; nc];
+        for &(_, j) in order.iter().skip(keep) {
+            for i in 0..n {
+                sx[i] = add_up(sx[i], self.g[(i, j)].abs());
+            }
+            for i in 0..nc {
+                sa[i] = add_up(sa[i], self.a[(i, j)].abs());
+            }
+        }
+        let mut z = Self {
+            c: self.c.clone(),
+            g: self.g.select_columns(&kept),
+            a: self.a.select_columns(&kept),
+            b: self.b.clone(),
+        };
+        if z.a.nrows() == 0 {
+            z.a = DMatrix::zeros(0, kept.len());
+        }
+        z.push_box(&sx)?;
+        z.push_slack(&sa)?;
+        Ok(z)
+    }
+}
