@@ -107,6 +107,16 @@ pub enum EstimatorError {
         /// How far outside, relative to the set's extent in the separating direction.
         excess: f64,
     },
+    /// A constrained-zonotope filter's measurement (with its noise set) misses the predicted set,
+    /// or its certified hull misses the interval observer's box: proved, not a tolerance. The
+    /// filter is unchanged.
+    #[error("data inconsistent with the noise bounds at step {step}: {reason}")]
+    SetMissed {
+        /// The step (0 for an update of the initial set).
+        step: u64,
+        /// What was proved.
+        reason: &'static str,
+    },
     /// A moving-horizon window whose measurements no disturbance sequence in the process-noise
     /// box fits into the measurement-noise box (docs/robust-mhe.md §2.8): the newest measurement,
     /// or one still in the window, contradicts the model and the boxes. The estimator is

@@ -71,6 +71,7 @@
 
 pub mod adaptive;
 pub mod checks;
+pub mod czf;
 pub mod ekf;
 pub mod error;
 mod gaussian_update;
@@ -89,6 +90,7 @@ pub use adaptive::{
     ReceiverStatus, ScalingContext,
 };
 pub use checks::{DataChecks, InnovationGate};
+pub use czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, ZonotopeEstimate, ZonotopeReport};
 pub use ekf::ExtendedKalmanFilter;
 pub use error::EstimatorError;
 pub use kalman::{GaussianEstimate, KalmanFilter};

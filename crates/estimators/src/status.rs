@@ -19,6 +19,7 @@
 use std::fmt;
 
 use crate::adaptive::AdaptiveStep;
+use crate::czf::ZonotopeReport;
 use crate::mhe::{MheReport, NonlinearMheReport};
 use crate::smf::StepReport;
 use crate::ukf::UkfReport;
@@ -32,6 +33,11 @@ pub enum EstimateKind {
     /// A guaranteed ellipsoid `𝓔(c, P) = {x : (x − c)ᵀ P⁻¹ (x − c) ≤ 1}` that contains the true
     /// state whenever the noises respect their bounds; the per-state bounds are its projections.
     GuaranteedEllipsoid,
+    /// A guaranteed constrained zonotope `{c + G ξ : ‖ξ‖∞ ≤ 1, A ξ = b}` that contains the true
+    /// state whenever the noises respect their bounds; the per-state bounds are its certified
+    /// interval hull (tightened by an interval observer and the declared state bounds), and the
+    /// shape is the diagonal of their squared half-widths.
+    GuaranteedConstrainedZonotope,
     /// A point estimate (moving-horizon estimators): no per-state bounds; the shape is a weight
     /// matrix of the method (documented by the estimator), neither a calibrated covariance nor a
     /// guaranteed set.
@@ -45,6 +51,7 @@ impl EstimateKind {
         match self {
             EstimateKind::Gaussian => "gaussian",
             EstimateKind::GuaranteedEllipsoid => "guaranteed ellipsoid",
+            EstimateKind::GuaranteedConstrainedZonotope => "guaranteed constrained zonotope",
             EstimateKind::Point => "point",
         }
     }
@@ -55,6 +62,9 @@ impl EstimateKind {
         match self {
             EstimateKind::Gaussian => "covariance",
             EstimateKind::GuaranteedEllipsoid => "ellipsoid shape matrix (certified outer bound)",
+            EstimateKind::GuaranteedConstrainedZonotope => {
+                "diagonal of the squared half-widths of the certified interval (the set itself: the estimator's set)"
+            }
             EstimateKind::Point => "weight matrix of the method (not a covariance, not a bound)",
         }
     }
@@ -65,6 +75,9 @@ impl EstimateKind {
         match self {
             EstimateKind::Gaussian => Some("mean ∓ one standard deviation"),
             EstimateKind::GuaranteedEllipsoid => Some("guaranteed interval (the ellipsoid's projection)"),
+            EstimateKind::GuaranteedConstrainedZonotope => {
+                Some("guaranteed interval (the set's verified hull, the interval observer, the state bounds)")
+            }
             EstimateKind::Point => None,
         }
     }
@@ -126,6 +139,10 @@ pub enum Guarantee {
     Holds,
     /// No longer guaranteed: inconsistent data were accepted at this or an earlier step.
     Lost,
+    /// Guaranteed, but some state's interval has grown past the estimator's divergence rule (the
+    /// constrained-zonotope filters: wider than a set factor times its initial width, or than its
+    /// declared bounds): a bound too wide to act on.
+    Diverging,
 }
 
 /// The status of one step, the same vocabulary for every estimator (module documentation).
@@ -156,7 +173,7 @@ impl StepStatus {
     pub fn is_clean(&self) -> bool {
         matches!(self.outcome, SolveOutcome::Initial | SolveOutcome::Predicted | SolveOutcome::Converged)
             && self.data != DataCheck::Inconsistent
-            && self.guarantee != Guarantee::Lost
+            && !matches!(self.guarantee, Guarantee::Lost | Guarantee::Diverging)
     }
 
     /// The outcome, then `+inconsistent` and `+not-guaranteed` where they apply.
@@ -175,6 +192,9 @@ impl fmt::Display for StepStatus {
         if self.guarantee == Guarantee::Lost {
             f.write_str("+not-guaranteed")?;
         }
+        if self.guarantee == Guarantee::Diverging {
+            f.write_str("+diverging")?;
+        }
         Ok(())
     }
 }
@@ -188,6 +208,8 @@ pub enum StepDetails {
     /// The set-membership filters: multipliers, solver status and iterations, fallback,
     /// certification inflation, consistency.
     SetMembership(StepReport),
+    /// The constrained-zonotope filters: sizes of the set, LP fallbacks, tightening, divergence.
+    ConstrainedZonotope(ZonotopeReport),
     /// The unscented filter's positive-definiteness guards.
     Unscented(UkfReport),
     /// The adaptive filter's noise scale `t_k` and distance `d_k` (`None` before the first update
@@ -208,6 +230,7 @@ impl StepDetails {
             StepDetails::None | StepDetails::Unscented(_) => &[],
             StepDetails::SetMembership(_) => &["tau1", "tau2", "tau3"],
             StepDetails::Adaptive(_) => &["scale", "distance"],
+            StepDetails::ConstrainedZonotope(_) => &["generators", "constraints"],
             StepDetails::MovingHorizon(_) | StepDetails::NonlinearMovingHorizon(_) => &["iterations"],
         }
     }
@@ -225,6 +248,10 @@ impl StepDetails {
             StepDetails::Adaptive(a) => {
                 f("scale", a.map(|a| a.scale));
                 f("distance", a.map(|a| a.distance));
+            }
+            StepDetails::ConstrainedZonotope(r) => {
+                f("generators", Some(r.generators as f64));
+                f("constraints", Some(r.constraints as f64));
             }
             StepDetails::MovingHorizon(r) => f("iterations", r.map(|r| r.solve.sweeps as f64)),
             StepDetails::NonlinearMovingHorizon(r) => f("iterations", r.map(|r| r.iterations as f64)),
