@@ -46,6 +46,7 @@ pub mod enclose;
 mod hull;
 mod lp;
 mod ops;
+pub mod polygon;
 mod reduce;
 
 use nalgebra::{DMatrix, DVector};

@@ -1,0 +1,264 @@
+//! The constrained-zonotope filter (`czf`): on a linear model its interval is the exact set's
+//! (an independent polygon computation) before any reduction; with every noise on the boundary
+//! of its box the truth stays inside on a nonlinear pendulum and on the supply vessel (heading
+//! measured), where `smf-nl` grows; contradicting data are refused with the filter unchanged, or
+//! flagged; an undefined model is `GuaranteeLost`; an unmeasured random walk is marked diverging.
+
+use constrained_zonotope::polygon::{bbox, box_poly, map_poly, strip, sum_poly};
+use estimators::{
+    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, DataCheck, DataChecks, Estimate, EstimatorError,
+    Guarantee, NonlinearSetMembershipFilter, Setup,
+};
+use estimators::checks::InconsistencyPolicy;
+use models::{
+    ConstantModel, DifferentiableModel, Dims, DiscreteModel, Interval, ModelError, SecondOrderModel, TaylorEnclosure,
+    Xoshiro256StarStar,
+};
+use nalgebra::{DMatrix, DVector, dmatrix, dvector};
+use vessel_dynamics::{DiscreteVessel, VesselParams};
+
+/// A pendulum: `θ⁺ = θ + dt ω`, `ω⁺ = ω − dt (g sin θ) + dt u`, the angle measured.
+struct Pendulum {
+    dt: f64,
+    /// `√θ` in `h` instead of `θ` (undefined for θ < 0).
+    root: bool,
+}
+
+impl DiscreteModel for Pendulum {
+    fn dims(&self) -> Dims {
+        Dims::new(2, 1, 1)
+    }
+    fn f(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = x[0] + self.dt * x[1];
+        out[1] = x[1] - self.dt * 9.81 * x[0].sin() + self.dt * u[0];
+        Ok(())
+    }
+    fn h(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        out[0] = if self.root { x[0].sqrt() } else { x[0] };
+        Ok(())
+    }
+}
+
+impl DifferentiableModel for Pendulum {
+    fn f_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out.copy_from(&dmatrix![1.0, self.dt; -self.dt * 9.81 * x[0].cos(), 1.0]);
+        Ok(())
+    }
+    fn h_jacobian(&self, x: &DVector<f64>, _u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        out[(0, 0)] = if self.root { 0.5 / x[0].sqrt() } else { 1.0 };
+        out[(0, 1)] = 0.0;
+        Ok(())
+    }
+}
+
+impl SecondOrderModel for Pendulum {
+    fn f_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        out.clear();
+        let dt = self.dt;
+        out.set_value(0, x[0] + x[1] * dt);
+        out.set_value(1, x[1] - x[0].sin() * (dt * 9.81) + Interval::point(dt) * u[0]);
+        out.set_jacobian(0, 0, Interval::point(1.0));
+        out.set_jacobian(0, 1, Interval::point(dt));
+        out.set_jacobian(1, 0, x[0].cos() * (-dt * 9.81));
+        out.set_jacobian(1, 1, Interval::point(1.0));
+        out.set_hessian_invalid();
+        Ok(())
+    }
+    fn h_enclosure(&self, x: &[Interval], _u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        out.clear();
+        if self.root {
+            out.set_value(0, x[0].sqrt());
+            out.set_jacobian(0, 0, Interval::point(0.5) / x[0].sqrt());
+        } else {
+            out.set_value(0, x[0]);
+            out.set_jacobian(0, 0, Interval::point(1.0));
+        }
+        out.set_hessian_invalid();
+        Ok(())
+    }
+}
+
+fn boxes(x0: DVector<f64>, p0: &[f64], q: &[f64], r: &[f64], inputs: usize) -> Setup {
+    Setup {
+        x0,
+        p0: DMatrix::from_diagonal(&DVector::from_column_slice(p0)),
+        process_noise: DMatrix::from_diagonal(&DVector::from_column_slice(q)),
+        measurement_noise: DMatrix::from_diagonal(&DVector::from_column_slice(r)),
+        inputs,
+    }
+}
+
+/// A vertex of the box of radii `r`: every noise on the boundary.
+fn vertex(rng: &mut Xoshiro256StarStar, r: &[f64]) -> DVector<f64> {
+    DVector::from_iterator(r.len(), r.iter().map(|r| if rng.uniform(-1.0, 1.0) < 0.0 { -r } else { *r }))
+}
+
+fn inside(e: &dyn Estimate, x: &DVector<f64>) -> bool {
+    (0..x.len()).all(|i| e.bounds(i).is_some_and(|(l, h)| l <= x[i] && x[i] <= h))
+}
+
+#[test]
+fn on_a_linear_model_the_interval_is_the_exact_set_s() {
+    // x⁺ = A x + B u + w, y = c x + v, boxes; no reduction in 5 steps at order 50: the published
+    // interval is the bounding box of the exact polygon (sound, and tight to the solver's 1e-7).
+    let a = dmatrix![0.95, 0.2; -0.15, 0.9];
+    let b = dmatrix![0.1; 0.05];
+    let c = dmatrix![1.0, -0.5];
+    let model = ConstantModel::new(a.clone(), b.clone(), c.clone()).unwrap();
+    let s = boxes(dvector![0.5, -0.2], &[1.0, 0.8], &[0.05, 0.02], &[0.1], 1);
+    let settings = ConstrainedZonotopeSettings { order: 50, max_constraints: 20, ..Default::default() };
+    let mut f = ConstrainedZonotopeFilter::new(s, settings).unwrap();
+    let mut poly = box_poly([0.5, -0.2], [1.0, 0.8]);
+    let mut rng = Xoshiro256StarStar::seed_from_u64(5);
+    let mut x = dvector![0.5 + 0.9, -0.2 - 0.7];
+    for k in 0..5 {
+        let u = dvector![rng.uniform(-1.0, 1.0)];
+        x = &a * &x + &b * &u + vertex(&mut rng, &[0.05, 0.02]);
+        let y = &c * &x + vertex(&mut rng, &[0.1]);
+        let e = f.step(&model, &u, &y).unwrap();
+        poly = sum_poly(&map_poly(&a, [b[0] * u[0], b[1] * u[0]], &poly), &box_poly([0.0, 0.0], [0.05, 0.02]));
+        poly = strip(&poly, [c[0], c[1]], y[0], 0.1);
+        let (lo, hi) = bbox(&poly);
+        for i in 0..2 {
+            let (l, h) = e.bounds(i).unwrap();
+            assert!(l <= lo[i] && h >= hi[i], "step {k}, state {i}: [{l}, {h}] misses [{}, {}]", lo[i], hi[i]);
+            assert!(lo[i] - l < 1e-7 && h - hi[i] < 1e-7, "step {k}, state {i}: [{l}, {h}] wider than [{}, {}]", lo[i], hi[i]);
+        }
+        assert!(inside(e, &x));
+        assert!(e.status().is_clean(), "{}", e.status());
+    }
+}
+
+#[test]
+fn the_pendulum_s_truth_stays_inside_with_noise_on_the_boundary() {
+    let model = Pendulum { dt: 0.05, root: false };
+    let (q, r) = ([0.002, 0.01], [0.02]);
+    let s = boxes(dvector![0.3, 0.0], &[0.5, 1.0], &q, &r, 1);
+    let mut f = ConstrainedZonotopeFilter::new(s, ConstrainedZonotopeSettings::default()).unwrap();
+    let mut rng = Xoshiro256StarStar::seed_from_u64(11);
+    let mut x = dvector![0.3 + 0.5, -1.0];
+    let mut next = DVector::zeros(2);
+    let mut y = DVector::zeros(1);
+    let mut widths = Vec::new();
+    for k in 0..3000 {
+        let u = dvector![2.0 * (k as f64 * 0.01).sin()];
+        model.f(&x, &u, &mut next).unwrap();
+        x = &next + vertex(&mut rng, &q);
+        model.h(&x, &u, &mut y).unwrap();
+        y += vertex(&mut rng, &r);
+        let e = f.step(&model, &u, &y).unwrap_or_else(|e| panic!("step {k}: {e}"));
+        assert!(inside(e, &x), "step {k}: {x} outside {:?}", (0..2).map(|i| e.bounds(i)).collect::<Vec<_>>());
+        assert_eq!(e.status().data, DataCheck::Consistent);
+        widths.push(e.bounds(1).map(|(l, h)| h - l).unwrap());
+    }
+    // Bounded: the angular rate's width at the end no more than twice its width early on.
+    let early = widths[500..1000].iter().copied().fold(0.0, f64::max);
+    let late = widths[2500..].iter().copied().fold(0.0, f64::max);
+    assert!(late <= 2.0 * early, "rate width grew from {early} to {late}");
+}
+
+#[test]
+fn the_vessel_stays_bounded_where_the_ellipsoid_filter_grows() {
+    let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
+    let q = [0.1, 0.1, 0.01, 0.01, 0.01, 0.001];
+    let r = [1.0, 1.0, 0.1];
+    let psi0 = std::f64::consts::FRAC_PI_4;
+    let s = boxes(dvector![0.0, 0.0, psi0, 0.0, 0.0, 0.0], &[2.0, 2.0, 0.1, 0.1, 0.1, 0.01], &q, &r, 3);
+    let settings = ConstrainedZonotopeSettings { order: 4, max_constraints: 6, ..Default::default() };
+    let mut f = ConstrainedZonotopeFilter::new(s, settings).unwrap();
+    // The ellipsoid filter with the least-trace ellipsoids of the same boxes (d·diag(h²)).
+    let ell = |h: &[f64]| DMatrix::from_diagonal(&DVector::from_iterator(h.len(), h.iter().map(|h| 6.0 * h * h)));
+    let es = Setup {
+        x0: dvector![0.0, 0.0, psi0, 0.0, 0.0, 0.0],
+        p0: ell(&[2.0, 2.0, 0.1, 0.1, 0.1, 0.01]),
+        process_noise: ell(&q),
+        measurement_noise: DMatrix::from_diagonal(&DVector::from_iterator(3, r.iter().map(|h| 3.0 * h * h))),
+        inputs: 3,
+    };
+    let mut smf = NonlinearSetMembershipFilter::new(es).unwrap();
+    let mut rng = Xoshiro256StarStar::seed_from_u64(31);
+    let mut x = dvector![1.5, -1.5, psi0 + 0.08, 0.05, -0.05, 0.005];
+    let (mut next, mut y) = (DVector::zeros(6), DVector::zeros(3));
+    let mut smf_alive = true;
+    for k in 0..300 {
+        let t = k as f64 * vessel.ts();
+        let u = DVector::from_fn(3, |i, _| [2e5, 5e4, 1e6][i] * (t / (5.0 + i as f64)).sin());
+        vessel.f(&x, &u, &mut next).unwrap();
+        x = &next + vertex(&mut rng, &q);
+        vessel.h(&x, &u, &mut y).unwrap();
+        y += vertex(&mut rng, &r);
+        let e = f.step(&vessel, &u, &y).unwrap_or_else(|e| panic!("step {k}: {e}"));
+        assert!(inside(e, &x), "step {k}: the truth is outside");
+        if smf_alive {
+            smf_alive = smf.step(&vessel, &u, &y).is_ok();
+        }
+    }
+    let w = |i: usize| f.estimate().bounds(i).map(|(l, h)| h - l).unwrap();
+    // The position within a few metres of the measurement's ±1 m, the heading within ±0.1 rad.
+    assert!(w(0) < 2.5 && w(1) < 2.5 && w(2) < 0.25, "widths {} {} {}", w(0), w(1), w(2));
+    if smf_alive {
+        let ws = 2.0 * smf.estimate().shape[(0, 0)].sqrt();
+        assert!(ws > w(0), "smf-nl's x width {ws} against czf's {}", w(0));
+    }
+}
+
+#[test]
+fn contradicting_data_are_refused_and_leave_the_filter_unchanged() {
+    let model = ConstantModel::new(dmatrix![1.0, 0.1; 0.0, 1.0], dmatrix![0.0; 0.1], dmatrix![1.0, 0.0]).unwrap();
+    let s = boxes(dvector![0.0, 0.0], &[1.0, 1.0], &[0.01, 0.01], &[0.1], 1);
+    let mut f = ConstrainedZonotopeFilter::new(s.clone(), ConstrainedZonotopeSettings::default()).unwrap();
+    let u = dvector![0.0];
+    f.step(&model, &u, &dvector![0.3]).unwrap();
+    let before = (f.estimate().lower().clone(), f.estimate().upper().clone(), f.estimate().set().clone());
+    // 1.3 + 0.1 cannot be reached: the prediction's x₁ is at most ≈ 0.55.
+    let err = f.step(&model, &u, &dvector![5.0]).unwrap_err();
+    assert!(matches!(err, EstimatorError::SetMissed { step: 2, .. }), "{err}");
+    assert_eq!((f.estimate().lower().clone(), f.estimate().upper().clone(), f.estimate().set().clone()), before);
+    // The measurement on the edge of the reachable set is accepted.
+    let e = f.step(&model, &u, &dvector![0.3]).unwrap();
+    assert!(e.status().is_clean());
+    // Flagged: the prediction is published, marked inconsistent and no longer guaranteed.
+    f.set_data_checks(DataChecks::with_policy(InconsistencyPolicy::FlagAndContinue)).unwrap();
+    let e = f.step(&model, &u, &dvector![5.0]).unwrap();
+    assert_eq!(e.status().data, DataCheck::Inconsistent);
+    assert_eq!(e.status().guarantee, Guarantee::Lost);
+    let e = f.step(&model, &u, &dvector![0.3]).unwrap();
+    assert_eq!(e.status().guarantee, Guarantee::Lost, "every later set is not guaranteed");
+}
+
+#[test]
+fn an_undefined_model_loses_the_guarantee_and_bad_input_is_refused() {
+    // h = √θ over a set that reaches θ < 0: no enclosure, GuaranteeLost, the filter unchanged.
+    let model = Pendulum { dt: 0.05, root: true };
+    let s = boxes(dvector![0.1, 0.0], &[0.5, 0.1], &[0.001, 0.001], &[0.01], 1);
+    let mut f = ConstrainedZonotopeFilter::new(s.clone(), ConstrainedZonotopeSettings::default()).unwrap();
+    let before = f.estimate().lower().clone();
+    let err = f.step(&model, &dvector![0.0], &dvector![0.3]).unwrap_err();
+    assert!(matches!(err, EstimatorError::GuaranteeLost { .. }), "{err}");
+    assert_eq!(f.estimate().lower(), &before);
+    let model = Pendulum { dt: 0.05, root: false };
+    assert!(matches!(f.step(&model, &dvector![f64::NAN], &dvector![0.3]), Err(EstimatorError::NonFinite { .. })));
+    assert!(matches!(f.step(&model, &dvector![0.0], &dvector![0.3, 1.0]), Err(EstimatorError::DimensionMismatch { .. })));
+    for (order, nc, factor) in [(0, 0, 2.0), (1, 8, 2.0), (201, 0, 2.0), (20, 0, 1.0), (20, 0, f64::NAN)] {
+        let settings = ConstrainedZonotopeSettings { order, max_constraints: nc, divergence_factor: factor, ..Default::default() };
+        assert!(matches!(ConstrainedZonotopeFilter::new(s.clone(), settings), Err(EstimatorError::InvalidSetting { .. })));
+    }
+}
+
+#[test]
+fn an_unmeasured_random_walk_is_marked_diverging() {
+    // x₂ is never measured and walks with ±0.1 a step: its width grows past twice its initial 2.
+    let model = ConstantModel::new(DMatrix::identity(2, 2), dmatrix![0.0; 0.0], dmatrix![1.0, 0.0]).unwrap();
+    let s = boxes(dvector![0.0, 0.0], &[1.0, 1.0], &[0.01, 0.1], &[0.1], 1);
+    let mut f = ConstrainedZonotopeFilter::new(s, ConstrainedZonotopeSettings::default()).unwrap();
+    let mut first = None;
+    for k in 1..=30 {
+        let e = f.step(&model, &dvector![0.0], &dvector![0.0]).unwrap();
+        if e.status().guarantee == Guarantee::Diverging && first.is_none() {
+            first = Some(k);
+            assert!(!e.status().is_clean() && e.status().label().contains("diverging"));
+        }
+    }
+    // 2 + 0.2 k reaches 4 at k = 10 (the rounding's enclosure may put it just above).
+    assert!(matches!(first, Some(10 | 11)), "{first:?}");
+}
