@@ -38,6 +38,7 @@ use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, Lin
 
 use crate::adaptive::{AdaptiveKalmanFilter, FuzzyScaling};
 use crate::checks::DataChecks;
+use crate::czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings};
 use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
@@ -184,6 +185,8 @@ pub enum EstimatorSettings {
     NonlinearMovingHorizon(Box<NonlinearMheSettings>),
     /// The fuzzy-adaptive filter's system.
     FuzzyAdaptive(Box<FuzzyAdaptiveSettings>),
+    /// The constrained-zonotope filters' reduction limits, policy, bounds and divergence rule.
+    ConstrainedZonotope(ConstrainedZonotopeSettings),
 }
 
 impl EstimatorSettings {
@@ -198,6 +201,7 @@ impl EstimatorSettings {
             EstimatorSettings::Unscented(_) => SettingsKind::Unscented,
             EstimatorSettings::NonlinearMovingHorizon(_) => SettingsKind::NonlinearMovingHorizon,
             EstimatorSettings::FuzzyAdaptive(_) => SettingsKind::FuzzyAdaptive,
+            EstimatorSettings::ConstrainedZonotope(_) => SettingsKind::ConstrainedZonotope,
         }
     }
 }
@@ -220,6 +224,8 @@ pub enum SettingsKind {
     NonlinearMovingHorizon,
     /// [`EstimatorSettings::FuzzyAdaptive`].
     FuzzyAdaptive,
+    /// [`EstimatorSettings::ConstrainedZonotope`].
+    ConstrainedZonotope,
 }
 
 impl SettingsKind {
@@ -236,6 +242,10 @@ impl SettingsKind {
             SettingsKind::Unscented => "sigma-point parameters (alpha, beta, kappa)",
             SettingsKind::NonlinearMovingHorizon => "nonlinear moving-horizon settings",
             SettingsKind::FuzzyAdaptive => "a fuzzy system with inputs [N, RTK, d]",
+            SettingsKind::ConstrainedZonotope => {
+                "constrained-zonotope settings (order, max_constraints, inconsistency policy, state bounds, \
+                 divergence factor)"
+            }
         }
     }
 
@@ -258,6 +268,9 @@ impl SettingsKind {
                 Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(settings)))
             }
             SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::default())),
+            SettingsKind::ConstrainedZonotope => {
+                Some(EstimatorSettings::ConstrainedZonotope(ConstrainedZonotopeSettings::default()))
+            }
         }
     }
 
@@ -348,6 +361,10 @@ pub mod names {
     pub const MHE_UKF: &str = "mhe-ukf";
     /// The nonlinear set-membership filter (certified linearisation remainder).
     pub const SMF_NL: &str = "smf-nl";
+    /// The constrained-zonotope filter on linear models.
+    pub const CZF: &str = "czf";
+    /// The constrained-zonotope filter on nonlinear models (mean-value extension).
+    pub const CZF_NL: &str = "czf-nl";
 }
 
 /// The set-membership filter built by `$build` (an expression of the solver `$t`) with the
@@ -512,6 +529,33 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
                     on_second_order(e, with_state_bounds(f, bounds)?)
                 }
             })
+        },
+    },
+    EstimatorEntry {
+        name: names::CZF,
+        kind: EstimateKind::GuaranteedConstrainedZonotope,
+        summary: "constrained-zonotope filter (Scott et al. 2016): the exact set of a linear model with boxed noise, \
+                  reduced to its order; verified interval hull, interval observer, p0/q/r as box half-widths \
+                  (docs/constrained-zonotopes.md)",
+        needs: Capability::Linear,
+        settings: SettingsKind::ConstrainedZonotope,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::ConstrainedZonotope(s) = s else { return Err(wrong_settings(e)) };
+            Ok(on_linear(e, ConstrainedZonotopeFilter::new(setup, s)?))
+        },
+    },
+    EstimatorEntry {
+        name: names::CZF_NL,
+        kind: EstimateKind::GuaranteedConstrainedZonotope,
+        summary: "nonlinear constrained-zonotope filter: the mean-value extension of f and h over the set's box \
+                  (Rego et al. 2020), verified interval hull, interval observer (docs/constrained-zonotopes.md)",
+        needs: Capability::SecondOrder,
+        settings: SettingsKind::ConstrainedZonotope,
+        extra_measurements: 0,
+        build: |e, setup, s| {
+            let EstimatorSettings::ConstrainedZonotope(s) = s else { return Err(wrong_settings(e)) };
+            Ok(on_second_order(e, ConstrainedZonotopeFilter::new(setup, s)?))
         },
     },
 ];

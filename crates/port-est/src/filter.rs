@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use estimators::registry::{
     self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver, names,
 };
-use estimators::{AnyEstimator, DataChecks, EstimatorError, Setup};
+use estimators::{AnyEstimator, ConstrainedZonotopeSettings, DataChecks, EstimatorError};
 use nalgebra::DVector;
 
 use crate::blame::{self, LargestCell};
@@ -175,6 +175,10 @@ fn settings(
         SetMembershipSettings { solver: solver.unwrap_or_default(), state_bounds, ..SetMembershipSettings::default() };
     Ok(match entry.settings {
         SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(smf)),
+        SettingsKind::ConstrainedZonotope => Some(EstimatorSettings::ConstrainedZonotope(ConstrainedZonotopeSettings {
+            state_bounds: model.state_bounds.clone(),
+            ..ConstrainedZonotopeSettings::default()
+        })),
         SettingsKind::Unscented => model.ukf.map(EstimatorSettings::Unscented),
         SettingsKind::SetMembershipInputBox => {
             let Some((lower, upper)) = model.input_range.clone() else {
@@ -217,14 +221,7 @@ fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver
         )));
     }
     let settings = settings(model, entry, solver)?;
-    let setup = Setup {
-        x0: model.x0.clone(),
-        p0: model.p0.clone(),
-        process_noise: model.q.clone(),
-        measurement_noise: model.r.clone(),
-        inputs: model.inputs(),
-    };
-    entry.build(setup, settings).map_err(|e| match e {
+    entry.build(model.setup(entry.kind), settings).map_err(|e| match e {
         EstimatorError::Lmi(_)
         | EstimatorError::UnknownEstimator { .. }
         | EstimatorError::MissingSetting { .. }

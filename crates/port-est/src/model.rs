@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use equation_models::EquationModel;
-use estimators::{EstimatorError, UkfParams};
+use estimators::{EstimateKind, EstimatorError, Setup, UkfParams};
 use models::{AnyModel, Capability, ConstantModel, DiscreteModel, LinearModel};
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
@@ -26,7 +26,9 @@ type Bounds = (DVector<f64>, DVector<f64>);
 /// The top-level keys of a model file that `port-est` reads itself; the rest of a model written
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
-pub const NOISE_KEYS: [&str; 10] = ["x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf"];
+pub const NOISE_KEYS: [&str; 13] = [
+    "x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf", "x0_radius", "w_radius", "v_radius",
+];
 
 impl std::fmt::Debug for Dynamics {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -63,6 +65,9 @@ struct ModelFile {
     u_upper: Option<Spanned<Vec<f64>>>,
     x_lower: Option<Spanned<Vec<f64>>>,
     x_upper: Option<Spanned<Vec<f64>>>,
+    x0_radius: Option<Spanned<Vec<f64>>>,
+    w_radius: Option<Spanned<Vec<f64>>>,
+    v_radius: Option<Spanned<Vec<f64>>>,
     mhe: Option<Spanned<crate::mhe_table::MheTable>>,
     ukf: Option<Spanned<UkfTable>>,
     // The equation tables, read by `equation-models`.
@@ -121,6 +126,9 @@ pub struct Model {
     /// Bounds `(x_lower, x_upper)` the true state always respects (±inf where none), if given:
     /// used by `smf-nl` (docs/nonlinear-smf.md (N1')).
     pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
+    /// The boxes `x0_radius`, `w_radius`, `v_radius` (half-widths of `X₀` about `x₀`, of `W` and of
+    /// `V`) of the constrained-zonotope filters, if given.
+    pub boxes: Option<Boxes>,
     /// The moving-horizon settings of the `[mhe]` table, if given (checked structurally; the
     /// estimator validates them when built, see [`Model::estimator_error`]).
     pub mhe: Option<estimators::MheSettings>,
@@ -129,6 +137,17 @@ pub struct Model {
     /// The file it was read from and where each key's value starts, to report later complaints
     /// (an estimator rejecting `q`, say) at the right place.
     source: Source,
+}
+
+/// The half-widths of the initial set, the process-noise box and the measurement-noise box.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Boxes {
+    /// `X₀ = x₀ ± x0_radius` (length `n`).
+    pub x0: DVector<f64>,
+    /// `W = ±w_radius` (length `n`).
+    pub w: DVector<f64>,
+    /// `V = ±v_radius` (length `m`).
+    pub v: DVector<f64>,
 }
 
 /// Where the keys of a model file are.
@@ -222,6 +241,30 @@ impl Model {
     /// file's terms: at the `file:line:column` of the key it is about when that can be told.
     #[must_use]
     pub fn estimator_error(&self, e: EstimatorError) -> Error {
+        self.estimator_error_at(e)
+    }
+
+    /// The initial data an estimator of `kind` reads from the file. A constrained-zonotope
+    /// filter reads generator matrices: the boxes `x0_radius`, `w_radius`, `v_radius` when the
+    /// file gives them, else the boxes around the ellipsoids `p0`, `q`, `r` (half-widths `√Pᵢᵢ`:
+    /// every ellipsoid lies in its box, so the filter's guarantee covers the ellipsoidal bounds);
+    /// every other kind reads `p0`, `q`, `r` as they are.
+    #[must_use]
+    pub fn setup(&self, kind: EstimateKind) -> Setup {
+        let (p0, q, r) = if kind == EstimateKind::GuaranteedConstrainedZonotope {
+            let around = |m: &DMatrix<f64>| DVector::from_iterator(m.nrows(), (0..m.nrows()).map(|i| m[(i, i)].max(0.0).sqrt()));
+            let (x0, w, v) = match &self.boxes {
+                Some(b) => (b.x0.clone(), b.w.clone(), b.v.clone()),
+                None => (around(&self.p0), around(&self.q), around(&self.r)),
+            };
+            (DMatrix::from_diagonal(&x0), DMatrix::from_diagonal(&w), DMatrix::from_diagonal(&v))
+        } else {
+            (self.p0.clone(), self.q.clone(), self.r.clone())
+        };
+        Setup { x0: self.x0.clone(), p0, process_noise: q, measurement_noise: r, inputs: self.inputs() }
+    }
+
+    fn estimator_error_at(&self, e: EstimatorError) -> Error {
         let key = match &e {
             EstimatorError::NotSymmetric { what }
             | EstimatorError::NotPositiveDefinite { what }
@@ -437,13 +480,17 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
     let x0 = cx.vector("x0", &f.x0, n)?;
     let input_range = cx.range(("u_lower", &f.u_lower), ("u_upper", &f.u_upper), p, "the input range", false)?;
     let state_bounds = cx.range(("x_lower", &f.x_lower), ("x_upper", &f.x_upper), n, "the state's range", true)?;
-    let mut keys = Vec::with_capacity(12);
+    let boxes = boxes(&cx, &f, n, m)?;
+    let mut keys = Vec::with_capacity(16);
     for (k, span) in [("q", f.q.span()), ("r", f.r.span()), ("p0", f.p0.span()), ("x0", f.x0.span())]
         .into_iter()
         .chain(f.u_lower.as_ref().map(|v| ("u_lower", v.span())))
         .chain(f.u_upper.as_ref().map(|v| ("u_upper", v.span())))
         .chain(f.x_lower.as_ref().map(|v| ("x_lower", v.span())))
         .chain(f.x_upper.as_ref().map(|v| ("x_upper", v.span())))
+        .chain(f.x0_radius.as_ref().map(|v| ("x0_radius", v.span())))
+        .chain(f.w_radius.as_ref().map(|v| ("w_radius", v.span())))
+        .chain(f.v_radius.as_ref().map(|v| ("v_radius", v.span())))
         .chain(f.a.as_ref().map(|v| ("a", v.span())))
         .chain(f.b.as_ref().map(|v| ("b", v.span())))
         .chain(f.c.as_ref().map(|v| ("c", v.span())))
@@ -481,7 +528,35 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         params.weights(n).map_err(|e| Error::at(cx.at(t.span()), format!("`ukf`: {e}")))?;
     }
     let source = Source { path: path.to_owned(), keys };
-    Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, mhe, ukf, source })
+    Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, source })
+}
+
+/// The boxes `x0_radius`, `w_radius`, `v_radius`: all three or none, finite and non-negative.
+fn boxes(cx: &Ctx<'_>, f: &ModelFile, n: usize, m: usize) -> Result<Option<Boxes>, Error> {
+    let keys = [("x0_radius", &f.x0_radius, n), ("w_radius", &f.w_radius, n), ("v_radius", &f.v_radius, m)];
+    let given: Vec<_> = keys.iter().filter(|(_, v, _)| v.is_some()).collect();
+    if given.is_empty() {
+        return Ok(None);
+    }
+    if given.len() < 3 {
+        let (_, v, _) = given[0];
+        let v = v.as_ref().map_or(0..0, |v| v.span());
+        return Err(Error::at(cx.at(v), "give all three boxes `x0_radius`, `w_radius`, `v_radius`, or none"));
+    }
+    let mut radii = Vec::with_capacity(3);
+    for (name, v, len) in keys {
+        let Some(v) = v else { return Ok(None) };
+        let r = cx.vector(name, v, len)?;
+        if let Some(i) = r.iter().position(|x| *x < 0.0) {
+            return Err(Error::at(cx.at(v.span()), format!("`{name}`: entry {} is {} (a half-width must be ≥ 0)", i + 1, r[i])));
+        }
+        radii.push(r);
+    }
+    let [x0, w, v]: [DVector<f64>; 3] = match radii.try_into() {
+        Ok(r) => r,
+        Err(_) => return Ok(None),
+    };
+    Ok(Some(Boxes { x0, w, v }))
 }
 
 /// The dynamics of a model file: its matrices `a`, `b`, `c`, or its `[model]` of equations.

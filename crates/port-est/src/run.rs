@@ -50,6 +50,8 @@ pub struct StatusTally {
     pub inconsistent: u64,
     /// Steps whose set is no longer guaranteed.
     pub not_guaranteed: u64,
+    /// Steps whose guaranteed set is wider than the estimator's divergence rule allows.
+    pub diverging: u64,
 }
 
 impl StatusTally {
@@ -65,12 +67,13 @@ impl StatusTally {
         }
         self.inconsistent += u64::from(s.data == DataCheck::Inconsistent);
         self.not_guaranteed += u64::from(s.guarantee == Guarantee::Lost);
+        self.diverging += u64::from(s.guarantee == Guarantee::Diverging);
     }
 
     /// Steps that did not end cleanly.
     #[must_use]
     pub fn unclean(&self) -> u64 {
-        self.not_converged + self.fallbacks + self.relaxed + self.inconsistent.max(self.not_guaranteed)
+        self.not_converged + self.fallbacks + self.relaxed + self.inconsistent.max(self.not_guaranteed) + self.diverging
     }
 
     /// One warning line per kind of unclean step, empty when every step ended cleanly.
@@ -88,6 +91,7 @@ impl StatusTally {
         add(self.relaxed, "could not meet their constraints: a relaxed problem's estimate is published");
         add(self.inconsistent, "had data inconsistent with the noise bounds");
         add(self.not_guaranteed, "published sets that are no longer guaranteed");
+        add(self.diverging, "published guaranteed sets wider than the divergence rule allows (too wide to act on)");
         w
     }
 }
@@ -151,6 +155,10 @@ impl EstimateColumns {
                 push("hi");
                 h.push_str(",trace_shape");
             }
+            EstimateKind::GuaranteedConstrainedZonotope => {
+                push("lo");
+                push("hi");
+            }
             _ => {}
         }
         for d in self.details {
@@ -178,7 +186,7 @@ impl EstimateColumns {
                 }
                 write!(out, ",{:e}", e.shape().trace())?;
             }
-            EstimateKind::GuaranteedEllipsoid => {
+            EstimateKind::GuaranteedEllipsoid | EstimateKind::GuaranteedConstrainedZonotope => {
                 for side in [0, 1] {
                     for i in 0..self.states {
                         match e.bounds(i) {
@@ -187,7 +195,9 @@ impl EstimateColumns {
                         }
                     }
                 }
-                write!(out, ",{:e}", e.shape().trace())?;
+                if self.kind == EstimateKind::GuaranteedEllipsoid {
+                    write!(out, ",{:e}", e.shape().trace())?;
+                }
             }
             _ => {}
         }
