@@ -28,10 +28,14 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("models", &["dense-kernels", "intervals"]),
     ("equation-models", &["models", "intervals"]),
     ("ellipsoid", &["dense-kernels"]),
+    ("constrained-zonotope", &["intervals"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels", "intervals"]),
     ("vessel-control", &["models", "dense-kernels", "vessel-dynamics", "estimators"]),
-    ("estimators", &["models", "dense-kernels", "ellipsoid", "lmi", "fuzzy-inference"]),
+    (
+        "estimators",
+        &["models", "dense-kernels", "ellipsoid", "constrained-zonotope", "intervals", "lmi", "fuzzy-inference"],
+    ),
     (
         "port-est",
         &[
@@ -55,6 +59,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "ellipsoid",
             "lmi",
             "port-est",
+            "constrained-zonotope",
             "*-dynamics",
             "fuzzy-inference",
             "equation-models",

@@ -64,6 +64,10 @@ pub trait Estimate {
     fn status(&self) -> StepStatus;
     /// The estimator's own account of the step (multipliers, iterations, noise scale…).
     fn details(&self) -> StepDetails;
+    /// The guaranteed constrained zonotope itself, for estimates of that kind.
+    fn constrained_zonotope(&self) -> Option<&constrained_zonotope::ConstrainedZonotope> {
+        None
+    }
 }
 
 /// One recursive estimator over models of type `M` (a capability trait such as

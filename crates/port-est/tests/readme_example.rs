@@ -61,6 +61,7 @@ fn readme_filter_example_runs_for_every_estimator() {
         let expected = match info.kind {
             EstimateKind::GuaranteedEllipsoid => "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,status",
             EstimateKind::Gaussian => "k,xhat1,xhat2,sd1,sd2,trace_cov,status",
+            EstimateKind::GuaranteedConstrainedZonotope => "k,xhat1,xhat2,lo1,lo2,hi1,hi2,generators,constraints,status",
             _ => "k,xhat1,xhat2,iterations,status",
         };
         assert_eq!(lines[0], expected, "{label}");
@@ -84,6 +85,12 @@ fn readme_filter_example_runs_for_every_estimator() {
                     assert!(v[8..11].iter().all(|t| *t >= 0.0), "{label}: multipliers are nonnegative");
                 }
                 EstimateKind::Gaussian => assert!(v[3] > 0.0 && v[4] > 0.0 && v[5] > 0.0, "{label}: sd and trace"),
+                EstimateKind::GuaranteedConstrainedZonotope => {
+                    for s in 0..2 {
+                        assert!(v[3 + s] <= v[1 + s] && v[1 + s] <= v[5 + s], "{label}: lo <= xhat <= hi at row {i}");
+                    }
+                    assert!(v[7] >= 1.0, "{label}: generators");
+                }
                 _ => {}
             }
         }

@@ -104,6 +104,11 @@ pub fn estimator_error(py: Python<'_>, e: &EstimatorError, row: Option<usize>) -
             let _ = value.setattr("probability", *probability);
             err
         }
+        EstimatorError::SetMissed { step, .. } => {
+            let err = InconsistentDataError::new_err(message);
+            let _ = err.value(py).setattr("step", *step);
+            err
+        }
         EstimatorError::OutsideStateBounds { step, state, .. } => {
             let err = InconsistentDataError::new_err(message);
             let value = err.value(py);

@@ -14,8 +14,9 @@ use crate::convert::{mat_out, vec_out};
 /// Attributes
 /// ----------
 /// kind : str
-///     ``"gaussian"`` (mean and covariance), ``"guaranteed ellipsoid"`` (a set certainly holding the
-///     state while the noises respect their bounds) or ``"point"`` (moving-horizon estimators).
+///     ``"gaussian"`` (mean and covariance), ``"guaranteed ellipsoid"`` or ``"guaranteed constrained
+///     zonotope"`` (sets certainly holding the state while the noises respect their bounds) or
+///     ``"point"`` (moving-horizon estimators).
 /// center : ndarray, shape (n,)
 ///     The centre (the mean of a Gaussian estimate).
 /// shape : ndarray, shape (n, n)
@@ -31,6 +32,9 @@ use crate::convert::{mat_out, vec_out};
 ///     Whether nothing is wrong (initial, predicted or converged, consistent, guarantee intact).
 /// guaranteed : bool
 ///     Whether this is a guaranteed set whose guarantee holds.
+/// set : tuple of ndarray, or None
+///     The guaranteed constrained zonotope ``{c + G xi : |xi|_inf <= 1, A xi = b}`` of a
+///     ``"guaranteed constrained zonotope"`` estimate, as ``(c, G, A, b)``; None for other kinds.
 /// details : dict[str, float | None]
 ///     The estimator's own numbers (``tau1``, ``tau2``, ``tau3`` of a set-membership step; ``scale``,
 ///     ``distance`` of the fuzzy-adaptive filter; ``iterations`` of a moving-horizon window).
@@ -44,6 +48,7 @@ pub struct Estimate {
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     status: StepStatus,
     details: Vec<(&'static str, Option<f64>)>,
+    set: Option<constrained_zonotope::ConstrainedZonotope>,
 }
 
 impl Estimate {
@@ -69,6 +74,7 @@ impl Estimate {
             bounds,
             status: e.status(),
             details,
+            set: e.constrained_zonotope().cloned(),
         }
     }
 
@@ -90,7 +96,7 @@ impl Estimate {
 
 #[pymethods]
 impl Estimate {
-    /// ``"gaussian"``, ``"guaranteed ellipsoid"`` or ``"point"``.
+    /// ``"gaussian"``, ``"guaranteed ellipsoid"``, ``"guaranteed constrained zonotope"`` or ``"point"``.
     #[getter]
     fn kind(&self) -> &'static str {
         self.kind.label()
@@ -135,7 +141,26 @@ impl Estimate {
     /// Whether this is a guaranteed set whose guarantee holds.
     #[getter]
     fn guaranteed(&self) -> bool {
-        self.kind == EstimateKind::GuaranteedEllipsoid && self.status.guarantee == estimators::Guarantee::Holds
+        matches!(self.kind, EstimateKind::GuaranteedEllipsoid | EstimateKind::GuaranteedConstrainedZonotope)
+            && matches!(self.status.guarantee, estimators::Guarantee::Holds | estimators::Guarantee::Diverging)
+    }
+
+    /// The constrained zonotope ``(c, G, A, b)``; None for other kinds of estimate.
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn set<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<
+        Option<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)>,
+    > {
+        let Some(z) = &self.set else { return Ok(None) };
+        Ok(Some((
+            vec_out(py, z.center().as_slice())?,
+            mat_out(py, z.generator_matrix())?,
+            mat_out(py, z.constraint_matrix())?,
+            vec_out(py, z.constraint_rhs().as_slice())?,
+        )))
     }
 
     /// The estimator's own numbers by name (None where the step has none).

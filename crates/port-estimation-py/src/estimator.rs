@@ -425,7 +425,8 @@ impl Estimator {
         self.entry.name
     }
 
-    /// The kind of estimate: ``"gaussian"``, ``"guaranteed ellipsoid"`` or ``"point"``.
+    /// The kind of estimate: ``"gaussian"``, ``"guaranteed ellipsoid"``, ``"guaranteed constrained zonotope"`` or
+    /// ``"point"``.
     #[getter]
     fn kind(&self) -> &'static str {
         self.entry.kind.label()

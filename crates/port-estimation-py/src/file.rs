@@ -64,11 +64,15 @@ impl ModelFile {
     /// set-membership filter, as for ``port-est filter``.
     #[pyo3(signature = (name = registry::names::SMF, **settings))]
     fn estimator(&self, py: Python<'_>, name: &str, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Estimator> {
+        // The file's initial data as the estimator's kind reads them (boxes for the
+        // constrained-zonotope filters).
+        let kind = registry::entry(name).map_or(estimators::EstimateKind::Gaussian, |e| e.kind);
+        let setup = self.file.setup(kind);
         let (x0, p0, q, r) = (
-            vec_out(py, self.file.x0.as_slice())?.into_any(),
-            mat_out(py, &self.file.p0)?.into_any(),
-            mat_out(py, &self.file.q)?.into_any(),
-            mat_out(py, &self.file.r)?.into_any(),
+            vec_out(py, setup.x0.as_slice())?.into_any(),
+            mat_out(py, &setup.p0)?.into_any(),
+            mat_out(py, &setup.process_noise)?.into_any(),
+            mat_out(py, &setup.measurement_noise)?.into_any(),
         );
         let initial = Initial { x0: Some(&x0), P0: Some(&p0), Q: Some(&q), R: Some(&r) };
         let file = FileSettings {

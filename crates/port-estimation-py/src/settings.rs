@@ -10,7 +10,7 @@ use estimators::mhe::{
 use estimators::registry::{
     EstimatorEntry, EstimatorSettings, FuzzyAdaptiveSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
 };
-use estimators::{Dims, InconsistencyPolicy, UkfParams};
+use estimators::{ConstrainedZonotopeSettings, Dims, InconsistencyPolicy, UkfParams};
 use fuzzy_inference::FuzzySystem;
 use nalgebra::DVector;
 use pyo3::prelude::*;
@@ -74,6 +74,9 @@ pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
             "v_upper",
         ],
         SettingsKind::FuzzyAdaptive => &["fis", "fis_toml", "horizontal"],
+        SettingsKind::ConstrainedZonotope => {
+            &["order", "max_constraints", "inconsistency", "x_lower", "x_upper", "divergence_factor"]
+        }
         _ => &[],
     }
 }
@@ -167,16 +170,7 @@ fn set_membership(
         Some(name) => SmfSolver::by_name(&name).map_err(|e| value_error(e.to_string()))?,
         None => SmfSolver::default(),
     };
-    let inconsistency = kw
-        .choice(
-            "inconsistency",
-            &[
-                ("error", InconsistencyPolicy::Error),
-                ("flag", InconsistencyPolicy::FlagAndContinue),
-                ("restart", InconsistencyPolicy::Restart),
-            ],
-        )?
-        .unwrap_or_default();
+    let inconsistency = inconsistency(kw)?;
     Ok(SetMembershipSettings { solver, inconsistency, state_bounds })
 }
 
@@ -323,6 +317,42 @@ fn fuzzy_adaptive(kw: &Kwargs<'_>) -> PyResult<FuzzyAdaptiveSettings> {
     Ok(s)
 }
 
+/// The constrained-zonotope filters' settings: `order`, `max_constraints`, `inconsistency`,
+/// `x_lower`/`x_upper` (over the file's), `divergence_factor`.
+fn constrained_zonotope(
+    kw: &Kwargs<'_>,
+    states: usize,
+    file: Option<&(DVector<f64>, DVector<f64>)>,
+) -> PyResult<ConstrainedZonotopeSettings> {
+    let mut s = ConstrainedZonotopeSettings::default();
+    if let Some(order) = kw.extract::<usize>("order", "a positive integer")? {
+        s.order = order;
+    }
+    if let Some(nc) = kw.extract::<usize>("max_constraints", "a non-negative integer")? {
+        s.max_constraints = nc;
+    }
+    if let Some(f) = kw.extract::<f64>("divergence_factor", "a number above 1")? {
+        s.divergence_factor = f;
+    }
+    s.inconsistency = inconsistency(kw)?;
+    s.state_bounds = kw.bounds("x_lower", "x_upper", states)?.or_else(|| file.cloned());
+    Ok(s)
+}
+
+/// The `inconsistency` keyword: `"error"` (the default), `"flag"` or `"restart"`.
+fn inconsistency(kw: &Kwargs<'_>) -> PyResult<InconsistencyPolicy> {
+    Ok(kw
+        .choice(
+            "inconsistency",
+            &[
+                ("error", InconsistencyPolicy::Error),
+                ("flag", InconsistencyPolicy::FlagAndContinue),
+                ("restart", InconsistencyPolicy::Restart),
+            ],
+        )?
+        .unwrap_or_default())
+}
+
 /// The settings of `entry` from keywords over the model file's (`None`: the row's defaults).
 ///
 /// # Errors
@@ -361,6 +391,9 @@ pub fn settings(
         SettingsKind::Unscented => Some(EstimatorSettings::Unscented(sigma_points(&kw, file.ukf.unwrap_or_default())?)),
         SettingsKind::NonlinearMovingHorizon => Some(nonlinear_moving_horizon(&kw, dims, entry)?),
         SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::new(fuzzy_adaptive(&kw)?))),
+        SettingsKind::ConstrainedZonotope => {
+            Some(EstimatorSettings::ConstrainedZonotope(constrained_zonotope(&kw, dims.states, file.state_bounds)?))
+        }
         other => {
             return Err(value_error(format!(
                 "estimator {} takes {}, which this version of the package cannot set",

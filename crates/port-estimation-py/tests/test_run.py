@@ -44,6 +44,11 @@ def _case(row, model_kind, steps=80, seed=1):
         wq, wr = np.sqrt(np.diag(q)), np.sqrt(np.diag(r))
         settings.update(w_lower=-wq, w_upper=wq, v_lower=-wr, v_upper=wr)
 
+    if row["kind"] == "guaranteed constrained zonotope":
+        # Boxes: those around the noise ellipsoids, and an initial box that holds the true start
+        # (the centre below is x0 / 2, off the vessel's start by up to 0.5 in its speed).
+        p0, q, r = (np.sqrt(np.diag(s)) for s in (3.0 * p0, q, r))
+
     def build():
         return pe.Estimator(row["name"], model, x0=x0 * 0.5, P0=p0, Q=q, R=r, **settings)
 

@@ -141,6 +141,9 @@ impl Estimate for ZonotopeEstimate {
     fn details(&self) -> StepDetails {
         StepDetails::ConstrainedZonotope(self.report)
     }
+    fn constrained_zonotope(&self) -> Option<&ConstrainedZonotope> {
+        Some(&self.set)
+    }
 }
 
 /// The constrained-zonotope filter (module documentation).

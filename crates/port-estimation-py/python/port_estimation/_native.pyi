@@ -15,7 +15,7 @@ ArrayLike = npt.ArrayLike
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 PathLike = Union[str, os.PathLike[str]]
-Kind = Literal["gaussian", "guaranteed ellipsoid", "point"]
+Kind = Literal["gaussian", "guaranteed ellipsoid", "guaranteed constrained zonotope", "point"]
 Capability = Literal["linear", "second-order", "differentiable", "discrete"]
 
 MAX_RUN_VALUES: Final[int]
@@ -108,6 +108,8 @@ class Estimate:
     def clean(self) -> bool: ...
     @property
     def guaranteed(self) -> bool: ...
+    @property
+    def set(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None: ...
     @property
     def details(self) -> dict[str, float | None]: ...
 
