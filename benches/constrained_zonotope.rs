@@ -13,7 +13,19 @@ use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
 const FOREIGN: &[&str] = &[
-    "x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf", "x0_radius", "w_radius", "v_radius",
+    "x0",
+    "p0",
+    "q",
+    "r",
+    "u_lower",
+    "u_upper",
+    "x_lower",
+    "x_upper",
+    "mhe",
+    "ukf",
+    "x0_radius",
+    "w_radius",
+    "v_radius",
 ];
 
 /// `steps` of a run with every noise on a vertex of its box.
@@ -51,7 +63,8 @@ fn six_tank(crit: &mut Criterion) {
         inputs: 3,
     };
     let x0 = DVector::from_element(6, 21.0);
-    let run = boundary_run(&model, &x0, &|k| DVector::from_element(3, 0.1 + 0.0025 * (k % 20) as f64), (0.001, 0.2), 60);
+    let run =
+        boundary_run(&model, &x0, &|k| DVector::from_element(3, 0.1 + 0.0025 * (k % 20) as f64), (0.001, 0.2), 60);
     let f0 = ConstrainedZonotopeFilter::new(setup, ConstrainedZonotopeSettings::default()).unwrap();
     // Steps 20..60 of the run, after the set has reached its reduced size.
     let mut warm = f0.clone();

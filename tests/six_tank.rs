@@ -9,7 +9,19 @@ use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
 const FOREIGN: &[&str] = &[
-    "x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf", "x0_radius", "w_radius", "v_radius",
+    "x0",
+    "p0",
+    "q",
+    "r",
+    "u_lower",
+    "u_upper",
+    "x_lower",
+    "x_upper",
+    "mhe",
+    "ukf",
+    "x0_radius",
+    "w_radius",
+    "v_radius",
 ];
 
 /// CORA's first measurement (at t = 0), which the log's rows cannot hold (examples/six-tank/README.md).

@@ -239,9 +239,8 @@ impl ConstrainedZonotope {
     /// The factor to eliminate and the row to solve it from, `None` when none can be.
     fn elimination_choice(&self, excess: &[f64]) -> Option<(usize, usize)> {
         let (nc, ng) = (self.constraints(), self.generators());
-        let candidates: Vec<usize> = (0..ng)
-            .filter(|&j| excess[j].is_finite() && (0..nc).any(|i| self.a[(i, j)] != 0.0))
-            .collect();
+        let candidates: Vec<usize> =
+            (0..ng).filter(|&j| excess[j].is_finite() && (0..nc).any(|i| self.a[(i, j)] != 0.0)).collect();
         if candidates.is_empty() {
             return None;
         }
@@ -372,9 +371,8 @@ impl ConstrainedZonotope {
     /// Keeps the `keep` largest lifted columns `[g_j; a_j]` and boxes the rest (Z6).
     fn reduce_generators(&self, keep: usize) -> Result<Self, SetError> {
         let (n, nc, ng) = (self.dim(), self.constraints(), self.generators());
-        let mut order: Vec<(f64, usize)> = (0..ng)
-            .map(|j| (self.g.column(j).norm_squared() + self.a.column(j).norm_squared(), j))
-            .collect();
+        let mut order: Vec<(f64, usize)> =
+            (0..ng).map(|j| (self.g.column(j).norm_squared() + self.a.column(j).norm_squared(), j)).collect();
         order.sort_by(|x, y| y.0.total_cmp(&x.0));
         let mut kept: Vec<usize> = order.iter().take(keep).map(|&(_, j)| j).collect();
         kept.sort_unstable();

@@ -4,7 +4,7 @@
 use nalgebra::{DMatrix, DVector, dmatrix, dvector};
 
 use super::*;
-use crate::polygon::{P, box_poly, bbox, cross, map_poly, strip, sum_poly};
+use crate::polygon::{P, bbox, box_poly, cross, map_poly, strip, sum_poly};
 
 /// A small deterministic generator of test numbers in `[-1, 1]`.
 struct Lcg(u64);
@@ -27,7 +27,9 @@ fn run(seed: u64, steps: usize, limits: Option<ReductionLimits>) -> Vec<(Constra
         let d = [0.1 * rng.next(), 0.1 * rng.next()];
         let w = [0.05 + 0.05 * rng.next().abs(), 0.05 + 0.05 * rng.next().abs()];
         z = z.affine_map(&m, Some(&dvector![d[0], d[1]])).unwrap();
-        z = z.minkowski_sum(&ConstrainedZonotope::from_box(&dvector![0.0, 0.0], &dvector![w[0], w[1]]).unwrap()).unwrap();
+        z = z
+            .minkowski_sum(&ConstrainedZonotope::from_box(&dvector![0.0, 0.0], &dvector![w[0], w[1]]).unwrap())
+            .unwrap();
         poly = sum_poly(&map_poly(&m, d, &poly), &box_poly([0.0, 0.0], w));
         // A measurement through the middle of the current set, so the strip cuts it.
         let h = [rng.next(), rng.next()];
@@ -57,8 +59,15 @@ fn the_hull_of_unreduced_operations_is_the_exact_polygon_s() {
                 // Sound: never inside the exact hull.
                 assert!(h.lower[i] <= lo[i] + 1e-12 && h.upper[i] >= hi[i] - 1e-12, "seed {seed} step {k}");
                 // Tight: the exact hull up to the solver's and the rounding enclosures' size.
-                assert!(lo[i] - h.lower[i] < 1e-7 && h.upper[i] - hi[i] < 1e-7, "seed {seed} step {k} state {i}: \
-                         [{}, {}] against [{}, {}]", h.lower[i], h.upper[i], lo[i], hi[i]);
+                assert!(
+                    lo[i] - h.lower[i] < 1e-7 && h.upper[i] - hi[i] < 1e-7,
+                    "seed {seed} step {k} state {i}: \
+                         [{}, {}] against [{}, {}]",
+                    h.lower[i],
+                    h.upper[i],
+                    lo[i],
+                    hi[i]
+                );
             }
         }
     }
@@ -126,8 +135,9 @@ fn an_exact_elimination_loses_nothing() {
     // The strip |x₁| ≤ 0.5 on the square: the constraint's implied range of its slack-free factor
     // lies inside [-1, 1] after rescaling, so eliminating it keeps the exact hull.
     let square = ConstrainedZonotope::from_box(&dvector![0.0, 0.0], &dvector![1.0, 1.0]).unwrap();
-    let cut =
-        square.intersect(&dmatrix![1.0, 0.0], &ConstrainedZonotope::from_box(&dvector![0.0], &dvector![0.5]).unwrap()).unwrap();
+    let cut = square
+        .intersect(&dmatrix![1.0, 0.0], &ConstrainedZonotope::from_box(&dvector![0.0], &dvector![0.5]).unwrap())
+        .unwrap();
     let r = cut.reduce(&ReductionLimits::new(10, 0).unwrap()).unwrap();
     assert_eq!(r.constraints(), 0);
     let h = r.interval_hull().unwrap();

@@ -5,11 +5,11 @@
 //! flagged; an undefined model is `GuaranteeLost`; an unmeasured random walk is marked diverging.
 
 use constrained_zonotope::polygon::{bbox, box_poly, map_poly, strip, sum_poly};
-use estimators::{
-    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, DataCheck, DataChecks, Estimate, EstimatorError,
-    Guarantee, NonlinearSetMembershipFilter, Setup,
-};
 use estimators::checks::InconsistencyPolicy;
+use estimators::{
+    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, DataCheck, DataChecks, Estimate, EstimatorError, Guarantee,
+    NonlinearSetMembershipFilter, Setup,
+};
 use models::{
     ConstantModel, DifferentiableModel, Dims, DiscreteModel, Interval, ModelError, SecondOrderModel, TaylorEnclosure,
     Xoshiro256StarStar,
@@ -122,7 +122,12 @@ fn on_a_linear_model_the_interval_is_the_exact_set_s() {
         for i in 0..2 {
             let (l, h) = e.bounds(i).unwrap();
             assert!(l <= lo[i] && h >= hi[i], "step {k}, state {i}: [{l}, {h}] misses [{}, {}]", lo[i], hi[i]);
-            assert!(lo[i] - l < 1e-7 && h - hi[i] < 1e-7, "step {k}, state {i}: [{l}, {h}] wider than [{}, {}]", lo[i], hi[i]);
+            assert!(
+                lo[i] - l < 1e-7 && h - hi[i] < 1e-7,
+                "step {k}, state {i}: [{l}, {h}] wider than [{}, {}]",
+                lo[i],
+                hi[i]
+            );
         }
         assert!(inside(e, &x));
         assert!(e.status().is_clean(), "{}", e.status());
@@ -238,10 +243,17 @@ fn an_undefined_model_loses_the_guarantee_and_bad_input_is_refused() {
     assert_eq!(f.estimate().lower(), &before);
     let model = Pendulum { dt: 0.05, root: false };
     assert!(matches!(f.step(&model, &dvector![f64::NAN], &dvector![0.3]), Err(EstimatorError::NonFinite { .. })));
-    assert!(matches!(f.step(&model, &dvector![0.0], &dvector![0.3, 1.0]), Err(EstimatorError::DimensionMismatch { .. })));
+    assert!(matches!(
+        f.step(&model, &dvector![0.0], &dvector![0.3, 1.0]),
+        Err(EstimatorError::DimensionMismatch { .. })
+    ));
     for (order, nc, factor) in [(0, 0, 2.0), (1, 8, 2.0), (201, 0, 2.0), (20, 0, 1.0), (20, 0, f64::NAN)] {
-        let settings = ConstrainedZonotopeSettings { order, max_constraints: nc, divergence_factor: factor, ..Default::default() };
-        assert!(matches!(ConstrainedZonotopeFilter::new(s.clone(), settings), Err(EstimatorError::InvalidSetting { .. })));
+        let settings =
+            ConstrainedZonotopeSettings { order, max_constraints: nc, divergence_factor: factor, ..Default::default() };
+        assert!(matches!(
+            ConstrainedZonotopeFilter::new(s.clone(), settings),
+            Err(EstimatorError::InvalidSetting { .. })
+        ));
     }
 }
 

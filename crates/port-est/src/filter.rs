@@ -175,10 +175,12 @@ fn settings(
         SetMembershipSettings { solver: solver.unwrap_or_default(), state_bounds, ..SetMembershipSettings::default() };
     Ok(match entry.settings {
         SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(smf)),
-        SettingsKind::ConstrainedZonotope => Some(EstimatorSettings::ConstrainedZonotope(ConstrainedZonotopeSettings {
-            state_bounds: model.state_bounds.clone(),
-            ..ConstrainedZonotopeSettings::default()
-        })),
+        SettingsKind::ConstrainedZonotope => {
+            Some(EstimatorSettings::ConstrainedZonotope(ConstrainedZonotopeSettings {
+                state_bounds: model.state_bounds.clone(),
+                ..ConstrainedZonotopeSettings::default()
+            }))
+        }
         SettingsKind::Unscented => model.ukf.map(EstimatorSettings::Unscented),
         SettingsKind::SetMembershipInputBox => {
             let Some((lower, upper)) = model.input_range.clone() else {

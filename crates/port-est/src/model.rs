@@ -27,7 +27,19 @@ type Bounds = (DVector<f64>, DVector<f64>);
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
 pub const NOISE_KEYS: [&str; 13] = [
-    "x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf", "x0_radius", "w_radius", "v_radius",
+    "x0",
+    "p0",
+    "q",
+    "r",
+    "u_lower",
+    "u_upper",
+    "x_lower",
+    "x_upper",
+    "mhe",
+    "ukf",
+    "x0_radius",
+    "w_radius",
+    "v_radius",
 ];
 
 impl std::fmt::Debug for Dynamics {
@@ -252,7 +264,8 @@ impl Model {
     #[must_use]
     pub fn setup(&self, kind: EstimateKind) -> Setup {
         let (p0, q, r) = if kind == EstimateKind::GuaranteedConstrainedZonotope {
-            let around = |m: &DMatrix<f64>| DVector::from_iterator(m.nrows(), (0..m.nrows()).map(|i| m[(i, i)].max(0.0).sqrt()));
+            let around =
+                |m: &DMatrix<f64>| DVector::from_iterator(m.nrows(), (0..m.nrows()).map(|i| m[(i, i)].max(0.0).sqrt()));
             let (x0, w, v) = match &self.boxes {
                 Some(b) => (b.x0.clone(), b.w.clone(), b.v.clone()),
                 None => (around(&self.p0), around(&self.q), around(&self.r)),
@@ -548,7 +561,10 @@ fn boxes(cx: &Ctx<'_>, f: &ModelFile, n: usize, m: usize) -> Result<Option<Boxes
         let Some(v) = v else { return Ok(None) };
         let r = cx.vector(name, v, len)?;
         if let Some(i) = r.iter().position(|x| *x < 0.0) {
-            return Err(Error::at(cx.at(v.span()), format!("`{name}`: entry {} is {} (a half-width must be ≥ 0)", i + 1, r[i])));
+            return Err(Error::at(
+                cx.at(v.span()),
+                format!("`{name}`: entry {} is {} (a half-width must be ≥ 0)", i + 1, r[i]),
+            ));
         }
         radii.push(r);
     }

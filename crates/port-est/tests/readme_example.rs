@@ -61,7 +61,9 @@ fn readme_filter_example_runs_for_every_estimator() {
         let expected = match info.kind {
             EstimateKind::GuaranteedEllipsoid => "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,status",
             EstimateKind::Gaussian => "k,xhat1,xhat2,sd1,sd2,trace_cov,status",
-            EstimateKind::GuaranteedConstrainedZonotope => "k,xhat1,xhat2,lo1,lo2,hi1,hi2,generators,constraints,status",
+            EstimateKind::GuaranteedConstrainedZonotope => {
+                "k,xhat1,xhat2,lo1,lo2,hi1,hi2,generators,constraints,status"
+            }
             _ => "k,xhat1,xhat2,iterations,status",
         };
         assert_eq!(lines[0], expected, "{label}");

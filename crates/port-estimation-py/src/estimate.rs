@@ -152,7 +152,12 @@ impl Estimate {
         &self,
         py: Python<'py>,
     ) -> PyResult<
-        Option<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)>,
+        Option<(
+            Bound<'py, PyArray1<f64>>,
+            Bound<'py, PyArray2<f64>>,
+            Bound<'py, PyArray2<f64>>,
+            Bound<'py, PyArray1<f64>>,
+        )>,
     > {
         let Some(z) = &self.set else { return Ok(None) };
         Ok(Some((

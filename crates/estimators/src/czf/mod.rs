@@ -214,7 +214,7 @@ impl ConstrainedZonotopeFilter {
                 requirement: "an integer from 1 to 200",
             });
         }
-        if !(settings.divergence_factor > 1.0) {
+        if settings.divergence_factor.is_nan() || settings.divergence_factor <= 1.0 {
             return Err(EstimatorError::InvalidSetting {
                 what: "divergence_factor",
                 value: settings.divergence_factor,
@@ -434,14 +434,14 @@ impl ConstrainedZonotopeFilter {
             rad[i] = intervals::up(er + intervals::up(f64::EPSILON * yc[i].abs()));
         }
         let lost = |e: SetError| guarantee_lost(step, format!("the measurement update: {e}"));
-        let strip = ConstrainedZonotope::zonotope(yc, -&self.v_generators)
-            .and_then(|s| s.add_box(&rad))
-            .map_err(lost)?;
+        let strip =
+            ConstrainedZonotope::zonotope(yc, -&self.v_generators).and_then(|s| s.add_box(&rad)).map_err(lost)?;
         let checked = self.checks.policy != InconsistencyPolicy::Off;
         let candidate = set.intersect(&mv.m, &strip).map_err(lost)?;
         let hull = candidate.interval_hull().map_err(lost)?;
         let mut contracted: Vec<Interval> = observer.iter().zip(&x).filter_map(|(o, b)| meet(*o, *b)).collect();
-        let observer_ok = contracted.len() == x.len() && contract_box(&mut contracted, &mv, y, &self.v_radius).is_some();
+        let observer_ok =
+            contracted.len() == x.len() && contract_box(&mut contracted, &mv, y, &self.v_radius).is_some();
         let consistent = !hull.certified_empty && observer_ok;
         let status = |data, lost: bool| StepStatus {
             outcome: SolveOutcome::Converged,
