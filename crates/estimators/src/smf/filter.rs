@@ -2,6 +2,7 @@
 
 use std::time::{Duration, Instant};
 
+use intervals::Interval;
 use nalgebra::{DMatrix, DVector};
 
 use models::{Dims, LinearModel, StepModel};
@@ -96,11 +97,21 @@ impl SetEstimate {
         ellipsoid::Ellipsoid::new(self.center.clone(), self.shape.clone())
     }
 
+    /// `x̂_i ∓ √P_ii`, rounded outward (the square root and the sums each one ulp), so the
+    /// published interval contains the certified ellipsoid's projection.
     fn set_bounds(&mut self) {
         for i in 0..self.center.len() {
-            let r = self.shape[(i, i)].max(0.0).sqrt();
-            self.lower[i] = self.center[i] - r;
-            self.upper[i] = self.center[i] + r;
+            let r = intervals::up(self.shape[(i, i)].max(0.0).sqrt());
+            self.lower[i] = intervals::down(self.center[i] - r);
+            self.upper[i] = intervals::up(self.center[i] + r);
+        }
+    }
+
+    /// Cuts the published interval by bounds the true state always respects.
+    pub(crate) fn cut_bounds(&mut self, bounds: &[Interval]) {
+        for (i, b) in bounds.iter().enumerate() {
+            self.lower[i] = self.lower[i].max(b.lo());
+            self.upper[i] = self.upper[i].min(b.hi());
         }
     }
 }
@@ -306,6 +317,11 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     /// The current set estimate.
     pub fn estimate(&self) -> &SetEstimate {
         &self.est
+    }
+
+    /// The current set estimate, for a wrapper that refines its published interval.
+    pub(crate) fn estimate_mut(&mut self) -> &mut SetEstimate {
+        &mut self.est
     }
 
     /// The solver.

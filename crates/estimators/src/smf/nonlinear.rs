@@ -543,7 +543,15 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             return Err(e);
         }
         self.u_last.copy_from(u);
-        Ok(self.inner.estimate())
+        Ok(self.published())
+    }
+
+    /// The inner filter's estimate, its interval cut by the declared bounds (N1'): the true state
+    /// respects them, so the cut interval still holds it.
+    fn published(&mut self) -> &SetEstimate {
+        let Self { inner, bounds, .. } = self;
+        inner.estimate_mut().cut_bounds(bounds);
+        self.inner.estimate()
     }
 
     /// The prediction alone: (N1)–(N3) and the linear filter's prediction with `Q'`.
@@ -565,7 +573,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             return Err(e);
         }
         self.u_last.copy_from(u);
-        Ok(self.inner.estimate())
+        Ok(self.published())
     }
 
     /// The update after [`NonlinearSetMembershipFilter::predict`]: `h` linearised about the
@@ -597,7 +605,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             let _ = self.inner.set_measurement_noise(&self.r);
             return Err(e);
         }
-        Ok(self.inner.estimate())
+        Ok(self.published())
     }
 
     fn apply_noise(&mut self) -> Result<(), EstimatorError> {
