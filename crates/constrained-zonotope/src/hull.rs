@@ -10,6 +10,7 @@ use intervals::Interval;
 use nalgebra::{DMatrix, DVector};
 
 use crate::lp::{FactorLp, LpProposal};
+use crate::simplex::{Simplex, SimplexResult};
 use crate::reduce::propagate;
 use crate::{ConstrainedZonotope, SetError};
 
@@ -110,15 +111,25 @@ impl ConstrainedZonotope {
         }
         let ng = self.generators();
         let mut q = vec![0.0; ng];
-        let mut lp: Option<FactorLp> = None;
+        let mut simplex = Simplex::new(&self.a, &self.b);
+        let mut clarabel: Option<FactorLp> = None;
         for i in 0..n {
             for sign in [1.0, -1.0] {
                 for j in 0..ng {
                     q[j] = sign * self.g[(i, j)];
                 }
-                let first = lp.is_none();
-                let solver = lp.get_or_insert_with(|| FactorLp::new(&self.a, &self.b, &q));
-                match solver.solve(&q, first) {
+                // The simplex first (warm-started from the last objective's basis), Clarabel when it
+                // stops; either only proposes multipliers.
+                let proposal = match simplex.solve(&q) {
+                    SimplexResult::Optimal { y, xi } => LpProposal::Optimal { lambda: y, xi },
+                    SimplexResult::Infeasible { y } => LpProposal::Infeasible { lambda: y },
+                    SimplexResult::Stopped => {
+                        let first = clarabel.is_none();
+                        let solver = clarabel.get_or_insert_with(|| FactorLp::new(&self.a, &self.b, &q));
+                        solver.solve(&q, first)
+                    }
+                };
+                match proposal {
                     LpProposal::Optimal { lambda, .. } => {
                         let bound = verified_lower(sign * self.c[i], &q, &self.a, &self.b, &lambda);
                         if sign > 0.0 {
@@ -128,7 +139,8 @@ impl ConstrainedZonotope {
                         }
                     }
                     LpProposal::Infeasible { lambda } => {
-                        if certifies_empty(&self.a, &self.b, &lambda) {
+                        let negated: Vec<f64> = lambda.iter().map(|v| -v).collect();
+                        if certifies_empty(&self.a, &self.b, &lambda) || certifies_empty(&self.a, &self.b, &negated) {
                             hull.certified_empty = true;
                             return Ok(hull);
                         }

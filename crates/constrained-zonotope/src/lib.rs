@@ -48,6 +48,7 @@ mod lp;
 mod ops;
 pub mod polygon;
 mod reduce;
+mod simplex;
 
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;

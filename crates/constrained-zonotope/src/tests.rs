@@ -218,3 +218,23 @@ fn bad_input_is_refused_before_allocating() {
     assert!(big.generators() <= MAX_GENERATORS);
     assert!(matches!(big.minkowski_sum(&big), Err(SetError::TooLarge { .. })));
 }
+
+#[test]
+fn the_simplex_finds_the_exact_bounds_itself() {
+    // The simplex alone (no Clarabel fallback): its multipliers give the polygon's bounds.
+    use crate::simplex::{Simplex, SimplexResult};
+    for seed in 0..20 {
+        let (z, poly) = run(seed, 5, None).pop().unwrap();
+        let (lo, hi) = bbox(&poly);
+        let mut s = Simplex::new(z.constraint_matrix(), z.constraint_rhs());
+        for i in 0..2 {
+            for sign in [1.0, -1.0] {
+                let q: Vec<f64> = (0..z.generators()).map(|j| sign * z.generator_matrix()[(i, j)]).collect();
+                let SimplexResult::Optimal { y, .. } = s.solve(&q) else { panic!("seed {seed}: the simplex stopped") };
+                let b = hull::verified_lower(sign * z.center()[i], &q, z.constraint_matrix(), z.constraint_rhs(), &y);
+                let exact = if sign > 0.0 { lo[i] } else { -hi[i] };
+                assert!(b <= exact + 1e-12 && exact - b < 1e-9, "seed {seed}, state {i}, sign {sign}: {b} vs {exact}");
+            }
+        }
+    }
+}
