@@ -86,92 +86,108 @@ impl Simplex {
         self.a.ncols()
     }
 
-    /// Minimises `cost` over the current constraints from the current basis.
+    /// Minimises `cost` over the current constraints from the current basis. Between basis
+    /// changes the factorisation and the duals stay valid, so every bound flip (an entering
+    /// variable that crosses its box before any basic variable reaches a bound) is taken at the
+    /// price of one column solve.
     fn optimise(&mut self, cost: &[f64]) -> Result<Vec<f64>, ()> {
         let nc = self.a.nrows();
         let total = self.cols.ncols();
         let max_iter = 50 + 20 * total;
         let mut degenerate = 0usize;
+        let mut basic = vec![false; total];
+        let mut d = vec![0.0; total];
         for _ in 0..max_iter {
+            basic.iter_mut().for_each(|v| *v = false);
+            for &j in &self.basis {
+                basic[j] = true;
+            }
             let bmat = self.cols.select_columns(&self.basis);
             let lu = bmat.clone().lu();
             // x_B = B⁻¹ (b − N x_N).
             let mut rhs = self.b.clone();
-            for j in 0..total {
-                if !self.basis.contains(&j) {
-                    let v = self.x[j];
-                    if v != 0.0 {
-                        for i in 0..nc {
-                            rhs[i] -= self.cols[(i, j)] * v;
-                        }
+            for j in (0..total).filter(|&j| !basic[j]) {
+                let v = self.x[j];
+                if v != 0.0 {
+                    for i in 0..nc {
+                        rhs[i] -= self.cols[(i, j)] * v;
                     }
                 }
             }
-            let xb = lu.solve(&rhs).ok_or(())?;
-            for (k, &j) in self.basis.iter().enumerate() {
-                self.x[j] = xb[k];
-            }
+            let mut xb = lu.solve(&rhs).ok_or(())?;
             let cb = DVector::from_iterator(nc, self.basis.iter().map(|&j| cost[j]));
             let y = bmat.transpose().lu().solve(&cb).ok_or(())?;
-            // Entering variable: Dantzig's rule, Bland's after many degenerate pivots.
-            let bland = degenerate > 2 * total;
-            let mut enter: Option<(usize, f64)> = None;
             for j in 0..total {
-                if self.basis.contains(&j) || self.lo[j] == self.hi[j] {
-                    continue;
+                d[j] = if basic[j] || self.lo[j] == self.hi[j] { 0.0 } else { cost[j] - self.cols.column(j).dot(&y) };
+            }
+            // Entering variables until the basis changes: Dantzig's rule, Bland's after many
+            // degenerate pivots.
+            let bland = degenerate > 2 * total;
+            let mut changed = false;
+            loop {
+                let mut enter: Option<(usize, f64)> = None;
+                for j in (0..total).filter(|&j| !basic[j]) {
+                    let improving = match self.at[j] {
+                        At::Lower => d[j] < -TOL,
+                        At::Upper => d[j] > TOL,
+                    };
+                    if improving && enter.is_none_or(|(_, best)| !bland && d[j].abs() > best) {
+                        enter = Some((j, d[j].abs()));
+                        if bland {
+                            break;
+                        }
+                    }
                 }
-                let d = cost[j] - self.cols.column(j).dot(&y);
-                let improving = match self.at[j] {
-                    At::Lower => d < -TOL,
-                    At::Upper => d > TOL,
-                };
-                if improving && enter.is_none_or(|(_, best)| !bland && d.abs() > best) {
-                    enter = Some((j, d.abs()));
-                    if bland {
+                let Some((j, _)) = enter else { break };
+                let dir = if self.at[j] == At::Lower { 1.0 } else { -1.0 };
+                let w = lu.solve(&self.cols.column(j).into_owned()).ok_or(())?;
+                let wmax = w.amax().max(1.0);
+                let mut t = self.hi[j] - self.lo[j];
+                let mut leave: Option<(usize, At)> = None;
+                for k in 0..nc {
+                    let wk = dir * w[k];
+                    let jb = self.basis[k];
+                    if wk > TOL * wmax {
+                        let s = (xb[k] - self.lo[jb]).max(0.0) / wk;
+                        if s < t {
+                            t = s;
+                            leave = Some((k, At::Lower));
+                        }
+                    } else if wk < -TOL * wmax && self.hi[jb].is_finite() {
+                        let s = (self.hi[jb] - xb[k]).max(0.0) / -wk;
+                        if s < t {
+                            t = s;
+                            leave = Some((k, At::Upper));
+                        }
+                    }
+                }
+                if !t.is_finite() {
+                    return Err(());
+                }
+                degenerate = if t <= TOL { degenerate + 1 } else { 0 };
+                match leave {
+                    None => {
+                        // A bound flip: the basis, its factorisation and the duals stay.
+                        xb.axpy(-dir * t, &w, 1.0);
+                        self.at[j] = if self.at[j] == At::Lower { At::Upper } else { At::Lower };
+                        self.x[j] = if self.at[j] == At::Lower { self.lo[j] } else { self.hi[j] };
+                    }
+                    Some((k, side)) => {
+                        let jb = self.basis[k];
+                        self.at[jb] = side;
+                        self.x[jb] = if side == At::Lower { self.lo[jb] } else { self.hi[jb] };
+                        self.basis[k] = j;
+                        self.x[j] += dir * t;
+                        changed = true;
                         break;
                     }
                 }
             }
-            let Some((j, _)) = enter else { return Ok(y.iter().copied().collect()) };
-            let dir = if self.at[j] == At::Lower { 1.0 } else { -1.0 };
-            let w = lu.solve(&self.cols.column(j).into_owned()).ok_or(())?;
-            let wmax = w.amax().max(1.0);
-            let mut t = self.hi[j] - self.lo[j];
-            let mut leave: Option<(usize, At)> = None;
-            for k in 0..nc {
-                let wk = dir * w[k];
-                let jb = self.basis[k];
-                if wk > TOL * wmax {
-                    let s = (self.x[jb] - self.lo[jb]).max(0.0) / wk;
-                    if s < t {
-                        t = s;
-                        leave = Some((k, At::Lower));
-                    }
-                } else if wk < -TOL * wmax && self.hi[jb].is_finite() {
-                    let s = (self.hi[jb] - self.x[jb]).max(0.0) / -wk;
-                    if s < t {
-                        t = s;
-                        leave = Some((k, At::Upper));
-                    }
+            if !changed {
+                for (k, &j) in self.basis.iter().enumerate() {
+                    self.x[j] = xb[k];
                 }
-            }
-            if !t.is_finite() {
-                return Err(());
-            }
-            degenerate = if t <= TOL { degenerate + 1 } else { 0 };
-            match leave {
-                None => {
-                    // A bound flip.
-                    self.at[j] = if self.at[j] == At::Lower { At::Upper } else { At::Lower };
-                    self.x[j] = if self.at[j] == At::Lower { self.lo[j] } else { self.hi[j] };
-                }
-                Some((k, side)) => {
-                    let jb = self.basis[k];
-                    self.at[jb] = side;
-                    self.x[jb] = if side == At::Lower { self.lo[jb] } else { self.hi[jb] };
-                    self.basis[k] = j;
-                    self.x[j] += dir * t;
-                }
+                return Ok(y.iter().copied().collect());
             }
         }
         Err(())
