@@ -124,9 +124,6 @@ impl ConstrainedZonotope {
                     SimplexResult::Optimal { y, xi } => LpProposal::Optimal { lambda: y, xi },
                     SimplexResult::Infeasible { y } => LpProposal::Infeasible { lambda: y },
                     SimplexResult::Stopped => {
-                        if std::env::var_os("CZ_DEBUG").is_some() {
-                            eprintln!("simplex stopped: ng {} nc {}", self.generators(), self.constraints());
-                        }
                         let first = clarabel.is_none();
                         let solver = clarabel.get_or_insert_with(|| FactorLp::new(&self.a, &self.b, &q));
                         solver.solve(&q, first)
