@@ -10,8 +10,8 @@ use intervals::Interval;
 use nalgebra::{DMatrix, DVector};
 
 use crate::lp::{FactorLp, LpProposal};
-use crate::simplex::{Simplex, SimplexResult};
 use crate::reduce::propagate;
+use crate::simplex::{Simplex, SimplexResult};
 use crate::{ConstrainedZonotope, SetError};
 
 /// The certified interval hull of a set.
