@@ -274,3 +274,43 @@ fn an_unmeasured_random_walk_is_marked_diverging() {
     // 2 + 0.2 k reaches 4 at k = 10 (the rounding's enclosure may put it just above).
     assert!(matches!(first, Some(10 | 11)), "{first:?}");
 }
+
+#[test]
+fn on_the_carrier_the_intervals_are_no_wider_than_the_ellipsoid_filter_s() {
+    // The straddle carrier at 1 ms, sideslip unmeasured (C = [0 I₃]), box noise on its vertices;
+    // the ellipsoid filter gets the least-trace ellipsoids around the same boxes (d·h²), so both
+    // are guaranteed for these data. After the first 50 steps, every state's interval of `czf`
+    // is no wider than `smf`'s at every step.
+    use carrier_dynamics::{CarrierModel, CarrierParams};
+    use estimators::SetMembershipFilter;
+    let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
+    let (a, b, _) = d.to_dynamic();
+    let c = DMatrix::from_fn(3, 4, |i, j| if j == 1 + i { 1.0 } else { 0.0 });
+    let model = ConstantModel::new(a.clone(), b.clone(), c.clone()).unwrap();
+    let (w, v, h0) = ([1e-3, 2e-3, 1e-4, 2e-3], [4e-3; 3], [0.05; 4]);
+    let boxes = boxes(DVector::zeros(4), &h0, &w, &v, 8);
+    let ell =
+        |h: &[f64]| DMatrix::from_diagonal(&DVector::from_iterator(h.len(), h.iter().map(|x| h.len() as f64 * x * x)));
+    let ellipsoids = Setup { p0: ell(&h0), process_noise: ell(&w), measurement_noise: ell(&v), ..boxes.clone() };
+    let settings = ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() };
+    let mut czf = ConstrainedZonotopeFilter::new(boxes, settings).unwrap();
+    let mut smf = SetMembershipFilter::new(ellipsoids).unwrap();
+    let mut rng = Xoshiro256StarStar::seed_from_u64(8);
+    let mut x = DVector::from_iterator(4, h0.iter().map(|h| 0.9 * h));
+    let u = DVector::from_element(8, 0.01);
+    for k in 0..300 {
+        x = &a * &x + &b * &u + vertex(&mut rng, &w);
+        let y = &c * &x + vertex(&mut rng, &v);
+        let ez = czf.step(&model, &u, &y).unwrap();
+        assert!(inside(ez, &x), "czf, step {k}");
+        let es = smf.step(&model, &u, &y).unwrap();
+        assert!(inside(es, &x), "smf, step {k}");
+        if k >= 50 {
+            for i in 0..4 {
+                let wz = ez.bounds(i).map(|(l, h)| h - l).unwrap();
+                let ws = es.bounds(i).map(|(l, h)| h - l).unwrap();
+                assert!(wz <= ws, "step {k}, state {i}: czf {wz} wider than smf {ws}");
+            }
+        }
+    }
+}

@@ -571,6 +571,3 @@ impl ConstrainedZonotopeFilter {
 }
 
 crate::traits::forward_estimator!(impl<> for ConstrainedZonotopeFilter, SecondOrderModel, ZonotopeEstimate);
-
-#[cfg(test)]
-mod tests;
