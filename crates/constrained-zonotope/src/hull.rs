@@ -89,26 +89,11 @@ impl ConstrainedZonotope {
     /// None at present for valid sets (the signature leaves room for limits).
     pub fn interval_hull(&self) -> Result<Hull, SetError> {
         let n = self.dim();
-        let (zlo, zhi) = self.zonotope_hull();
-        let mut hull = Hull { lower: zlo, upper: zhi, certified_empty: false, lp_failures: 0 };
-        if self.constraints() == 0 {
+        let hull = self.propagated_hull();
+        if self.constraints() == 0 || hull.certified_empty {
             return Ok(hull);
         }
-        let Some(ranges) = propagate(&self.a, &self.b) else {
-            hull.certified_empty = true;
-            return Ok(hull);
-        };
-        // Bounds from the propagated ranges: c_i + Σ_j g_ij E_j.
-        for i in 0..n {
-            let mut s = Interval::point(self.c[i]);
-            for (j, e) in ranges.e.iter().enumerate() {
-                s = s + *e * self.g[(i, j)];
-            }
-            if s.is_bounded() {
-                hull.lower[i] = hull.lower[i].max(s.lo());
-                hull.upper[i] = hull.upper[i].min(s.hi());
-            }
-        }
+        let mut hull = hull;
         let ng = self.generators();
         let mut q = vec![0.0; ng];
         let mut simplex = Simplex::new(&self.a, &self.b);
@@ -155,6 +140,34 @@ impl ConstrainedZonotope {
             hull.certified_empty = true;
         }
         Ok(hull)
+    }
+
+    /// A cheaper certified box, without linear programs: the zonotope's hull tightened by the
+    /// factor ranges of interval constraint propagation (Z4), `cᵢ + Σⱼ Gᵢⱼ E_j`. Never narrower than
+    /// [`ConstrainedZonotope::interval_hull`]; `certified_empty` when the propagation empties a range.
+    #[must_use]
+    pub fn propagated_hull(&self) -> Hull {
+        let n = self.dim();
+        let (zlo, zhi) = self.zonotope_hull();
+        let mut hull = Hull { lower: zlo, upper: zhi, certified_empty: false, lp_failures: 0 };
+        if self.constraints() == 0 {
+            return hull;
+        }
+        let Some(ranges) = propagate(&self.a, &self.b) else {
+            hull.certified_empty = true;
+            return hull;
+        };
+        for i in 0..n {
+            let mut s = Interval::point(self.c[i]);
+            for (j, e) in ranges.e.iter().enumerate() {
+                s = s + *e * self.g[(i, j)];
+            }
+            if s.is_bounded() {
+                hull.lower[i] = hull.lower[i].max(s.lo());
+                hull.upper[i] = hull.upper[i].min(s.hi());
+            }
+        }
+        hull
     }
 
     /// Whether the set is empty (Z8): `CertifiedEmpty` only on a verified certificate.

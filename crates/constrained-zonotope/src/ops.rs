@@ -13,47 +13,37 @@ impl ConstrainedZonotope {
     /// Appends, for every `i` with `radius[i] > 0`, the generator `radius[i] eᵢ` (a zero column of
     /// `A`): the set grows by the box of those radii (exactly, `Z ⊕ □(0, r)`).
     pub(crate) fn push_box(&mut self, radius: &[f64]) -> Result<(), SetError> {
-        if radius.iter().any(|r| !r.is_finite()) {
-            return Err(SetError::Overflow("box enlargement"));
-        }
-        let nz: Vec<usize> = (0..radius.len()).filter(|&i| radius[i] > 0.0).collect();
-        if nz.is_empty() {
-            return Ok(());
-        }
-        let ng = self.generators();
-        check_size("generators", ng + nz.len(), MAX_GENERATORS)?;
-        let g = std::mem::replace(&mut self.g, DMatrix::zeros(0, 0));
-        let mut g = g.resize_horizontally(ng + nz.len(), 0.0);
-        for (k, &i) in nz.iter().enumerate() {
-            g[(i, ng + k)] = radius[i];
-        }
-        self.g = g;
-        let a = std::mem::replace(&mut self.a, DMatrix::zeros(0, 0));
-        self.a = a.resize_horizontally(ng + nz.len(), 0.0);
-        Ok(())
+        self.push_diagonal(radius, true, "box enlargement")
     }
 
     /// Appends, for every constraint row `i` with `slack[i] > 0`, a factor with column
     /// `slack[i] eᵢ` in `A` and a zero column in `G`: the constraint `aᵢ ξ = bᵢ` becomes
     /// `|aᵢ ξ − bᵢ| ≤ slackᵢ`, which every `ξ` within the row's rounding error satisfies.
     pub(crate) fn push_slack(&mut self, slack: &[f64]) -> Result<(), SetError> {
-        if slack.iter().any(|r| !r.is_finite()) {
-            return Err(SetError::Overflow("constraint slack"));
+        self.push_diagonal(slack, false, "constraint slack")
+    }
+
+    /// One new factor per positive entry of `d`, its column `dᵢ eᵢ` in `G` (`generators`) or in
+    /// `A` (slacks), zero in the other.
+    fn push_diagonal(&mut self, d: &[f64], generators: bool, what: &'static str) -> Result<(), SetError> {
+        if d.iter().any(|r| !r.is_finite()) {
+            return Err(SetError::Overflow(what));
         }
-        let nz: Vec<usize> = (0..slack.len()).filter(|&i| slack[i] > 0.0).collect();
+        let nz: Vec<usize> = (0..d.len()).filter(|&i| d[i] > 0.0).collect();
         if nz.is_empty() {
             return Ok(());
         }
         let ng = self.generators();
         check_size("generators", ng + nz.len(), MAX_GENERATORS)?;
-        let a = std::mem::replace(&mut self.a, DMatrix::zeros(0, 0));
-        let mut a = a.resize_horizontally(ng + nz.len(), 0.0);
+        let g = std::mem::replace(&mut self.g, DMatrix::zeros(0, 0)).resize_horizontally(ng + nz.len(), 0.0);
+        let a = std::mem::replace(&mut self.a, DMatrix::zeros(0, 0)).resize_horizontally(ng + nz.len(), 0.0);
+        let (mut g, mut a) = (g, a);
+        let target = if generators { &mut g } else { &mut a };
         for (k, &i) in nz.iter().enumerate() {
-            a[(i, ng + k)] = slack[i];
+            target[(i, ng + k)] = d[i];
         }
+        self.g = g;
         self.a = a;
-        let g = std::mem::replace(&mut self.g, DMatrix::zeros(0, 0));
-        self.g = g.resize_horizontally(ng + nz.len(), 0.0);
         Ok(())
     }
 

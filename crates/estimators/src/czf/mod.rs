@@ -551,8 +551,12 @@ impl ConstrainedZonotopeFilter {
         crate::validate::check_finite("y", y.as_slice())?;
         let step = self.step + 1;
         let (set, observer) = self.predicted(model, u, step)?;
-        // The predicted box: the hull of the predicted set with the observer and the bounds.
-        let hull = set.interval_hull().map_err(|e| guarantee_lost(step, e.to_string()))?;
+        // The predicted box: the hull of the predicted set with the observer and the bounds. It
+        // only linearises h and starts the observer's contraction: where h is affine over the
+        // cheap propagated box (its Jacobian enclosure a point) no LP is needed for it.
+        let quick = set.propagated_hull();
+        let affine = h_is_affine(model, &boxed(&quick.lower, &quick.upper), u, &mut self.h_enclosure)?;
+        let hull = if affine { quick } else { set.interval_hull().map_err(|e| guarantee_lost(step, e.to_string()))? };
         let status = StepStatus::unchecked(SolveOutcome::Predicted);
         let (_, x) = self.publish(set.clone(), &hull, observer.clone(), status, step)?;
         let saved_u = std::mem::replace(&mut self.last_u, u.clone());
@@ -568,6 +572,19 @@ impl ConstrainedZonotopeFilter {
             }
         }
     }
+}
+
+/// Whether every entry of `h`'s Jacobian enclosure over the box is a single number (`h` affine
+/// there).
+fn h_is_affine<M: SecondOrderModel + ?Sized>(
+    model: &M,
+    x: &[Interval],
+    u: &DVector<f64>,
+    enclosure: &mut TaylorEnclosure,
+) -> Result<bool, EstimatorError> {
+    model.h_enclosure(x, u, enclosure)?;
+    let (rows, n) = enclosure.dims();
+    Ok((0..rows).all(|i| (0..n).all(|j| enclosure.jacobian(i, j).width() == 0.0)))
 }
 
 crate::traits::forward_estimator!(impl<> for ConstrainedZonotopeFilter, SecondOrderModel, ZonotopeEstimate);
