@@ -584,7 +584,12 @@ fn h_is_affine<M: SecondOrderModel + ?Sized>(
 ) -> Result<bool, EstimatorError> {
     model.h_enclosure(x, u, enclosure)?;
     let (rows, n) = enclosure.dims();
-    Ok((0..rows).all(|i| (0..n).all(|j| enclosure.jacobian(i, j).width() == 0.0)))
+    Ok((0..rows).all(|i| {
+        (0..n).all(|j| {
+            let d = enclosure.jacobian(i, j);
+            d.lo() == d.hi()
+        })
+    }))
 }
 
 crate::traits::forward_estimator!(impl<> for ConstrainedZonotopeFilter, SecondOrderModel, ZonotopeEstimate);
