@@ -12,22 +12,6 @@ use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, SetMemb
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
-const FOREIGN: &[&str] = &[
-    "x0",
-    "p0",
-    "q",
-    "r",
-    "u_lower",
-    "u_upper",
-    "x_lower",
-    "x_upper",
-    "mhe",
-    "ukf",
-    "x0_radius",
-    "w_radius",
-    "v_radius",
-];
-
 /// `steps` of a run with every noise on a vertex of its box.
 fn boundary_run<M: DiscreteModel>(
     model: &M,
@@ -54,7 +38,7 @@ fn boundary_run<M: DiscreteModel>(
 fn six_tank(crit: &mut Criterion) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/six-tank/model.toml");
     let text = std::fs::read_to_string(path).unwrap();
-    let model = EquationModel::from_toml_str_with_foreign_keys(&text, path, FOREIGN).unwrap();
+    let model = EquationModel::from_toml_str_with_foreign_keys(&text, path, &port_est::model::NOISE_KEYS).unwrap();
     let setup = Setup {
         x0: DVector::from_element(6, 20.0),
         p0: DMatrix::identity(6, 6) * 4.0,

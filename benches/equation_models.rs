@@ -11,13 +11,12 @@ use estimators::{ExtendedKalmanFilter, Setup, UkfParams, UnscentedKalmanFilter};
 use models::{DifferentiableModel, DiscreteModel};
 use nalgebra::{DMatrix, DVector};
 
-/// The keys of a model file that `port-est` reads.
-const FOREIGN: &[&str] = &["x0", "p0", "q", "r", "u_lower", "u_upper", "x_lower", "x_upper", "mhe", "ukf"];
-
+/// A model file of `examples/models`, its `port-est` keys skipped.
 fn load(name: &str) -> EquationModel {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/models").join(name);
     let text = std::fs::read_to_string(&path).unwrap();
-    EquationModel::from_toml_str_with_foreign_keys(&text, &path.display().to_string(), FOREIGN).unwrap()
+    EquationModel::from_toml_str_with_foreign_keys(&text, &path.display().to_string(), &port_est::model::NOISE_KEYS)
+        .unwrap()
 }
 
 /// Filter settings and a cycle of inputs and measurements.

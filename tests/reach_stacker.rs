@@ -8,26 +8,10 @@ use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimat
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector, dvector};
 
-const FOREIGN: &[&str] = &[
-    "x0",
-    "p0",
-    "q",
-    "r",
-    "u_lower",
-    "u_upper",
-    "x_lower",
-    "x_upper",
-    "mhe",
-    "ukf",
-    "x0_radius",
-    "w_radius",
-    "v_radius",
-];
-
 fn model() -> EquationModel {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/reach-stacker/model.toml");
     let text = std::fs::read_to_string(path).unwrap();
-    EquationModel::from_toml_str_with_foreign_keys(&text, path, FOREIGN).unwrap()
+    EquationModel::from_toml_str_with_foreign_keys(&text, path, &port_est::model::NOISE_KEYS).unwrap()
 }
 
 #[test]

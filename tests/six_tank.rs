@@ -8,22 +8,6 @@ use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimat
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
-const FOREIGN: &[&str] = &[
-    "x0",
-    "p0",
-    "q",
-    "r",
-    "u_lower",
-    "u_upper",
-    "x_lower",
-    "x_upper",
-    "mhe",
-    "ukf",
-    "x0_radius",
-    "w_radius",
-    "v_radius",
-];
-
 /// CORA's first measurement (at t = 0), which the log's rows cannot hold (examples/six-tank/README.md).
 const Y1: [f64; 3] = [18.587107801413037, 20.225990245627816, 19.112251238495777];
 
@@ -38,7 +22,8 @@ fn root() -> std::path::PathBuf {
 fn model() -> EquationModel {
     let path = root().join("examples/six-tank/model.toml");
     let text = std::fs::read_to_string(&path).unwrap();
-    EquationModel::from_toml_str_with_foreign_keys(&text, &path.display().to_string(), FOREIGN).unwrap()
+    EquationModel::from_toml_str_with_foreign_keys(&text, &path.display().to_string(), &port_est::model::NOISE_KEYS)
+        .unwrap()
 }
 
 /// The log: `(u_k, y_{k+1})`, 19 rows.
