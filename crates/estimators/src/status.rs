@@ -139,9 +139,9 @@ pub enum Guarantee {
     Holds,
     /// No longer guaranteed: inconsistent data were accepted at this or an earlier step.
     Lost,
-    /// Guaranteed, but some state's interval has grown past the estimator's divergence rule (the
-    /// constrained-zonotope filters: wider than a set factor times its initial width, or than its
-    /// declared bounds): a bound too wide to act on.
+    /// Guaranteed, but some state's interval has grown past the estimator's divergence rule (wider
+    /// than a set factor — 2 by default — times its initial width, or than its declared bounds): a
+    /// bound too wide to act on.
     Diverging,
 }
 

@@ -2,7 +2,8 @@
 //! (an independent polygon computation) before any reduction; with every noise on the boundary
 //! of its box the truth stays inside on a nonlinear pendulum and on the supply vessel (heading
 //! measured), where `smf-nl` grows; contradicting data are refused with the filter unchanged, or
-//! flagged; an undefined model is `GuaranteeLost`; an unmeasured random walk is marked diverging.
+//! flagged; an undefined model is `GuaranteeLost`; an unmeasured random walk is marked diverging (by
+//! the ellipsoid filter too).
 
 use constrained_zonotope::polygon::{bbox, box_poly, map_poly, strip, sum_poly};
 use estimators::checks::InconsistencyPolicy;
@@ -273,6 +274,25 @@ fn an_unmeasured_random_walk_is_marked_diverging() {
     }
     // 2 + 0.2 k reaches 4 at k = 10 (the rounding's enclosure may put it just above).
     assert!(matches!(first, Some(10 | 11)), "{first:?}");
+    // The ellipsoid filter keeps the same rule: its unmeasured state's interval grows past twice
+    // its initial width too, and the status says so (the set is still guaranteed).
+    let s = Setup {
+        x0: dvector![0.0, 0.0],
+        p0: DMatrix::identity(2, 2),
+        process_noise: DMatrix::from_diagonal(&dvector![1e-4, 1e-2]),
+        measurement_noise: DMatrix::identity(1, 1) * 1e-2,
+        inputs: 1,
+    };
+    let mut smf = estimators::SetMembershipFilter::new(s).unwrap();
+    assert!(smf.estimate().status().is_clean());
+    let mut marked = false;
+    for _ in 0..200 {
+        let e = smf.step(&model, &dvector![0.0], &dvector![0.0]).unwrap();
+        marked |= e.status().guarantee == Guarantee::Diverging;
+    }
+    let (l, h) = smf.estimate().bounds(1).unwrap();
+    assert!(h - l > 4.0 && marked, "width {} after 200 steps", h - l);
+    assert_eq!(smf.estimate().status().guarantee, Guarantee::Diverging);
 }
 
 #[test]

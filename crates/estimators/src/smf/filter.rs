@@ -67,7 +67,16 @@ pub struct SetEstimate {
     pub upper: DVector<f64>,
     /// What the step did (for the initial set: `τ = (⅓, ⅓, ⅓)`, status unsolved).
     pub report: StepReport,
+    /// Whether some state's interval is wider than [`DIVERGENCE_FACTOR`] times its initial width
+    /// (or than its declared bounds, `smf-nl`): the status says `diverging`.
+    pub diverging: bool,
+    /// [`DIVERGENCE_FACTOR`] times the initial interval's widths.
+    width_limit: DVector<f64>,
 }
+
+/// A state's interval wider than this many times its initial width marks the step diverging
+/// ([`Guarantee::Diverging`]; the constrained-zonotope filters' default rule).
+pub const DIVERGENCE_FACTOR: f64 = 2.0;
 
 impl StepReport {
     /// The report of the initial set.
@@ -100,16 +109,19 @@ impl SetEstimate {
     /// `x̂_i ∓ √P_ii`, rounded outward (the square root and the sums each one ulp), so the
     /// published interval contains the certified ellipsoid's projection.
     fn set_bounds(&mut self) {
+        self.diverging = false;
         for i in 0..self.center.len() {
             let r = intervals::up(self.shape[(i, i)].max(0.0).sqrt());
             self.lower[i] = intervals::down(self.center[i] - r);
             self.upper[i] = intervals::up(self.center[i] + r);
+            self.diverging |= self.upper[i] - self.lower[i] > self.width_limit[i];
         }
     }
 
     /// Cuts the published interval by bounds the true state always respects.
     pub(crate) fn cut_bounds(&mut self, bounds: &[Interval]) {
         for (i, b) in bounds.iter().enumerate() {
+            self.diverging |= self.upper[i] - self.lower[i] > b.hi() - b.lo();
             self.lower[i] = self.lower[i].max(b.lo());
             self.upper[i] = self.upper[i].min(b.hi());
         }
@@ -194,8 +206,11 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             lower: DVector::zeros(n),
             upper: DVector::zeros(n),
             report: StepReport::initial(),
+            diverging: false,
+            width_limit: DVector::from_element(n, f64::INFINITY),
         };
         est.set_bounds();
+        est.width_limit = (&est.upper - &est.lower) * DIVERGENCE_FACTOR;
         let nn = || DMatrix::zeros(n, n);
         Ok(Self {
             n,
@@ -646,7 +661,11 @@ impl Estimate for SetEstimate {
         StepStatus {
             outcome: r.outcome,
             data,
-            guarantee: if r.guaranteed { Guarantee::Holds } else { Guarantee::Lost },
+            guarantee: match (r.guaranteed, self.diverging) {
+                (false, _) => Guarantee::Lost,
+                (true, true) => Guarantee::Diverging,
+                (true, false) => Guarantee::Holds,
+            },
         }
     }
     fn details(&self) -> StepDetails {
