@@ -202,10 +202,10 @@ fn the_vessel_stays_bounded_where_the_ellipsoid_filter_grows() {
     let w = |i: usize| f.estimate().bounds(i).map(|(l, h)| h - l).unwrap();
     // The position within a few metres of the measurement's ±1 m, the heading within ±0.1 rad.
     assert!(w(0) < 2.5 && w(1) < 2.5 && w(2) < 0.25, "widths {} {} {}", w(0), w(1), w(2));
-    if smf_alive {
-        let ws = 2.0 * smf.estimate().shape[(0, 0)].sqrt();
-        assert!(ws > w(0), "smf-nl's x width {ws} against czf's {}", w(0));
-    }
+    // Measured: czf-nl 0.73 m, smf-nl (on the least-trace ellipsoids of the same boxes) 47 m.
+    let ws = 2.0 * smf.estimate().shape[(0, 0)].sqrt();
+    assert!(smf_alive, "smf-nl stopped on this run");
+    assert!(ws > 10.0 * w(0), "smf-nl's x width {ws} against czf-nl's {}", w(0));
 }
 
 #[test]
