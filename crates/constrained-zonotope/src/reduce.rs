@@ -99,9 +99,9 @@ pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRang
                 if !implied.is_bounded() {
                     continue;
                 }
-                let r_new = intersect(r[j], implied)?;
+                let r_new = r[j].meet(implied)?;
                 r[j] = r_new;
-                let e_new = intersect(e[j], implied)?;
+                let e_new = e[j].meet(implied)?;
                 if e_new != e[j] {
                     changed = true;
                     e[j] = e_new;
@@ -113,11 +113,6 @@ pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRang
         }
     }
     Some(FactorRanges { e, r })
-}
-
-fn intersect(x: Interval, y: Interval) -> Option<Interval> {
-    let (lo, hi) = (x.lo().max(y.lo()), x.hi().min(y.hi()));
-    (lo <= hi).then(|| Interval::new(lo, hi))
 }
 
 /// The diagonal of the top-left block of `K⁻¹`, `K = [[H, Aᵀ], [A, 0]]`, `H = I + GᵀG`, in the
@@ -144,12 +139,6 @@ fn kkt_inverse_diagonal(g: &DMatrix<f64>, a: &DMatrix<f64>) -> Vec<f64> {
             h_diag[j] - uj.dot(&(&s_lu * &uj))
         })
         .collect()
-}
-
-/// Midpoint and radius of `[lo, hi]`, the radius rounded up so that `m ± r` covers it.
-fn mid_rad(x: Interval) -> (f64, f64) {
-    let m = 0.5 * x.lo() + 0.5 * x.hi();
-    (m, up(up(x.hi() - m).max(up(m - x.lo()))))
 }
 
 impl ConstrainedZonotope {
@@ -199,7 +188,7 @@ impl ConstrainedZonotope {
         let mut box_err = vec![0.0; n];
         let mut slack = vec![0.0; nc];
         // c' = c + G m, b' = b − A m: dot products of length ng + 1.
-        let mids: Vec<(f64, f64)> = ranges.e.iter().map(|e| mid_rad(*e)).collect();
+        let mids: Vec<(f64, f64)> = ranges.e.iter().map(|e| e.mid_rad()).collect();
         for i in 0..n {
             let (mut s, mut abs) = (self.c[i], self.c[i].abs());
             for j in 0..ng {
@@ -250,7 +239,7 @@ impl ConstrainedZonotope {
             if !r.is_bounded() {
                 continue;
             }
-            let (m, rad) = mid_rad(*e);
+            let (m, rad) = e.mid_rad();
             if rad == 0.0 {
                 // A factor fixed by the constraints: eliminating it loses nothing.
                 out[j] = 0.0;

@@ -161,6 +161,24 @@ impl Interval {
         Self { lo: self.lo.min(other.lo), hi: self.hi.max(other.hi) }
     }
 
+    /// `x ∩ y`, `None` when they do not meet.
+    #[must_use]
+    #[inline]
+    pub fn meet(self, other: Interval) -> Option<Interval> {
+        let (lo, hi) = (self.lo.max(other.lo), self.hi.min(other.hi));
+        (lo <= hi).then_some(Self { lo, hi })
+    }
+
+    /// The midpoint (0 when it is not finite) and a radius rounded up so that
+    /// `[mid − rad, mid + rad]` holds the interval.
+    #[must_use]
+    #[inline]
+    pub fn mid_rad(self) -> (f64, f64) {
+        let m = 0.5 * self.lo + 0.5 * self.hi;
+        let m = if m.is_finite() { m } else { 0.0 };
+        (m, up(up(self.hi - m).max(up(m - self.lo))))
+    }
+
     /// `|x|` (exact: no rounding).
     #[must_use]
     #[inline]

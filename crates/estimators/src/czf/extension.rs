@@ -7,7 +7,7 @@
 //! `φ(x) ∈ M x + E`, `E = φ(p) − M p + (J(X) − M)(X − p)` (C1), an interval vector evaluated in
 //! outward-rounded arithmetic, so `φ(Z) ⊆ M Z ⊕ E` for every set `Z ⊆ X`.
 
-use intervals::{Interval, up};
+use intervals::Interval;
 use nalgebra::{DMatrix, DVector};
 
 use models::{SecondOrderModel, TaylorEnclosure};
@@ -48,17 +48,6 @@ pub(crate) struct MeanValue {
 /// Why an extension could not be formed (the caller turns it into `GuaranteeLost`).
 pub(crate) type Unbounded = String;
 
-pub(crate) fn mid(x: Interval) -> f64 {
-    let m = 0.5 * x.lo() + 0.5 * x.hi();
-    if m.is_finite() { m } else { 0.0 }
-}
-
-/// Midpoint and an upward-rounded radius covering the interval.
-pub(crate) fn mid_rad(x: Interval) -> (f64, f64) {
-    let m = mid(x);
-    (m, up(up(x.hi() - m).max(up(m - x.lo()))))
-}
-
 /// The mean-value extension (C1) of `f` or `h` over the box `x`.
 pub(crate) fn mean_value<M: SecondOrderModel + ?Sized>(
     model: &M,
@@ -68,7 +57,7 @@ pub(crate) fn mean_value<M: SecondOrderModel + ?Sized>(
     enclosure: &mut TaylorEnclosure,
 ) -> Result<Result<MeanValue, Unbounded>, models::ModelError> {
     let n = x.len();
-    let p: Vec<f64> = x.iter().map(|v| mid(*v)).collect();
+    let p: Vec<f64> = x.iter().map(|v| v.mid_rad().0).collect();
     let point: Vec<Interval> = p.iter().map(|v| Interval::point(*v)).collect();
     match which {
         Function::Dynamics => model.f_value_enclosure(&point, u, enclosure)?,
@@ -103,7 +92,7 @@ pub(crate) fn mean_value<M: SecondOrderModel + ?Sized>(
         let mut s = value[i];
         for j in 0..n {
             let jij = jacobian[i * n + j];
-            let mij = mid(jij);
+            let mij = jij.mid_rad().0;
             m[(i, j)] = mij;
             s = s - Interval::point(mij) * p[j];
             s = s + (jij - Interval::point(mij)) * (x[j] - Interval::point(p[j]));
@@ -114,12 +103,6 @@ pub(crate) fn mean_value<M: SecondOrderModel + ?Sized>(
         e.push(s);
     }
     Ok(Ok(MeanValue { m, e, jacobian, value, p }))
-}
-
-/// `x ∩ y`, `None` when empty.
-pub(crate) fn meet(x: Interval, y: Interval) -> Option<Interval> {
-    let (lo, hi) = (x.lo().max(y.lo()), x.hi().min(y.hi()));
-    (lo <= hi).then(|| Interval::new(lo, hi))
 }
 
 /// The interval observer's prediction (C5): per row, the best of the natural interval extension
@@ -144,7 +127,7 @@ pub(crate) fn predict_box<M: SecondOrderModel + ?Sized>(
         for j in 0..n {
             form = form + mv.jacobian[i * n + j] * (x[j] - Interval::point(mv.p[j]));
         }
-        if let Some(v) = meet(out[i], form) {
+        if let Some(v) = out[i].meet(form) {
             out[i] = v;
         }
         let row = &mv.jacobian[i * n..(i + 1) * n];
@@ -178,7 +161,7 @@ pub(crate) fn predict_box<M: SecondOrderModel + ?Sized>(
         model.f_value_enclosure(&corner, u, enclosure)?;
         let hi = enclosure.value(i).hi();
         if lo <= hi {
-            if let Some(v) = meet(out[i], Interval::new(lo, hi) + rest) {
+            if let Some(v) = out[i].meet(Interval::new(lo, hi) + rest) {
                 out[i] = v;
             }
         }
@@ -213,7 +196,7 @@ pub(crate) fn contract_box(x: &mut [Interval], mv: &MeanValue, y: &DVector<f64>,
                 }
                 let implied = (target - rest) / jij + Interval::point(mv.p[j]);
                 if implied.is_bounded() {
-                    x[j] = meet(x[j], implied)?;
+                    x[j] = x[j].meet(implied)?;
                 }
             }
         }

@@ -28,7 +28,7 @@ use models::{Dims, SecondOrderModel, TaylorEnclosure};
 use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
-use extension::{Function, boxed, contract_box, mean_value, meet, mid_rad, predict_box};
+use extension::{Function, boxed, contract_box, mean_value, predict_box};
 
 /// Settings of the constrained-zonotope filters.
 #[derive(Debug, Clone, PartialEq)]
@@ -150,7 +150,6 @@ impl Estimate for ZonotopeEstimate {
 #[derive(Debug, Clone)]
 pub struct ConstrainedZonotopeFilter {
     dims: Dims,
-    set: ConstrainedZonotope,
     observer: Vec<Interval>,
     w: ConstrainedZonotope,
     w_radius: Vec<f64>,
@@ -183,9 +182,28 @@ fn radii(g: &DMatrix<f64>) -> Vec<f64> {
     z.map(|z| z.zonotope_hull().1.iter().copied().collect()).unwrap_or_else(|_| vec![f64::INFINITY; g.nrows()])
 }
 
-/// The outcome of an update, before it is committed.
+/// A published interval before the set it belongs to is attached ([`Published::with_set`]).
+struct Published {
+    center: DVector<f64>,
+    shape: DMatrix<f64>,
+    lower: DVector<f64>,
+    upper: DVector<f64>,
+    status: StepStatus,
+    report: ZonotopeReport,
+}
+
+impl Published {
+    /// The estimate of the (reduced) `set`, its size in the report.
+    fn with_set(self, set: ConstrainedZonotope) -> ZonotopeEstimate {
+        let Published { center, shape, lower, upper, status, mut report } = self;
+        report.generators = set.generators();
+        report.constraints = set.constraints();
+        ZonotopeEstimate { center, shape, lower, upper, status, report, set }
+    }
+}
+
+/// The outcome of an update, before it is committed (the set is the estimate's).
 struct Updated {
-    set: ConstrainedZonotope,
     observer: Vec<Interval>,
     estimate: ZonotopeEstimate,
     lost: bool,
@@ -256,7 +274,6 @@ impl ConstrainedZonotopeFilter {
         let mut filter = Self {
             dims,
             observer: boxed(&lo, &hi),
-            set,
             w,
             w_radius,
             v_generators: setup.measurement_noise.clone(),
@@ -286,10 +303,10 @@ impl ConstrainedZonotopeFilter {
             f_enclosure: TaylorEnclosure::new(n, n),
             h_enclosure: TaylorEnclosure::new(m, n),
         };
-        let hull = filter.set.interval_hull().map_err(|e| set_error("X0", e))?;
+        let hull = set.interval_hull().map_err(|e| set_error("X0", e))?;
         let status = filter.estimate.status;
-        let (estimate, _) = filter.publish(filter.set.clone(), &hull, filter.observer.clone(), status, 0)?;
-        filter.estimate = estimate;
+        let (published, _) = filter.publish(&hull, filter.observer.clone(), status, 0)?;
+        filter.estimate = published.with_set(set);
         Ok(filter)
     }
 
@@ -323,16 +340,15 @@ impl ConstrainedZonotopeFilter {
         boxed(&self.estimate.lower, &self.estimate.upper)
     }
 
-    /// The published estimate for `set` (reduced afterwards by the caller) with its hull, the
-    /// interval observer's box and the bounds (C4); an error when they do not meet.
+    /// The published interval from a set's hull, the interval observer's box and the bounds
+    /// (C4), and the observer's box cut to it; an error when they do not meet.
     fn publish(
         &self,
-        set: ConstrainedZonotope,
         hull: &constrained_zonotope::Hull,
         observer: Vec<Interval>,
         mut status: StepStatus,
         step: u64,
-    ) -> Result<(ZonotopeEstimate, Vec<Interval>), EstimatorError> {
+    ) -> Result<(Published, Vec<Interval>), EstimatorError> {
         let n = self.dims.states;
         let mut lower = DVector::zeros(n);
         let mut upper = DVector::zeros(n);
@@ -346,7 +362,7 @@ impl ConstrainedZonotopeFilter {
                 if own.width() > hi[i] - lo[i] {
                     diverging += 1;
                 }
-                x = meet(x, Interval::new(lo[i], hi[i])).ok_or(EstimatorError::OutsideStateBounds {
+                x = x.meet(Interval::new(lo[i], hi[i])).ok_or(EstimatorError::OutsideStateBounds {
                     step,
                     state: i,
                     set_lower: own.lo(),
@@ -355,7 +371,7 @@ impl ConstrainedZonotopeFilter {
                     bound_upper: hi[i],
                 })?;
             }
-            x = meet(x, observer[i]).ok_or(EstimatorError::SetMissed { step, reason: MISSED_OBSERVER })?;
+            x = x.meet(observer[i]).ok_or(EstimatorError::SetMissed { step, reason: MISSED_OBSERVER })?;
             observer[i] = x;
             if x != own {
                 tightened += 1;
@@ -372,18 +388,13 @@ impl ConstrainedZonotopeFilter {
         let mut center = DVector::zeros(n);
         let mut shape = DMatrix::zeros(n, n);
         for i in 0..n {
-            let (c, r) = mid_rad(Interval::new(lower[i], upper[i]));
+            let (c, r) = Interval::new(lower[i], upper[i]).mid_rad();
             center[i] = c;
             shape[(i, i)] = r * r;
         }
-        let report = ZonotopeReport {
-            generators: set.generators(),
-            constraints: set.constraints(),
-            lp_failures: hull.lp_failures,
-            tightened,
-            diverging,
-        };
-        Ok((ZonotopeEstimate { center, shape, lower, upper, status, report, set }, observer))
+        let report =
+            ZonotopeReport { generators: 0, constraints: 0, lp_failures: hull.lp_failures, tightened, diverging };
+        Ok((Published { center, shape, lower, upper, status, report }, observer))
     }
 
     /// (C2): the predicted set, unreduced, and the interval observer's predicted box.
@@ -396,9 +407,10 @@ impl ConstrainedZonotopeFilter {
         let x = self.current_box();
         let mv = mean_value(model, Function::Dynamics, &x, u, &mut self.f_enclosure)?
             .map_err(|reason| guarantee_lost(step, reason))?;
-        let (e_mid, e_rad): (Vec<f64>, Vec<f64>) = mv.e.iter().map(|e| mid_rad(*e)).unzip();
+        let (e_mid, e_rad): (Vec<f64>, Vec<f64>) = mv.e.iter().map(|e| e.mid_rad()).unzip();
         let lost = |e: SetError| guarantee_lost(step, format!("the predicted set: {e}"));
         let set = self
+            .estimate
             .set
             .affine_map(&mv.m, Some(&DVector::from_vec(e_mid)))
             .and_then(|s| s.add_box(&DVector::from_vec(e_rad)))
@@ -429,7 +441,7 @@ impl ConstrainedZonotopeFilter {
         let mut yc = DVector::zeros(m);
         let mut rad = DVector::zeros(m);
         for i in 0..m {
-            let (em, er) = mid_rad(mv.e[i]);
+            let (em, er) = mv.e[i].mid_rad();
             yc[i] = y[i] - em;
             rad[i] = intervals::up(er + intervals::up(f64::EPSILON * yc[i].abs()));
         }
@@ -439,7 +451,7 @@ impl ConstrainedZonotopeFilter {
         let checked = self.checks.policy != InconsistencyPolicy::Off;
         let candidate = set.intersect(&mv.m, &strip).map_err(lost)?;
         let hull = candidate.interval_hull().map_err(lost)?;
-        let mut contracted: Vec<Interval> = observer.iter().zip(&x).filter_map(|(o, b)| meet(*o, *b)).collect();
+        let mut contracted: Vec<Interval> = observer.iter().zip(&x).filter_map(|(o, b)| o.meet(*b)).collect();
         let observer_ok =
             contracted.len() == x.len() && contract_box(&mut contracted, &mv, y, &self.v_radius).is_some();
         let consistent = !hull.certified_empty && observer_ok;
@@ -450,10 +462,10 @@ impl ConstrainedZonotopeFilter {
         };
         if consistent {
             let data = if checked { DataCheck::Consistent } else { DataCheck::NotChecked };
-            match self.publish(candidate.clone(), &hull, contracted, status(data, self.lost), step) {
-                Ok((estimate, observer)) => {
-                    let set = candidate.reduce(&self.limits).map_err(lost)?;
-                    return Ok(Updated { set, observer, estimate, lost: self.lost });
+            match self.publish(&hull, contracted, status(data, self.lost), step) {
+                Ok((published, observer)) => {
+                    let estimate = published.with_set(candidate.reduce(&self.limits).map_err(lost)?);
+                    return Ok(Updated { observer, estimate, lost: self.lost });
                 }
                 // The hull, the observer and the declared bounds do not meet: inconsistent too.
                 Err(e) if self.checks.policy == InconsistencyPolicy::Error => return Err(e),
@@ -467,19 +479,14 @@ impl ConstrainedZonotopeFilter {
         // prediction is published, and no later set is guaranteed.
         let data = if checked { DataCheck::Inconsistent } else { DataCheck::NotChecked };
         let hull = set.interval_hull().map_err(lost)?;
-        let (estimate, observer) = self.publish(set.clone(), &hull, x, status(data, true), step)?;
-        let set = set.reduce(&self.limits).map_err(lost)?;
-        Ok(Updated { set, observer, estimate, lost: true })
+        let (published, observer) = self.publish(&hull, x, status(data, true), step)?;
+        let estimate = published.with_set(set.reduce(&self.limits).map_err(lost)?);
+        Ok(Updated { observer, estimate, lost: true })
     }
 
     fn commit(&mut self, up: Updated, step: u64) {
-        let mut estimate = up.estimate;
-        estimate.report.generators = up.set.generators();
-        estimate.report.constraints = up.set.constraints();
-        estimate.set = up.set.clone();
-        self.set = up.set;
         self.observer = up.observer;
-        self.estimate = estimate;
+        self.estimate = up.estimate;
         self.lost = up.lost;
         self.step = step;
     }
@@ -505,10 +512,10 @@ impl ConstrainedZonotopeFilter {
             data: DataCheck::NotChecked,
             guarantee: if self.lost { Guarantee::Lost } else { Guarantee::Holds },
         };
-        let (estimate, observer) = self.publish(set.clone(), &hull, observer, status, step)?;
-        let set = set.reduce(&self.limits).map_err(|e| guarantee_lost(step, e.to_string()))?;
+        let (published, observer) = self.publish(&hull, observer, status, step)?;
+        let estimate = published.with_set(set.reduce(&self.limits).map_err(|e| guarantee_lost(step, e.to_string()))?);
         self.last_u.copy_from(u);
-        self.commit(Updated { set, observer, estimate, lost: self.lost }, step);
+        self.commit(Updated { observer, estimate, lost: self.lost }, step);
         Ok(&self.estimate)
     }
 
@@ -526,7 +533,7 @@ impl ConstrainedZonotopeFilter {
         let step = self.step;
         let x = self.current_box();
         let observer = self.observer.clone();
-        let up = self.updated(model, self.set.clone(), x, observer, y, step)?;
+        let up = self.updated(model, self.estimate.set.clone(), x, observer, y, step)?;
         self.commit(up, step);
         Ok(&self.estimate)
     }
@@ -558,7 +565,7 @@ impl ConstrainedZonotopeFilter {
         let affine = h_is_affine(model, &boxed(&quick.lower, &quick.upper), u, &mut self.h_enclosure)?;
         let hull = if affine { quick } else { set.interval_hull().map_err(|e| guarantee_lost(step, e.to_string()))? };
         let status = StepStatus::unchecked(SolveOutcome::Predicted);
-        let (_, x) = self.publish(set.clone(), &hull, observer.clone(), status, step)?;
+        let (_, x) = self.publish(&hull, observer, status, step)?;
         let saved_u = std::mem::replace(&mut self.last_u, u.clone());
         let result = self.updated(model, set, x.clone(), x, y, step);
         match result {
