@@ -6,9 +6,10 @@
 //! returned. Each bound is the best of that, of `λ = 0` (the zonotope's own bound) and of the
 //! propagated factor ranges.
 
-use intervals::Interval;
+use intervals::{Interval, down};
 use nalgebra::{DMatrix, DVector};
 
+use crate::enclose::{add_up, dot_error};
 use crate::lp::{FactorLp, LpProposal};
 use crate::reduce::propagate;
 use crate::simplex::{Simplex, SimplexResult};
@@ -59,20 +60,30 @@ pub enum Containment {
     Undecided,
 }
 
-/// A rigorous lower bound of `min {c + qᵀ ξ : A ξ = b, ‖ξ‖∞ ≤ 1}` from multipliers `λ`.
+/// A rigorous lower bound of `min {c + qᵀ ξ : A ξ = b, ‖ξ‖∞ ≤ 1}` from multipliers `λ`:
+/// `c + λᵀ b − Σⱼ |qⱼ − (Aᵀ λ)ⱼ|`, each dot product evaluated in floating point with its a-priori
+/// error bound ([`dot_error`]) subtracted, the sums of bounds rounded up.
 pub(crate) fn verified_lower(c: f64, q: &[f64], a: &DMatrix<f64>, b: &DVector<f64>, lambda: &[f64]) -> f64 {
-    let mut total = Interval::point(c);
+    let nc = lambda.len();
+    let (mut s, mut abs) = (c, c.abs());
     for (l, bl) in lambda.iter().zip(b.iter()) {
-        total = total + Interval::point(*l) * *bl;
+        let t = l * bl;
+        s += t;
+        abs += t.abs();
     }
+    // Σⱼ (|rⱼ| + eⱼ) ≥ ‖q − Aᵀ λ‖₁, rounded up.
+    let mut penalty = 0.0;
     for (j, qj) in q.iter().enumerate() {
-        let mut r = Interval::point(*qj);
+        let (mut r, mut r_abs) = (*qj, qj.abs());
         for (i, l) in lambda.iter().enumerate() {
-            r = r - Interval::point(*l) * a[(i, j)];
+            let t = l * a[(i, j)];
+            r -= t;
+            r_abs += t.abs();
         }
-        total = total - r.abs();
+        penalty = add_up(penalty, add_up(r.abs(), dot_error(r_abs, nc + 1)));
     }
-    if total.is_bounded() { total.lo() } else { f64::NEG_INFINITY }
+    let lower = down(down(s - dot_error(abs, nc + 1)) - penalty);
+    if lower.is_finite() { lower } else { f64::NEG_INFINITY }
 }
 
 /// Whether `λ` proves `{ξ : A ξ = b, ‖ξ‖∞ ≤ 1}` empty: `λᵀ b − ‖Aᵀ λ‖₁ > 0`, rigorously.
@@ -96,7 +107,11 @@ impl ConstrainedZonotope {
         let mut hull = hull;
         let ng = self.generators();
         let mut q = vec![0.0; ng];
-        let mut simplex = Simplex::new(&self.a, &self.b);
+        // The simplex runs over the factors that enter a constraint; the others sit at the bound
+        // their cost chooses, and the verified bound below accounts for them (`|q_j|`).
+        let active: Vec<usize> = (0..ng).filter(|&j| self.a.column(j).iter().any(|v| *v != 0.0)).collect();
+        let mut q_active = vec![0.0; active.len()];
+        let mut simplex = Simplex::new(&self.a.select_columns(&active), &self.b);
         let mut clarabel: Option<FactorLp> = None;
         for i in 0..n {
             for sign in [1.0, -1.0] {
@@ -105,7 +120,10 @@ impl ConstrainedZonotope {
                 }
                 // The simplex first (warm-started from the last objective's basis), Clarabel when it
                 // stops; either only proposes multipliers.
-                let proposal = match simplex.solve(&q) {
+                for (qa, &j) in q_active.iter_mut().zip(&active) {
+                    *qa = q[j];
+                }
+                let proposal = match simplex.solve(&q_active) {
                     SimplexResult::Optimal { y, xi } => LpProposal::Optimal { lambda: y, xi },
                     SimplexResult::Infeasible { y } => LpProposal::Infeasible { lambda: y },
                     SimplexResult::Stopped => {

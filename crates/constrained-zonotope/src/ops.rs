@@ -10,36 +10,62 @@ fn dimension(what: &'static str, expected: String, found: String) -> SetError {
 }
 
 impl ConstrainedZonotope {
-    /// Appends, for every `i` with `radius[i] > 0`, the generator `radius[i] eᵢ` (a zero column of
-    /// `A`): the set grows by the box of those radii (exactly, `Z ⊕ □(0, r)`).
+    /// Grows the set by the box of `radius` (exactly, `Z ⊕ □(0, r)`): a positive `radius[i]` is
+    /// added to an existing generator `ρ eᵢ` with a zero column of `A` (`|ρ| + rᵢ`, rounded up:
+    /// collinear segments add), else appended as a new one.
     pub(crate) fn push_box(&mut self, radius: &[f64]) -> Result<(), SetError> {
         self.push_diagonal(radius, true, "box enlargement")
     }
 
-    /// Appends, for every constraint row `i` with `slack[i] > 0`, a factor with column
-    /// `slack[i] eᵢ` in `A` and a zero column in `G`: the constraint `aᵢ ξ = bᵢ` becomes
-    /// `|aᵢ ξ − bᵢ| ≤ slackᵢ`, which every `ξ` within the row's rounding error satisfies.
+    /// Relaxes every constraint row `i` with `slack[i] > 0` to `|aᵢ ξ − bᵢ| ≤ slackᵢ` (which every
+    /// `ξ` within the row's rounding error satisfies): the slack is added to an existing slack
+    /// factor of that row (a column `σ eᵢ` of `A`, zero in `G`), else a new factor with column
+    /// `slack[i] eᵢ` in `A` and a zero column in `G` is appended.
     pub(crate) fn push_slack(&mut self, slack: &[f64]) -> Result<(), SetError> {
         self.push_diagonal(slack, false, "constraint slack")
     }
 
-    /// One new factor per positive entry of `d`, its column `dᵢ eᵢ` in `G` (`generators`) or in
-    /// `A` (slacks), zero in the other.
+    /// The column `j` that is `v eᵢ` in `G` (`generators`) or in `A` and zero in the other.
+    fn axis_column(&self, i: usize, generators: bool) -> Option<usize> {
+        let (target, other) = if generators { (&self.g, &self.a) } else { (&self.a, &self.g) };
+        // From the end: the rounding boxes and slacks of earlier operations were appended there.
+        (0..self.generators()).rev().find(|&j| {
+            target[(i, j)] != 0.0
+                && other.column(j).iter().all(|v| *v == 0.0)
+                && target.column(j).iter().enumerate().all(|(r, v)| r == i || *v == 0.0)
+        })
+    }
+
+    /// [`Self::push_box`] (`generators`) or [`Self::push_slack`].
     fn push_diagonal(&mut self, d: &[f64], generators: bool, what: &'static str) -> Result<(), SetError> {
         if d.iter().any(|r| !r.is_finite()) {
             return Err(SetError::Overflow(what));
         }
-        let nz: Vec<usize> = (0..d.len()).filter(|&i| d[i] > 0.0).collect();
-        if nz.is_empty() {
+        let mut new = Vec::new();
+        for (i, &di) in d.iter().enumerate().filter(|(_, di)| **di > 0.0) {
+            match self.axis_column(i, generators) {
+                Some(j) => {
+                    let target = if generators { &mut self.g } else { &mut self.a };
+                    let v = target[(i, j)];
+                    let grown = add_up(v.abs(), di);
+                    if !grown.is_finite() {
+                        return Err(SetError::Overflow(what));
+                    }
+                    target[(i, j)] = grown.copysign(v);
+                }
+                None => new.push(i),
+            }
+        }
+        if new.is_empty() {
             return Ok(());
         }
         let ng = self.generators();
-        check_size("generators", ng + nz.len(), MAX_GENERATORS)?;
-        let g = std::mem::replace(&mut self.g, DMatrix::zeros(0, 0)).resize_horizontally(ng + nz.len(), 0.0);
-        let a = std::mem::replace(&mut self.a, DMatrix::zeros(0, 0)).resize_horizontally(ng + nz.len(), 0.0);
+        check_size("generators", ng + new.len(), MAX_GENERATORS)?;
+        let g = std::mem::replace(&mut self.g, DMatrix::zeros(0, 0)).resize_horizontally(ng + new.len(), 0.0);
+        let a = std::mem::replace(&mut self.a, DMatrix::zeros(0, 0)).resize_horizontally(ng + new.len(), 0.0);
         let (mut g, mut a) = (g, a);
         let target = if generators { &mut g } else { &mut a };
-        for (k, &i) in nz.iter().enumerate() {
+        for (k, &i) in new.iter().enumerate() {
             target[(i, ng + k)] = d[i];
         }
         self.g = g;

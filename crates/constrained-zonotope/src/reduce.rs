@@ -77,17 +77,17 @@ pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRang
     let (nc, ng) = (a.nrows(), a.ncols());
     let mut e = vec![Interval::new(-1.0, 1.0); ng];
     let mut r = vec![Interval::ENTIRE; ng];
+    let mut terms = vec![Interval::ZERO; ng];
     for _ in 0..PROPAGATION_SWEEPS {
         let mut changed = false;
         for i in 0..nc {
             // Σ_k a_ik E_k as a lower and an upper sum of the terms' bounds.
             let (mut lo, mut hi) = (0.0, 0.0);
-            let mut terms = Vec::with_capacity(ng);
             for k in 0..ng {
                 let t = e[k] * a[(i, k)];
                 lo = down(lo + t.lo());
                 hi = up(hi + t.hi());
-                terms.push(t);
+                terms[k] = t;
             }
             for j in 0..ng {
                 let aij = a[(i, j)];

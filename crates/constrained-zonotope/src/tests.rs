@@ -238,3 +238,66 @@ fn the_simplex_finds_the_exact_bounds_itself() {
         }
     }
 }
+
+/// The dual bound of [`hull::verified_lower`] evaluated in outward-rounded interval arithmetic
+/// instead of a-priori error bounds: an enclosure of the exact value of `c + λᵀb − ‖q − Aᵀλ‖₁`.
+fn dual_bound_enclosure(c: f64, q: &[f64], a: &DMatrix<f64>, b: &DVector<f64>, lambda: &[f64]) -> intervals::Interval {
+    use intervals::Interval;
+    let mut total = Interval::point(c);
+    for (l, bl) in lambda.iter().zip(b.iter()) {
+        total = total + Interval::point(*l) * *bl;
+    }
+    for (j, qj) in q.iter().enumerate() {
+        let mut r = Interval::point(*qj);
+        for (i, l) in lambda.iter().enumerate() {
+            r = r - Interval::point(*l) * a[(i, j)];
+        }
+        total = total - r.abs();
+    }
+    total
+}
+
+#[test]
+fn the_a_priori_dual_bound_is_never_above_the_exact_value_and_close_to_it() {
+    let mut rng = Lcg(7);
+    for case in 0..400 {
+        // Magnitudes from 1e-3 to 1e8, and multipliers that nearly cancel q (the optimum's case).
+        let scale = 10f64.powi((case % 12) as i32 - 3);
+        let (nc, ng) = (1 + case % 5, 3 + case % 17);
+        let a = DMatrix::from_fn(nc, ng, |_, _| scale * rng.next());
+        let b = DVector::from_fn(nc, |_, _| scale * rng.next());
+        let lambda: Vec<f64> = (0..nc).map(|_| rng.next()).collect();
+        let q: Vec<f64> =
+            (0..ng).map(|j| (0..nc).map(|i| lambda[i] * a[(i, j)]).sum::<f64>() * (1.0 + 1e-14 * rng.next())).collect();
+        let c = scale * 1e3 * rng.next();
+        let fast = hull::verified_lower(c, &q, &a, &b, &lambda);
+        let exact = dual_bound_enclosure(c, &q, &a, &b, &lambda);
+        // Above the enclosure's upper end would be above the exact value: unsound.
+        assert!(fast <= exact.hi(), "case {case}: {fast} > {}", exact.hi());
+        let tol = 1e-12 * (c.abs() + scale * (1 + nc * ng) as f64);
+        assert!(fast >= exact.lo() - tol, "case {case}: {fast} far below {}", exact.lo());
+    }
+}
+
+#[test]
+fn boxes_and_slacks_merge_into_existing_axis_factors() {
+    let z = ConstrainedZonotope::from_box(&dvector![1.0, -2.0], &dvector![0.5, 0.25]).unwrap();
+    let mut y = z.clone();
+    for _ in 0..10 {
+        y = y.add_box(&dvector![0.1, 0.2]).unwrap();
+    }
+    assert_eq!(y.generators(), 2, "collinear segments add, no new factors");
+    let h = y.interval_hull().unwrap();
+    for (i, r) in [1.5, 2.25].into_iter().enumerate() {
+        assert!(h.lower[i] <= y.center()[i] - r && h.upper[i] >= y.center()[i] + r);
+        assert!(h.upper[i] - h.lower[i] <= 2.0 * r + 1e-12);
+    }
+    // A strip intersected twice: the second intersection's rounding slacks join the first's.
+    let strip = ConstrainedZonotope::from_box(&dvector![0.3], &dvector![0.2]).unwrap();
+    let once = y.intersect(&dmatrix![1.0 / 3.0, 0.7], &strip).unwrap();
+    let twice = once.intersect(&dmatrix![1.0 / 3.0, 0.7], &strip).unwrap();
+    let slack_columns = |s: &ConstrainedZonotope| {
+        (0..s.generators()).filter(|&j| s.generator_matrix().column(j).iter().all(|v| *v == 0.0)).count()
+    };
+    assert!(slack_columns(&twice) <= twice.constraints(), "at most one slack factor per row");
+}

@@ -122,6 +122,7 @@ pub(crate) fn predict_box<M: SecondOrderModel + ?Sized>(
     model.f_value_enclosure(x, u, enclosure)?;
     let mut out: Vec<Interval> = (0..n).map(|i| enclosure.value(i)).collect();
     let mut corner = vec![Interval::ZERO; n];
+    let mut evaluated: Vec<(Vec<Interval>, Vec<Interval>)> = Vec::new();
     for i in 0..n {
         let mut form = mv.value[i];
         for j in 0..n {
@@ -150,16 +151,22 @@ pub(crate) fn predict_box<M: SecondOrderModel + ?Sized>(
                 Interval::point(x[j].lo())
             }
         };
-        for j in 0..n {
-            corner[j] = end(j, false);
-        }
-        model.f_value_enclosure(&corner, u, enclosure)?;
-        let lo = enclosure.value(i).lo();
-        for j in 0..n {
-            corner[j] = end(j, true);
-        }
-        model.f_value_enclosure(&corner, u, enclosure)?;
-        let hi = enclosure.value(i).hi();
+        let mut value_at = |upper: bool| -> Result<Interval, models::ModelError> {
+            for j in 0..n {
+                corner[j] = end(j, upper);
+            }
+            // Rows that are monotone the same way share their corners (every tank of a cascade).
+            if let Some((_, values)) = evaluated.iter().find(|(c, _)| *c == corner) {
+                return Ok(values[i]);
+            }
+            model.f_value_enclosure(&corner, u, enclosure)?;
+            let values: Vec<Interval> = (0..n).map(|r| enclosure.value(r)).collect();
+            let v = values[i];
+            evaluated.push((corner.clone(), values));
+            Ok(v)
+        };
+        let lo = value_at(false)?.lo();
+        let hi = value_at(true)?.hi();
         if lo <= hi {
             if let Some(v) = out[i].meet(Interval::new(lo, hi) + rest) {
                 out[i] = v;
