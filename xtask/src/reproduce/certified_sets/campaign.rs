@@ -1,0 +1,347 @@
+//! Boundary noise at scale: the constrained-zonotope filters on three models, every noise on a
+//! vertex of its box (the hardest case for containment), seeded runs on every core, each step's
+//! published interval checked against the truth.
+//!
+//! * **carrier** — `czf` on the straddle carrier (paper preset, `T_s` = 1 ms, 4 states, the three
+//!   velocities measured), beside the ellipsoidal `smf` on the least-trace ellipsoids around the
+//!   same boxes (`d·h²`, a weaker assumption, so both hold on the same data): widths per state
+//!   and step times side by side.
+//! * **reach-stacker** — `czf-nl` on examples/reach-stacker (kinematic bicycle, GNSS x/y ±0.5 m,
+//!   yaw-rate gyro, no compass): whether the heading's interval stays bounded.
+//! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank, order 8, 6 constraints).
+
+use std::path::Path;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use equation_models::EquationModel;
+use estimators::{
+    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, EstimatorError, SetMembershipFilter, Setup,
+};
+use models::{ConstantModel, DiscreteModel, SecondOrderModel, Xoshiro256StarStar};
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use crate::reproduce::runner::StepTiming;
+
+/// One model's runs.
+struct Scenario {
+    name: &'static str,
+    plant: Plant,
+    setup: Setup,
+    /// Half-widths of `W` and `V`.
+    w: Vec<f64>,
+    v: Vec<f64>,
+    settings: ConstrainedZonotopeSettings,
+    /// The input at step `k` for the true state `x`.
+    input: fn(usize, &DVector<f64>) -> DVector<f64>,
+    runs: usize,
+    steps: usize,
+}
+
+enum Plant {
+    Linear(ConstantModel),
+    Equations(Box<EquationModel>),
+}
+
+/// What the runs of one model found.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenarioResult {
+    /// The model.
+    pub name: String,
+    /// Seeded runs.
+    pub runs: usize,
+    /// Steps taken over every run.
+    pub steps: usize,
+    /// Steps with a state outside its published interval (must be 0).
+    pub misses: usize,
+    /// Runs stopped by an error (`GuaranteeLost`, a refused measurement): must be 0.
+    pub stopped: Vec<String>,
+    /// Steps marked diverging (a state wider than twice its initial width).
+    pub diverging_steps: usize,
+    /// Median over runs of each state's median width over the second tenth of the steps.
+    pub width_early: Vec<f64>,
+    /// The same over the last tenth.
+    pub width_late: Vec<f64>,
+    /// Per state, the largest ratio over runs of the last tenth's median width to the second
+    /// tenth's (the growth rule: at most 2).
+    pub worst_growth: Vec<f64>,
+    /// The step time of the constrained-zonotope filter.
+    pub step_time: StepTiming,
+    /// The ellipsoidal filter beside it (carrier only).
+    pub ellipsoid: Option<EllipsoidComparison>,
+}
+
+/// `smf` on the same data.
+#[derive(Debug, Clone, Serialize)]
+pub struct EllipsoidComparison {
+    /// Steps after the first 50 of each run where `czf`'s interval is wider than `smf`'s on some
+    /// state (the claim: 0).
+    pub czf_wider_steps: usize,
+    /// Steps compared.
+    pub steps_compared: usize,
+    /// Per state, the median of `czf` width / `smf` width over the compared steps.
+    pub median_width_ratio: Vec<f64>,
+    /// Steps with a state outside `smf`'s interval (must be 0).
+    pub misses: usize,
+    /// The step time of `smf`.
+    pub step_time: StepTiming,
+}
+
+/// One run's counts.
+#[derive(Default)]
+struct RunTally {
+    steps: usize,
+    misses: usize,
+    stopped: Option<String>,
+    diverging: usize,
+    early: Vec<f64>,
+    late: Vec<f64>,
+    ns: Vec<u64>,
+    smf_ns: Vec<u64>,
+    smf_misses: usize,
+    czf_wider: usize,
+    compared: usize,
+    ratios: Vec<Vec<f64>>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
+}
+
+fn equations(root: &Path, file: &str) -> Result<(Box<EquationModel>, Setup), String> {
+    let path = root.join(file);
+    let model = port_est::model::read_model(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let setup = model.setup(estimators::EstimateKind::GuaranteedConstrainedZonotope);
+    match model.dynamics {
+        port_est::model::Dynamics::Equations(m) => Ok((Box::new((*m).clone()), setup)),
+        _ => Err(format!("{}: not a model written as equations", path.display())),
+    }
+}
+
+fn radii(m: &DMatrix<f64>) -> Vec<f64> {
+    (0..m.nrows()).map(|i| m[(i, i)]).collect()
+}
+
+/// The three scenarios at full (`quick = false`) or `--quick` sizes; `runs` overrides the runs
+/// per model.
+fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenario>, String> {
+    let d = carrier_dynamics::CarrierModel::new(carrier_dynamics::CarrierParams::paper_preset())
+        .and_then(|m| m.discretize(1e-3))
+        .map_err(|e| format!("carrier: {e}"))?;
+    let (a, b, _) = d.to_dynamic();
+    let c = DMatrix::from_fn(3, 4, |i, j| if j == 1 + i { 1.0 } else { 0.0 });
+    let carrier = ConstantModel::new(a, b, c).map_err(|e| format!("carrier: {e}"))?;
+    let (w, v) = (1e-3, 4e-3);
+    let carrier_setup = Setup {
+        x0: DVector::zeros(4),
+        p0: DMatrix::identity(4, 4) * 0.1,
+        process_noise: DMatrix::identity(4, 4) * w,
+        measurement_noise: DMatrix::identity(3, 3) * v,
+        inputs: 8,
+    };
+    let (stacker, stacker_setup) = equations(root, "examples/reach-stacker/model.toml")?;
+    let (tanks, tank_setup) = equations(root, "examples/six-tank/model.toml")?;
+    let size = |full: (usize, usize), small: (usize, usize)| {
+        let (r, s) = if quick { small } else { full };
+        (runs.unwrap_or(r), s)
+    };
+    let mut out = Vec::new();
+    let (runs_c, steps_c) = size((30, 25_000), (2, 1000));
+    out.push(Scenario {
+        name: "carrier",
+        plant: Plant::Linear(carrier),
+        w: radii(&carrier_setup.process_noise),
+        v: radii(&carrier_setup.measurement_noise),
+        setup: carrier_setup,
+        settings: ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() },
+        input: |k, _| DVector::from_fn(8, |j, _| 0.01 * (1.0 + (1e-3 * k as f64 + j as f64).sin())),
+        runs: runs_c,
+        steps: steps_c,
+    });
+    let (runs_r, steps_r) = size((20, 10_000), (2, 1000));
+    out.push(Scenario {
+        name: "reach-stacker",
+        plant: Plant::Equations(stacker),
+        w: radii(&stacker_setup.process_noise),
+        v: radii(&stacker_setup.measurement_noise),
+        setup: stacker_setup,
+        settings: ConstrainedZonotopeSettings { order: 6, max_constraints: 6, ..Default::default() },
+        // Driving between the stacks: speed held near 2 m/s, slaloms and turns.
+        input: |k, x| {
+            let t = k as f64 * 0.1;
+            DVector::from_column_slice(&[0.5 * (2.0 - x[3]) + 0.2 * (0.05 * t).sin(), 0.25 * (0.07 * t).sin()])
+        },
+        runs: runs_r,
+        steps: steps_r,
+    });
+    let (runs_t, steps_t) = size((20, 5000), (2, 200));
+    out.push(Scenario {
+        name: "six-tank",
+        plant: Plant::Equations(tanks),
+        w: radii(&tank_setup.process_noise),
+        v: radii(&tank_setup.measurement_noise),
+        setup: tank_setup,
+        settings: ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() },
+        input: |k, _| DVector::from_fn(3, |i, _| 0.1 + 0.05 * ((k as f64 * 0.05) + i as f64).sin()),
+        runs: runs_t,
+        steps: steps_t,
+    });
+    Ok(out)
+}
+
+/// One seeded run of `sc` on `model`; `smf` beside it for the linear plant.
+fn drive<M: DiscreteModel + SecondOrderModel>(
+    sc: &Scenario,
+    model: &M,
+    linear: Option<&ConstantModel>,
+    seed: u64,
+    progress: &indicatif::ProgressBar,
+) -> Result<RunTally, String> {
+    let (n, m) = (sc.setup.x0.len(), sc.v.len());
+    let mut rng = Xoshiro256StarStar::seed_from_u64(seed);
+    let mut sign = move || if rng.uniform(-1.0, 1.0) < 0.0 { -1.0 } else { 1.0 };
+    let x0_radius = radii(&sc.setup.p0);
+    let mut x = DVector::from_fn(n, |i, _| sc.setup.x0[i] + x0_radius[i] * sign());
+    let mut czf = ConstrainedZonotopeFilter::new(sc.setup.clone(), sc.settings.clone())
+        .map_err(|e| format!("{}: {e}", sc.name))?;
+    // The least-trace ellipsoids around the boxes: d · diag(h²).
+    let around =
+        |h: &[f64]| DMatrix::from_diagonal(&DVector::from_iterator(h.len(), h.iter().map(|v| h.len() as f64 * v * v)));
+    let mut smf = match linear {
+        Some(_) => Some(
+            SetMembershipFilter::new(Setup {
+                p0: around(&x0_radius),
+                process_noise: around(&sc.w),
+                measurement_noise: around(&sc.v),
+                ..sc.setup.clone()
+            })
+            .map_err(|e| format!("{} smf: {e}", sc.name))?,
+        ),
+        None => None,
+    };
+    let mut t = RunTally { ratios: vec![Vec::new(); n], ..RunTally::default() };
+    let mut widths: Vec<Vec<f64>> = vec![Vec::with_capacity(sc.steps); n];
+    let (mut next, mut y) = (DVector::zeros(n), DVector::zeros(m));
+    for k in 0..sc.steps {
+        let u = (sc.input)(k, &x);
+        model.f(&x, &u, &mut next).map_err(|e| format!("{} truth: {e}", sc.name))?;
+        x = &next + DVector::from_fn(n, |i, _| sc.w[i] * sign());
+        model.h(&x, &u, &mut y).map_err(|e| format!("{} truth: {e}", sc.name))?;
+        let y = &y + DVector::from_fn(m, |i, _| sc.v[i] * sign());
+        let t0 = Instant::now();
+        let est = match czf.step(model, &u, &y) {
+            Ok(e) => e,
+            Err(e @ (EstimatorError::GuaranteeLost { .. } | EstimatorError::SetMissed { .. })) => {
+                t.stopped = Some(format!("seed {seed}, step {k}: {e}"));
+                break;
+            }
+            Err(e) => return Err(format!("{}, seed {seed}, step {k}: {e}", sc.name)),
+        };
+        t.ns.push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
+        t.steps += 1;
+        t.diverging += usize::from(!est.status().is_clean());
+        let czf_bounds: Vec<(f64, f64)> = (0..n).map(|i| est.bounds(i).unwrap_or((f64::NAN, f64::NAN))).collect();
+        t.misses += usize::from(czf_bounds.iter().enumerate().any(|(i, &(l, h))| !(l <= x[i] && x[i] <= h)));
+        for (i, (l, h)) in czf_bounds.iter().enumerate() {
+            widths[i].push(h - l);
+        }
+        if let (Some(smf), Some(lin)) = (smf.as_mut(), linear) {
+            let t0 = Instant::now();
+            let e = smf.step(lin, &u, &y).map_err(|e| format!("{} smf, seed {seed}, step {k}: {e}", sc.name))?;
+            t.smf_ns.push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
+            let b: Vec<(f64, f64)> = (0..n).map(|i| e.bounds(i).unwrap_or((f64::NAN, f64::NAN))).collect();
+            t.smf_misses += usize::from(b.iter().enumerate().any(|(i, &(l, h))| !(l <= x[i] && x[i] <= h)));
+            if k >= 50 {
+                t.compared += 1;
+                let wider = (0..n).any(|i| czf_bounds[i].1 - czf_bounds[i].0 > b[i].1 - b[i].0);
+                t.czf_wider += usize::from(wider);
+                for i in 0..n {
+                    t.ratios[i].push((czf_bounds[i].1 - czf_bounds[i].0) / (b[i].1 - b[i].0));
+                }
+            }
+        }
+        if k % 256 == 255 {
+            progress.inc(256);
+        }
+    }
+    let s = widths[0].len();
+    t.early = widths.iter().map(|w| median(w[s / 10..s / 5].to_vec())).collect();
+    t.late = widths.iter().map(|w| median(w[s * 9 / 10..].to_vec())).collect();
+    Ok(t)
+}
+
+/// Every scenario's runs, spread over the machine's cores; seeds `seed + 3000 + run`.
+///
+/// # Errors
+/// A model file that cannot be read, or a filter error other than a stopped run.
+pub fn run(root: &Path, seed: u64, quick: bool, runs: Option<usize>) -> Result<Vec<ScenarioResult>, String> {
+    let all = scenarios(root, quick, runs)?;
+    let jobs: Vec<(usize, usize)> =
+        all.iter().enumerate().flat_map(|(s, sc)| (0..sc.runs).map(move |r| (s, r))).collect();
+    let total: usize = all.iter().map(|sc| sc.runs * sc.steps).sum();
+    let progress = crate::reproduce::progress_bar(total as u64, "boundary-noise steps");
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<(usize, Result<RunTally, String>)>> = Mutex::new(Vec::new());
+    let workers = std::thread::available_parallelism().map_or(1, usize::from).min(jobs.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let j = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&(s, r)) = jobs.get(j) else { break };
+                    let sc = &all[s];
+                    let seed = seed.wrapping_add(3000 + r as u64);
+                    let tally = match &sc.plant {
+                        Plant::Linear(model) => drive(sc, model, Some(model), seed, &progress),
+                        Plant::Equations(model) => drive(sc, model.as_ref(), None, seed, &progress),
+                    };
+                    if let Ok(mut out) = results.lock() {
+                        out.push((s, tally));
+                    }
+                }
+            });
+        }
+    });
+    progress.finish_and_clear();
+    let results = results.into_inner().map_err(|_| "a campaign worker panicked".to_owned())?;
+    let mut per: Vec<Vec<RunTally>> = (0..all.len()).map(|_| Vec::new()).collect();
+    for (s, tally) in results {
+        per[s].push(tally?);
+    }
+    Ok(all.iter().zip(per).map(|(sc, tallies)| summarise(sc, tallies)).collect())
+}
+
+fn summarise(sc: &Scenario, tallies: Vec<RunTally>) -> ScenarioResult {
+    let n = sc.setup.x0.len();
+    let per_state = |f: &dyn Fn(&RunTally, usize) -> f64| -> Vec<Vec<f64>> {
+        (0..n).map(|i| tallies.iter().map(|t| f(t, i)).collect()).collect()
+    };
+    let early = per_state(&|t, i| t.early[i]);
+    let late = per_state(&|t, i| t.late[i]);
+    let growth = per_state(&|t, i| t.late[i] / t.early[i]);
+    let ellipsoid = (!tallies.iter().all(|t| t.smf_ns.is_empty())).then(|| EllipsoidComparison {
+        czf_wider_steps: tallies.iter().map(|t| t.czf_wider).sum(),
+        steps_compared: tallies.iter().map(|t| t.compared).sum(),
+        median_width_ratio: (0..n)
+            .map(|i| median(tallies.iter().flat_map(|t| t.ratios[i].clone()).collect()))
+            .collect(),
+        misses: tallies.iter().map(|t| t.smf_misses).sum(),
+        step_time: StepTiming::of(tallies.iter().flat_map(|t| t.smf_ns.clone()).collect()),
+    });
+    ScenarioResult {
+        name: sc.name.to_owned(),
+        runs: tallies.len(),
+        steps: tallies.iter().map(|t| t.steps).sum(),
+        misses: tallies.iter().map(|t| t.misses).sum(),
+        stopped: tallies.iter().filter_map(|t| t.stopped.clone()).collect(),
+        diverging_steps: tallies.iter().map(|t| t.diverging).sum(),
+        width_early: early.into_iter().map(median).collect(),
+        width_late: late.into_iter().map(median).collect(),
+        worst_growth: growth.into_iter().map(|g| g.into_iter().fold(f64::NEG_INFINITY, f64::max)).collect(),
+        step_time: StepTiming::of(tallies.iter().flat_map(|t| t.ns.clone()).collect()),
+        ellipsoid,
+    }
+}

@@ -1,0 +1,130 @@
+//! CORA's six-tank observer benchmark (examples/six-tank, its README for the provenance): `czf-nl`
+//! with the model file's boxes on CORA's published inputs and measurements, its final certified
+//! widths against CORA's saved final hulls (examples/six-tank/cora_hulls.csv), and the step time at
+//! the default order (20, 8 constraints).
+
+use std::path::Path;
+use std::time::Instant;
+
+use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate};
+use nalgebra::DVector;
+use serde::Serialize;
+
+use crate::reproduce::runner::StepTiming;
+
+/// CORA's first measurement (at t = 0), which the log's rows cannot hold (examples/six-tank/README.md).
+const Y1: [f64; 3] = [18.587107801413037, 20.225990245627816, 19.112251238495777];
+
+/// Repetitions of the 19-step log for the step time.
+const TIMING_REPEATS: [usize; 2] = [50, 3];
+
+/// The comparison.
+#[derive(Debug, Clone, Serialize)]
+pub struct SixTank {
+    /// `czf-nl`'s final widths (t = 9.5 s).
+    pub widths: Vec<f64>,
+    /// Their mean.
+    pub mean: f64,
+    /// CORA's saved final hull widths per observer: `(name, widths)`.
+    pub cora: Vec<(String, Vec<f64>)>,
+    /// Per state, the least of CORA's widths.
+    pub cora_best: Vec<f64>,
+    /// Their mean.
+    pub cora_best_mean: f64,
+    /// Steps whose status was not clean (must be 0 on CORA's data).
+    pub unclean_steps: usize,
+    /// One step at the default order.
+    pub step_time: StepTiming,
+}
+
+fn read(path: &Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn number(path: &Path, line: usize, cell: &str) -> Result<f64, String> {
+    cell.trim().parse().map_err(|_| format!("{}:{}: not a number: {cell:?}", path.display(), line + 1))
+}
+
+/// One row of the log: `(u_k, y_{k+1})`.
+type Row = (DVector<f64>, DVector<f64>);
+
+/// The log of examples/six-tank/data.csv.
+fn log(path: &Path) -> Result<Vec<Row>, String> {
+    let text = read(path)?;
+    let mut rows = Vec::new();
+    for (line, l) in text.lines().enumerate().skip(1) {
+        let v = l.split(',').map(|c| number(path, line, c)).collect::<Result<Vec<f64>, String>>()?;
+        if v.len() != 7 {
+            return Err(format!("{}:{}: expected 7 columns, found {}", path.display(), line + 1, v.len()));
+        }
+        rows.push((DVector::from_column_slice(&v[1..4]), DVector::from_column_slice(&v[4..7])));
+    }
+    Ok(rows)
+}
+
+/// CORA's widths per observer at t = 9.5 s (the test's `tFinal == 10` branch), states in order.
+fn cora(path: &Path) -> Result<Vec<(String, Vec<f64>)>, String> {
+    let text = read(path)?;
+    let mut out: Vec<(String, Vec<f64>)> = Vec::new();
+    for (line, l) in text.lines().enumerate().skip(1) {
+        let cells: Vec<&str> = l.split(',').collect();
+        if cells.len() != 5 {
+            return Err(format!("{}:{}: expected 5 columns", path.display(), line + 1));
+        }
+        if cells[0].contains("tFinal") {
+            // The test's other branch: hulls at another horizon, not this comparison's.
+            continue;
+        }
+        let width = number(path, line, cells[4])?;
+        match out.iter_mut().find(|(name, _)| name == cells[0]) {
+            Some((_, w)) => w.push(width),
+            None => out.push((cells[0].to_owned(), vec![width])),
+        }
+    }
+    if out.is_empty() || out.iter().any(|(_, w)| w.len() != 6) {
+        return Err(format!("{}: expected six states per observer", path.display()));
+    }
+    Ok(out)
+}
+
+/// Runs the comparison from the files under `root`.
+///
+/// # Errors
+/// A file that cannot be read or parsed, or a filter error.
+pub fn run(root: &Path, quick: bool) -> Result<SixTank, String> {
+    let dir = root.join("examples/six-tank");
+    let model = port_est::model::read_model(&dir.join("model.toml")).map_err(|e| format!("six-tank model: {e}"))?;
+    let setup = model.setup(estimators::EstimateKind::GuaranteedConstrainedZonotope);
+    let port_est::model::Dynamics::Equations(tanks) = &model.dynamics else {
+        return Err("examples/six-tank/model.toml: not a model written as equations".into());
+    };
+    let rows = log(&dir.join("data.csv"))?;
+    let cora = cora(&dir.join("cora_hulls.csv"))?;
+    let mut ns = Vec::new();
+    let mut widths = Vec::new();
+    let mut unclean_steps = 0;
+    for repeat in 0..TIMING_REPEATS[usize::from(quick)] {
+        let mut f = ConstrainedZonotopeFilter::new(setup.clone(), ConstrainedZonotopeSettings::default())
+            .map_err(|e| format!("czf-nl: {e}"))?;
+        f.update(tanks.as_ref(), &DVector::from_column_slice(&Y1)).map_err(|e| format!("czf-nl, y_1: {e}"))?;
+        for (k, (u, y)) in rows.iter().enumerate() {
+            let t0 = Instant::now();
+            let e = f.step(tanks.as_ref(), u, y).map_err(|e| format!("czf-nl, row {k}: {e}"))?;
+            ns.push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
+            if repeat == 0 {
+                unclean_steps += usize::from(!e.status().is_clean());
+                widths = (0..6).map(|i| e.bounds(i).map_or(f64::NAN, |(l, h)| h - l)).collect();
+            }
+        }
+    }
+    let cora_best: Vec<f64> = (0..6).map(|i| cora.iter().map(|(_, w)| w[i]).fold(f64::INFINITY, f64::min)).collect();
+    Ok(SixTank {
+        mean: widths.iter().sum::<f64>() / 6.0,
+        widths,
+        cora_best_mean: cora_best.iter().sum::<f64>() / 6.0,
+        cora_best,
+        cora,
+        unclean_steps,
+        step_time: StepTiming::of(ns),
+    })
+}
