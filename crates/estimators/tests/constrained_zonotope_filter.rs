@@ -256,6 +256,25 @@ fn an_undefined_model_loses_the_guarantee_and_bad_input_is_refused() {
             Err(EstimatorError::InvalidSetting { .. })
         ));
     }
+    // State bounds: ±∞ on its own side means "none" (as in model files); NaN, empty ranges and a
+    // bound that excludes every number are refused.
+    let inf = f64::INFINITY;
+    let with = |lo: [f64; 2], hi: [f64; 2]| ConstrainedZonotopeSettings {
+        state_bounds: Some((DVector::from_column_slice(&lo), DVector::from_column_slice(&hi))),
+        ..Default::default()
+    };
+    let mut bounded = ConstrainedZonotopeFilter::new(s.clone(), with([-inf, -2.0], [inf, 2.0])).unwrap();
+    let e = bounded.step(&model, &dvector![0.0], &dvector![0.1]).unwrap();
+    assert!(e.status().is_clean(), "{}", e.status());
+    for (lo, hi) in [([f64::NAN, -2.0], [inf, 2.0]), ([inf, -2.0], [inf, 2.0]), ([-inf, 1.0], [inf, -1.0])] {
+        let r = ConstrainedZonotopeFilter::new(s.clone(), with(lo, hi));
+        assert!(matches!(r, Err(EstimatorError::InvalidSetting { .. })), "{lo:?} {hi:?}");
+    }
+    let r = ConstrainedZonotopeFilter::new(
+        s.clone(),
+        ConstrainedZonotopeSettings { state_bounds: Some((dvector![0.0], dvector![1.0])), ..Default::default() },
+    );
+    assert!(matches!(r, Err(EstimatorError::DimensionMismatch { .. })));
 }
 
 #[test]
@@ -274,6 +293,22 @@ fn an_unmeasured_random_walk_is_marked_diverging() {
     }
     // 2 + 0.2 k reaches 4 at k = 10 (the rounding's enclosure may put it just above).
     assert!(matches!(first, Some(10 | 11)), "{first:?}");
+    // Declared bounds |x₂| ≤ 3 (range 6): the walk is held to them instead — not diverging at
+    // widths 4–6, diverging once its set (before the cut) is wider than 6 (k = 20).
+    let bounded = ConstrainedZonotopeSettings {
+        state_bounds: Some((dvector![f64::NEG_INFINITY, -3.0], dvector![f64::INFINITY, 3.0])),
+        ..Default::default()
+    };
+    let s = boxes(dvector![0.0, 0.0], &[1.0, 1.0], &[0.01, 0.1], &[0.1], 1);
+    let mut f = ConstrainedZonotopeFilter::new(s, bounded).unwrap();
+    let mut first = None;
+    for k in 1..=30 {
+        let e = f.step(&model, &dvector![0.0], &dvector![0.0]).unwrap();
+        if e.status().guarantee == Guarantee::Diverging && first.is_none() {
+            first = Some(k);
+        }
+    }
+    assert!(matches!(first, Some(20 | 21)), "{first:?}");
     // The ellipsoid filter keeps the same rule: its unmeasured state's interval grows past twice
     // its initial width too, and the status says so (the set is still guaranteed).
     let s = Setup {

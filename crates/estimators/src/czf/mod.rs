@@ -41,8 +41,9 @@ pub struct ConstrainedZonotopeSettings {
     pub inconsistency: InconsistencyPolicy,
     /// `(lower, upper)`: bounds the true state always respects (±∞ where none).
     pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
-    /// A state's published width above this many times its initial width (or above its declared
-    /// bounds' range) marks the step diverging ([`Guarantee::Diverging`]).
+    /// A state's published width above this many times its initial width marks the step
+    /// diverging ([`Guarantee::Diverging`]); a state with finite declared bounds is diverging
+    /// when its set (before the cut) is wider than their range instead.
     pub divergence_factor: f64,
 }
 
@@ -257,13 +258,26 @@ impl ConstrainedZonotopeFilter {
         let bounds = match settings.state_bounds {
             None => None,
             Some((lo, hi)) => {
-                crate::validate::check_vec("x_lower", &lo, n)?;
-                crate::validate::check_vec("x_upper", &hi, n)?;
-                if let Some(i) = (0..n).find(|&i| lo[i].is_nan() || hi[i].is_nan() || lo[i] > hi[i]) {
+                for (what, v) in [("x_lower", &lo), ("x_upper", &hi)] {
+                    if v.len() != n {
+                        return Err(EstimatorError::DimensionMismatch { what, expected: n, found: v.len() });
+                    }
+                }
+                // ±∞ where a state has no bound; NaN, an empty range or a bound that excludes
+                // every number are refused.
+                let bad = |i: usize| {
+                    lo[i].is_nan()
+                        || hi[i].is_nan()
+                        || lo[i] > hi[i]
+                        || lo[i] == f64::INFINITY
+                        || hi[i] == f64::NEG_INFINITY
+                };
+                if let Some(i) = (0..n).find(|&i| bad(i)) {
                     return Err(EstimatorError::InvalidSetting {
                         what: "x_lower/x_upper",
                         value: i as f64,
-                        requirement: "lower ≤ upper at every state (the value is the state's index)",
+                        requirement: "lower ≤ upper at every state, each finite or ±∞ on its own side (the value is \
+                                      the state's index)",
                     });
                 }
                 Some((lo.iter().copied().collect(), hi.iter().copied().collect()))
@@ -376,7 +390,10 @@ impl ConstrainedZonotopeFilter {
             if x != own {
                 tightened += 1;
             }
-            if x.width() > self.divergence_factor * self.initial_width[i] {
+            // A state with finite declared bounds is held to their range (above); the others to
+            // `divergence_factor` times their initial width.
+            let bounded = self.bounds.as_ref().is_some_and(|(lo, hi)| lo[i].is_finite() && hi[i].is_finite());
+            if !bounded && x.width() > self.divergence_factor * self.initial_width[i] {
                 diverging += 1;
             }
             lower[i] = x.lo();

@@ -67,15 +67,19 @@ pub struct SetEstimate {
     pub upper: DVector<f64>,
     /// What the step did (for the initial set: `τ = (⅓, ⅓, ⅓)`, status unsolved).
     pub report: StepReport,
-    /// Whether some state's interval is wider than [`DIVERGENCE_FACTOR`] times its initial width
-    /// (or than its declared bounds, `smf-nl`): the status says `diverging`.
+    /// Whether some state's interval is wider than [`DIVERGENCE_FACTOR`] times its initial width,
+    /// or, for a state with finite declared bounds (`smf-nl`), than their range: the status says
+    /// `diverging`.
     pub diverging: bool,
-    /// [`DIVERGENCE_FACTOR`] times the initial interval's widths.
+    /// Per state, [`DIVERGENCE_FACTOR`] times the initial interval's width, or the declared
+    /// bounds' range.
     width_limit: DVector<f64>,
 }
 
 /// A state's interval wider than this many times its initial width marks the step diverging
-/// ([`Guarantee::Diverging`]; the constrained-zonotope filters' default rule).
+/// ([`Guarantee::Diverging`]; the constrained-zonotope filters' default rule). A state with finite
+/// declared bounds is held to their range instead: inside them a set is as wide as the user said
+/// the state may be, however it compares with the initial set.
 pub const DIVERGENCE_FACTOR: f64 = 2.0;
 
 impl StepReport {
@@ -115,6 +119,16 @@ impl SetEstimate {
             self.lower[i] = intervals::down(self.center[i] - r);
             self.upper[i] = intervals::up(self.center[i] + r);
             self.diverging |= self.upper[i] - self.lower[i] > self.width_limit[i];
+        }
+    }
+
+    /// Holds each state with finite `bounds` to their range in the divergence rule (instead of
+    /// [`DIVERGENCE_FACTOR`] times its initial width).
+    pub(crate) fn limit_widths_to(&mut self, bounds: &[Interval]) {
+        for (i, b) in bounds.iter().enumerate() {
+            if b.lo().is_finite() && b.hi().is_finite() {
+                self.width_limit[i] = b.hi() - b.lo();
+            }
         }
     }
 

@@ -11,13 +11,18 @@
 //! published set's bounding box (N1). The EKF (first seed, for the figure) takes each shape as
 //! nine covariances (its ±3σ box is the ellipsoid's box, as on the truck). The filter is told the
 //! vessel's speed limits as state bounds (N1'); the same filter without them runs on the same
-//! data to show why they matter.
+//! data to show why they matter. The constrained-zonotope filter `czf-nl`
+//! (docs/constrained-zonotopes.md) runs beside them on the first seeds, on the ellipsoids' bounding
+//! boxes (a weaker assumption: the same noise lies in them) and the same speed limits.
 
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use estimators::{EstimatorError, ExtendedKalmanFilter, NonlinearSetMembershipFilter, Setup};
+use estimators::{
+    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, EstimatorError, ExtendedKalmanFilter,
+    NonlinearSetMembershipFilter, Setup,
+};
 use models::{DiscreteModel, Interval, Noise, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -28,6 +33,10 @@ use super::outputs::WriteFigure as _;
 
 /// Seeds and steps per seed of the full run and of `--quick`.
 const SIZES: [(usize, usize); 2] = [(20, 5000), (2, 1000)];
+
+/// Seeds (the first ones) on which `czf-nl` runs beside `smf-nl`, full and `--quick` (a step costs
+/// about 100 times `smf-nl`'s).
+const ZONOTOPE_SEEDS: [usize; 2] = [4, 1];
 
 /// The speed limits declared to the filter as state bounds (N1'): `|u|, |v| ≤ 2 m/s`,
 /// `|r| ≤ 0.1 rad/s` — generous for a 76 m supply vessel holding station (the truth here stays
@@ -60,6 +69,8 @@ pub struct CertifiedVessel {
     pub psi_width_first_last_fifth_deg: (f64, f64),
     /// The same filter without the speed limits, on the same data.
     pub without_limits: Growth,
+    /// `czf-nl` on the first seeds' data.
+    pub zonotope: ZonotopeVessel,
     /// Median width of the EKF's ±3σ band of `x` \[m\] and `ψ` \[°\] (first seed).
     pub ekf_band_width: (f64, f64),
     /// Steps where the EKF's ±3σ band of `x`, `y` or `ψ` misses the truth, of the first seed's.
@@ -68,6 +79,29 @@ pub struct CertifiedVessel {
     pub figure: (String, String),
     /// Wall-clock seconds.
     pub seconds: f64,
+}
+
+/// `czf-nl` on the bounding boxes of the same ellipsoids, with the speed limits.
+#[derive(Debug, Clone, Serialize)]
+pub struct ZonotopeVessel {
+    /// Seeds (the first of the Monte Carlo's).
+    pub seeds: usize,
+    /// Steps taken.
+    pub steps: usize,
+    /// Steps with `x`, `y`, `ψ`, `u`, `v` or `r` outside its published interval (must be 0).
+    pub misses: usize,
+    /// Runs stopped by an error (`GuaranteeLost`, a refused measurement): must be 0.
+    pub stopped: usize,
+    /// Steps marked diverging.
+    pub diverging_steps: usize,
+    /// Median width of the certified `x`, `y` interval \[m\] and of `ψ` \[°\].
+    pub median_widths: (f64, f64, f64),
+    /// Median `x` width over the first and the last fifth of the steps \[m\].
+    pub x_width_first_last_fifth_m: (f64, f64),
+    /// The same for `ψ` \[°\].
+    pub psi_width_first_last_fifth_deg: (f64, f64),
+    /// Median width of `smf-nl`'s `x` interval over the same seeds \[m\] (the ratio's other side).
+    pub smf_median_x_width_m: f64,
 }
 
 /// The widths of the filter without state bounds.
@@ -95,8 +129,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// One step of the figure run: `t`, then per coordinate (`x`, `y`, `ψ`) the certified interval
-/// and the EKF's band `[x̂ − 3σ, x̂ + 3σ]`, both relative to the truth.
-type Row = [f64; 13];
+/// and the EKF's band `[x̂ − 3σ, x̂ + 3σ]`, both relative to the truth; then per coordinate
+/// `czf-nl`'s interval relative to the truth.
+type Row = [f64; 19];
 
 /// What one Monte Carlo run counts.
 #[derive(Default)]
@@ -109,6 +144,22 @@ struct Tally {
     widths: [Vec<f64>; 4],
     /// Widths of `x`, `ψ`, `u` over the first (0) and the last (1) fifth of the steps.
     ends: [[Vec<f64>; 2]; 3],
+    /// `czf-nl`'s counts (first seeds only).
+    zonotope: ZonotopeTally,
+}
+
+/// What `czf-nl` counts.
+#[derive(Default)]
+struct ZonotopeTally {
+    seeds: usize,
+    steps: usize,
+    misses: usize,
+    stopped: usize,
+    diverging: usize,
+    /// Widths of `x`, `y`, `ψ`, and `smf-nl`'s `x` on the same steps.
+    widths: [Vec<f64>; 4],
+    /// Widths of `x`, `ψ` over the first and the last fifth.
+    ends: [[Vec<f64>; 2]; 2],
 }
 
 /// The Monte Carlo over `seeds` × `horizon` steps, the filter bounded by `limits` (or not); the
@@ -117,6 +168,7 @@ fn monte_carlo(
     seed: u64,
     (seeds, horizon): (usize, usize),
     limits: Option<[f64; 3]>,
+    zonotope_seeds: usize,
     mut rows: Option<&mut Vec<Row>>,
 ) -> Result<Tally, String> {
     let model = DiscreteVessel::paper(VesselParams::paper()).map_err(|e| format!("vessel: {e}"))?;
@@ -136,6 +188,24 @@ fn monte_carlo(
     };
     let noise = |shape: &DMatrix<f64>| Noise::ellipsoid_boundary(shape.clone()).map_err(|e| format!("noise: {e}"));
     let (w, v, x0) = (noise(&setup.process_noise)?, noise(&setup.measurement_noise)?, noise(&setup.p0)?);
+    // czf-nl: the bounding boxes of the same ellipsoids (half-widths √P_ii), as generator matrices.
+    let sqrt_diag = |m: &DMatrix<f64>| DMatrix::from_diagonal(&m.diagonal().map(f64::sqrt));
+    let boxes = Setup {
+        p0: sqrt_diag(&setup.p0),
+        process_noise: sqrt_diag(&setup.process_noise),
+        measurement_noise: sqrt_diag(&setup.measurement_noise),
+        ..setup.clone()
+    };
+    let inf = f64::INFINITY;
+    let zonotope_settings = ConstrainedZonotopeSettings {
+        state_bounds: limits.map(|l| {
+            (
+                DVector::from_column_slice(&[-inf, -inf, -inf, -l[0], -l[1], -l[2]]),
+                DVector::from_column_slice(&[inf, inf, inf, l[0], l[1], l[2]]),
+            )
+        }),
+        ..ConstrainedZonotopeSettings::default()
+    };
     let mut tally = Tally::default();
     let (mut u, mut next, mut y) = (DVector::zeros(3), DVector::zeros(6), DVector::zeros(3));
     for i in 0..seeds {
@@ -149,6 +219,15 @@ fn monte_carlo(
                 .map_err(|e| format!("smf-nl: {e}"))?;
         }
         let mut ekf = ExtendedKalmanFilter::new(ekf_setup.clone()).map_err(|e| format!("EKF: {e}"))?;
+        let mut czf = if i < zonotope_seeds {
+            tally.zonotope.seeds += 1;
+            Some(
+                ConstrainedZonotopeFilter::new(boxes.clone(), zonotope_settings.clone())
+                    .map_err(|e| format!("czf-nl: {e}"))?,
+            )
+        } else {
+            None
+        };
         for k in 0..horizon {
             let t = k as f64 * model.ts();
             for (j, amp) in [2e5, 5e4, 1e6].into_iter().enumerate() {
@@ -190,9 +269,38 @@ fn monte_carlo(
                     tally.ends[slot][end].push(boxes[j].width());
                 }
             }
+            let mut zonotope_rows = [f64::NAN; 6];
+            if let Some(f) = czf.as_mut() {
+                let z = &mut tally.zonotope;
+                match f.step(&model, &u, &y) {
+                    Ok(e) => {
+                        z.steps += 1;
+                        z.diverging += usize::from(!e.status().is_clean());
+                        let b: Vec<(f64, f64)> = (0..6).map(|j| e.bounds(j).unwrap_or((f64::NAN, f64::NAN))).collect();
+                        z.misses += usize::from((0..6).any(|j| !(b[j].0 <= x[j] && x[j] <= b[j].1)));
+                        for (slot, j) in [0, 1, 2].into_iter().enumerate() {
+                            z.widths[slot].push(b[j].1 - b[j].0);
+                            zonotope_rows[2 * slot] = b[j].0 - x[j];
+                            zonotope_rows[2 * slot + 1] = b[j].1 - x[j];
+                        }
+                        z.widths[3].push(boxes[0].width());
+                        if let Some(end) = fifth {
+                            z.ends[0][end].push(b[0].1 - b[0].0);
+                            z.ends[1][end].push(b[2].1 - b[2].0);
+                        }
+                    }
+                    Err(e @ (EstimatorError::GuaranteeLost { .. } | EstimatorError::SetMissed { .. })) => {
+                        eprintln!("czf-nl stopped, seed {i}, step {k}: {e}");
+                        z.stopped += 1;
+                        czf = None;
+                    }
+                    Err(e) => return Err(format!("czf-nl, seed {i}, step {k}: {e}")),
+                }
+            }
             if let (0, Some(rows)) = (i, rows.as_deref_mut()) {
                 let e = ekf.step(&model, &u, &y).map_err(|e| format!("EKF, step {k}: {e}"))?;
-                let mut row = [0.0; 13];
+                let mut row = [0.0; 19];
+                row[13..].copy_from_slice(&zonotope_rows);
                 row[0] = t + model.ts();
                 for j in 0..3 {
                     let s = 3.0 * e.covariance[(j, j)].max(0.0).sqrt();
@@ -226,13 +334,27 @@ pub fn run(seed: u64, quick: bool, figures: &Path) -> Result<CertifiedVessel, St
     let sizes = SIZES[usize::from(quick)];
     let t0 = Instant::now();
     let mut rows: Vec<Row> = Vec::new();
-    let bounded = monte_carlo(seed, sizes, Some(SPEED_LIMITS), Some(&mut rows))?;
-    let free = monte_carlo(seed, sizes, None, None)?;
+    let bounded = monte_carlo(seed, sizes, Some(SPEED_LIMITS), ZONOTOPE_SEEDS[usize::from(quick)], Some(&mut rows))?;
+    let free = monte_carlo(seed, sizes, None, 0, None)?;
     let ekf_misses = rows.iter().filter(|r| (0..3).any(|j| r[3 + 4 * j] > 0.0 || r[4 + 4 * j] < 0.0)).count();
     let ekf_width = |j: usize| median(rows.iter().map(|r| r[4 + 4 * j] - r[3 + 4 * j]).collect());
     let figure = figure(figures, &rows, seed).map_err(|e| format!("writing the certified vessel figure: {e}"))?;
     let [wx, wy, wpsi, _] = bounded.widths;
     let [x_ends, psi_ends, _] = bounded.ends;
+    let z = bounded.zonotope;
+    let [zx, zy, zpsi, smf_x] = z.widths;
+    let [zx_ends, zpsi_ends] = z.ends;
+    let zonotope = ZonotopeVessel {
+        seeds: z.seeds,
+        steps: z.steps,
+        misses: z.misses,
+        stopped: z.stopped,
+        diverging_steps: z.diverging,
+        median_widths: (median(zx), median(zy), median(zpsi).to_degrees()),
+        x_width_first_last_fifth_m: ends(zx_ends, 1.0),
+        psi_width_first_last_fifth_deg: ends(zpsi_ends, 180.0 / std::f64::consts::PI),
+        smf_median_x_width_m: median(smf_x),
+    };
     let [free_x, free_psi, [_, free_u]] = free.ends;
     Ok(CertifiedVessel {
         seeds: sizes.0,
@@ -252,6 +374,7 @@ pub fn run(seed: u64, quick: bool, figures: &Path) -> Result<CertifiedVessel, St
             psi_width_first_last_fifth_deg: ends(free_psi, 180.0 / std::f64::consts::PI),
             u_width_last_fifth: median(free_u),
         },
+        zonotope,
         ekf_band_width: (ekf_width(0), ekf_width(2).to_degrees()),
         ekf_band_misses: (ekf_misses, rows.len()),
         figure,
@@ -266,8 +389,8 @@ fn figure(dir: &Path, rows: &[Row], seed: u64) -> std::io::Result<(String, Strin
     let t = col(0, 1.0);
     let mut grid = Grid::new(1);
     grid.title = format!(
-        "Supply vessel, bounded noise: certified intervals (smf-nl) and the EKF's ±3σ band, minus the truth \
-         (seed {})",
+        "Supply vessel, bounded noise: certified intervals (smf-nl, czf-nl) and the EKF's ±3σ band, minus the \
+         truth (seed {})",
         seed + 2000
     );
     for (j, (name, unit, scale)) in
@@ -277,13 +400,25 @@ fn figure(dir: &Path, rows: &[Row], seed: u64) -> std::io::Result<(String, Strin
         c.width = 900;
         let base = 1 + 4 * j;
         c.add(Series::band("EKF ±3σ band", t.clone(), col(base + 2, scale), col(base + 3, scale), PALETTE[1]));
-        c.add(Series::band("certified interval", t.clone(), col(base, scale), col(base + 1, scale), PALETTE[2]));
+        c.add(Series::band(
+            "certified interval (smf-nl)",
+            t.clone(),
+            col(base, scale),
+            col(base + 1, scale),
+            PALETTE[2],
+        ));
+        let zb = 13 + 2 * j;
+        c.add(Series::band("certified interval (czf-nl)", t.clone(), col(zb, scale), col(zb + 1, scale), PALETTE[3]));
         c.add(Series::line("truth", t.clone(), vec![0.0; t.len()], PALETTE[0]));
         grid.add(c);
     }
     let file = "certified_vessel.svg".to_owned();
     grid.write(&dir.join(&file))?;
-    Ok((file, "Certified x, y, ψ intervals of smf-nl beside the EKF's ±3σ band, minus the truth (first seed)".into()))
+    Ok((
+        file,
+        "Certified x, y, ψ intervals of smf-nl and czf-nl beside the EKF's ±3σ band, minus the truth (first seed)"
+            .into(),
+    ))
 }
 
 /// The report's section.
@@ -365,6 +500,35 @@ pub fn markdown(c: &CertifiedVessel) -> String {
         g.x_width_first_last_fifth_m.1,
         c.figure.1,
         c.figure.0
+    );
+    let z = &c.zonotope;
+    let _ = writeln!(
+        md,
+        "\n### The constrained-zonotope filter beside it\n\n\
+         `czf-nl` (docs/constrained-zonotopes.md) on the first {} seeds' data, with the ellipsoids' bounding boxes \
+         (half-widths √P_ii: a weaker assumption, the same noise lies in them) and the same speed limits.\n\n\
+         | quantity | value |\n|---|---|\n\
+         | steps | {} |\n\
+         | truth outside a published interval (any state) | **{}** |\n\
+         | runs stopped (GuaranteeLost or a refused measurement) | {} |\n\
+         | steps marked diverging | {} |\n\
+         | median certified width of x / y / ψ | {:.3} m / {:.3} m / {:.3}° |\n\
+         | `smf-nl`'s median x width on the same steps | {:.3} m |\n\
+         | median x width, first / last fifth of the steps | {:.3} m / {:.3} m |\n\
+         | median ψ width, first / last fifth of the steps | {:.3}° / {:.3}° |\n",
+        z.seeds,
+        z.steps,
+        z.misses,
+        z.stopped,
+        z.diverging_steps,
+        z.median_widths.0,
+        z.median_widths.1,
+        z.median_widths.2,
+        z.smf_median_x_width_m,
+        z.x_width_first_last_fifth_m.0,
+        z.x_width_first_last_fifth_m.1,
+        z.psi_width_first_last_fifth_deg.0,
+        z.psi_width_first_last_fifth_deg.1,
     );
     md
 }

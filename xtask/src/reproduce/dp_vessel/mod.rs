@@ -281,6 +281,8 @@ impl Summary {
                 "median_x_width_m": r(self.certified.median_x_width_m),
                 "median_psi_width_deg": r(self.certified.median_psi_width_deg),
                 "ekf_band_misses": self.certified.ekf_band_misses,
+                "zonotope_misses": self.certified.zonotope.misses,
+                "zonotope_stopped": self.certified.zonotope.stopped,
             },
         })
     }

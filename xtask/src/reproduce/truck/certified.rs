@@ -9,13 +9,19 @@
 //! EKF's Gaussian settings). The certified sideslip interval is `atan([V_y]/[V_x])` over the
 //! published set's bounding box (2), computed in interval arithmetic; the EKF's band is
 //! `β̂ ± 3σ_β` (σ_β propagated from `P` to first order). A Monte Carlo run repeats the certified
-//! filter alone over many seeds and counts the steps whose truth leaves the published set.
+//! filter alone over many seeds and counts the steps whose truth leaves the published set. In the
+//! figure run the constrained-zonotope filter `czf-nl` (docs/constrained-zonotopes.md) runs beside
+//! them on the ellipsoids' bounding boxes (±3σ: the same noise lies in them), its β interval
+//! `atan([V_y]/[V_x])` over its published box.
 
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use estimators::{EstimatorError, ExtendedKalmanFilter, NonlinearSetMembershipFilter, Setup};
+use estimators::{
+    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, EstimatorError, ExtendedKalmanFilter,
+    NonlinearSetMembershipFilter, Setup,
+};
 use models::{DiscreteModel, Interval, Noise, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -82,10 +88,31 @@ pub struct CertifiedSummary {
     pub timing: StepTiming,
     /// The Monte Carlo count.
     pub monte_carlo: MonteCarlo,
+    /// `czf-nl` in the figure run.
+    pub zonotope: ZonotopeBeta,
     /// The figure `(file, caption)`.
     pub figure: (String, String),
     /// The CSV file (relative to `csv/`).
     pub csv: String,
+}
+
+/// `czf-nl` on the figure run's data.
+#[derive(Debug, Clone, Serialize)]
+pub struct ZonotopeBeta {
+    /// Steps taken.
+    pub steps: usize,
+    /// Steps with a state or `β` outside its published interval (must be 0).
+    pub misses: usize,
+    /// Why it stopped, if it did (`GuaranteeLost` or a refused measurement).
+    pub stopped: Option<String>,
+    /// Median / largest width of its certified `β` interval \[°\].
+    pub median_beta_width_deg: f64,
+    /// Largest width \[°\].
+    pub max_beta_width_deg: f64,
+    /// Median of its `β` width over `smf-nl`'s on the same steps.
+    pub median_ratio_to_smf: f64,
+    /// Wall time of its step.
+    pub timing: StepTiming,
 }
 
 /// One run's outcome; with `record`, the per-step series of the figure.
@@ -97,9 +124,16 @@ struct SeedRun {
     max_distance: f64,
     lost: bool,
     step_ns: Vec<u64>,
-    /// `[t, β, β_lo, β_hi, β̂_EKF, σ_β,EKF]` per step.
-    rows: Vec<[f64; 6]>,
+    /// `[t, β, β_lo, β_hi, β̂_EKF, σ_β,EKF, β_lo,czf, β_hi,czf]` per step.
+    rows: Vec<Row>,
+    czf_steps: usize,
+    czf_misses: usize,
+    czf_stopped: Option<String>,
+    czf_ns: Vec<u64>,
 }
+
+/// One step of the figure run.
+type Row = [f64; 8];
 
 fn diag(v: [f64; 3]) -> DMatrix<f64> {
     DMatrix::from_diagonal(&DVector::from_row_slice(&v))
@@ -163,6 +197,22 @@ fn run_seed(truth: &TruthTrajectory, model: &TruckEkfModel, seed: u64, record: b
     let mut x = &setup.x0 + x0.sample(&mut rng);
     let mut smf = NonlinearSetMembershipFilter::new(setup).map_err(|e| format!("smf-nl: {e}"))?;
     let mut ekf = ExtendedKalmanFilter::new(ekf_setup(ts)).map_err(|e| format!("EKF: {e}"))?;
+    let sqrt_diag = |m: &DMatrix<f64>| DMatrix::from_diagonal(&m.diagonal().map(f64::sqrt));
+    let setup = certified_setup(ts);
+    let boxes = Setup {
+        p0: sqrt_diag(&setup.p0),
+        process_noise: sqrt_diag(&setup.process_noise),
+        measurement_noise: sqrt_diag(&setup.measurement_noise),
+        ..setup
+    };
+    let mut czf = if record {
+        Some(
+            ConstrainedZonotopeFilter::new(boxes, ConstrainedZonotopeSettings::default())
+                .map_err(|e| format!("czf-nl: {e}"))?,
+        )
+    } else {
+        None
+    };
     let mut run = SeedRun::default();
     let (mut u, mut next, mut y) = (DVector::zeros(7), DVector::zeros(3), DVector::zeros(3));
     for k in 0..truth.len().saturating_sub(1) {
@@ -196,7 +246,38 @@ fn run_seed(truth: &TruthTrajectory, model: &TruckEkfModel, seed: u64, record: b
             run.step_ns.push(u64::try_from(ns).unwrap_or(u64::MAX));
             let e = ekf.step(model, &u, &y).map_err(|e| format!("EKF, step {k}: {e}"))?;
             let (b, s) = ekf_beta(&e.center, &e.covariance);
-            run.rows.push([(k + 1) as f64 * ts, (x[1] / x[0]).atan(), beta.lo(), beta.hi(), b, s]);
+            let mut zonotope_beta = (f64::NAN, f64::NAN);
+            if let Some(f) = czf.as_mut() {
+                let t0 = Instant::now();
+                match f.step(model, &u, &y) {
+                    Ok(z) => {
+                        run.czf_ns.push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
+                        run.czf_steps += 1;
+                        let b: Vec<Interval> = (0..3)
+                            .map(|i| z.bounds(i).map_or(Interval::ENTIRE, |(l, h)| Interval::new(l, h)))
+                            .collect();
+                        let zb = (b[1] / b[0]).atan();
+                        let outside = (0..3).any(|i| !b[i].contains(x[i])) || !zb.contains((x[1] / x[0]).atan());
+                        run.czf_misses += usize::from(outside);
+                        zonotope_beta = (zb.lo(), zb.hi());
+                    }
+                    Err(e @ (EstimatorError::GuaranteeLost { .. } | EstimatorError::SetMissed { .. })) => {
+                        run.czf_stopped = Some(format!("step {k}: {e}"));
+                        czf = None;
+                    }
+                    Err(e) => return Err(format!("czf-nl, seed {seed}, step {k}: {e}")),
+                }
+            }
+            run.rows.push([
+                (k + 1) as f64 * ts,
+                (x[1] / x[0]).atan(),
+                beta.lo(),
+                beta.hi(),
+                b,
+                s,
+                zonotope_beta.0,
+                zonotope_beta.1,
+            ]);
         }
     }
     Ok(run)
@@ -242,6 +323,18 @@ pub fn run(
     }
     bar.finish_and_clear();
     mc.seconds = t0.elapsed().as_secs_f64();
+    let zonotope_widths: Vec<f64> = first.rows.iter().map(|r| (r[7] - r[6]) * deg).filter(|w| w.is_finite()).collect();
+    let zonotope = ZonotopeBeta {
+        steps: first.czf_steps,
+        misses: first.czf_misses,
+        stopped: first.czf_stopped.clone(),
+        median_beta_width_deg: median(zonotope_widths.clone()),
+        max_beta_width_deg: zonotope_widths.iter().copied().fold(0.0, f64::max),
+        median_ratio_to_smf: median(
+            first.rows.iter().map(|r| (r[7] - r[6]) / (r[3] - r[2])).filter(|v| v.is_finite()).collect(),
+        ),
+        timing: StepTiming::of(first.czf_ns.clone()),
+    };
     Ok(CertifiedSummary {
         noise: NOISE.to_owned(),
         steps: first.steps,
@@ -256,24 +349,30 @@ pub fn run(
         median_width_ratio: median(ratios),
         timing: StepTiming::of(first.step_ns),
         monte_carlo: mc,
+        zonotope,
         figure,
         csv,
     })
 }
 
-fn write_csv(path: &Path, rows: &[[f64; 6]]) -> std::io::Result<()> {
-    let mut s = String::from("t,beta,beta_certified_lo,beta_certified_hi,beta_ekf,beta_ekf_sigma\n");
+fn write_csv(path: &Path, rows: &[Row]) -> std::io::Result<()> {
+    let mut s =
+        String::from("t,beta,beta_certified_lo,beta_certified_hi,beta_ekf,beta_ekf_sigma,beta_czf_lo,beta_czf_hi\n");
     for r in rows {
-        let _ = writeln!(s, "{:.3},{:.9e},{:.9e},{:.9e},{:.9e},{:.4e}", r[0], r[1], r[2], r[3], r[4], r[5]);
+        let _ = writeln!(
+            s,
+            "{:.3},{:.9e},{:.9e},{:.9e},{:.9e},{:.4e},{:.9e},{:.9e}",
+            r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7]
+        );
     }
     outputs::write_atomic(path, s.as_bytes())
 }
 
 /// The truth's `β`, the certified interval and the EKF's ±3σ band over the slalom, a zoom on one
 /// half-period, and both widths over time.
-fn figure(dir: &Path, rows: &[[f64; 6]], seed: u64) -> std::io::Result<(String, String)> {
+fn figure(dir: &Path, rows: &[Row], seed: u64) -> std::io::Result<(String, String)> {
     let deg = 180.0 / std::f64::consts::PI;
-    let col = |f: &dyn Fn(&[f64; 6]) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let col = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
     let t = col(&|r| r[0]);
     let mut grid = Grid::new(1);
     grid.title = format!("Truck slalom, bounded noise: certified β (smf-nl) and the EKF's ±3σ band (seed {seed})");
@@ -288,7 +387,8 @@ fn figure(dir: &Path, rows: &[[f64; 6]], seed: u64) -> std::io::Result<(String, 
             col(&|r| (r[4] + SIGMAS * r[5]) * deg),
             PALETTE[1],
         ));
-        c.add(Series::band("certified β interval", t.clone(), col(&|r| r[2] * deg), col(&|r| r[3] * deg), PALETTE[2]));
+        c.add(Series::band("certified β (smf-nl)", t.clone(), col(&|r| r[2] * deg), col(&|r| r[3] * deg), PALETTE[2]));
+        c.add(Series::band("certified β (czf-nl)", t.clone(), col(&|r| r[6] * deg), col(&|r| r[7] * deg), PALETTE[3]));
         c.add(Series::line("truth (model with bounded noise)", t.clone(), col(&|r| r[1] * deg), PALETTE[0]));
         if let Some((a, b)) = range {
             let inside = rows.iter().filter(|r| r[0] >= a && r[0] <= b);
@@ -309,7 +409,8 @@ fn figure(dir: &Path, rows: &[[f64; 6]], seed: u64) -> std::io::Result<(String, 
     }
     let mut c = Chart::new("Widths", "time t [s]", "width [°]");
     c.width = 900;
-    c.add(Series::line("certified interval", t.clone(), col(&|r| (r[3] - r[2]) * deg), PALETTE[2]));
+    c.add(Series::line("certified interval (smf-nl)", t.clone(), col(&|r| (r[3] - r[2]) * deg), PALETTE[2]));
+    c.add(Series::line("certified interval (czf-nl)", t.clone(), col(&|r| (r[7] - r[6]) * deg), PALETTE[3]));
     c.add(Series::line("EKF ±3σ band (6σ_β)", t, col(&|r| 2.0 * SIGMAS * r[5] * deg), PALETTE[1]));
     c.y_range = rows.iter().filter(|r| r[0] >= 0.2).fold(None, |acc: Option<(f64, f64)>, r| {
         let hi = ((r[3] - r[2]).max(2.0 * SIGMAS * r[5]) * deg) * 1.1;
@@ -320,7 +421,9 @@ fn figure(dir: &Path, rows: &[[f64; 6]], seed: u64) -> std::io::Result<(String, 
     grid.write(&dir.join(&file))?;
     Ok((
         file,
-        "Certified β interval of smf-nl beside the EKF's ±3σ band, bounded noise on the boundary (first seed)".into(),
+        "Certified β intervals of smf-nl and czf-nl beside the EKF's ±3σ band, bounded noise on the boundary (first \
+         seed)"
+            .into(),
     ))
 }
 
@@ -381,6 +484,22 @@ pub fn markdown(c: &CertifiedSummary) -> String {
         100.0 * c.ekf_outside_band as f64 / c.steps.max(1) as f64,
         c.figure.1,
         c.figure.0
+    );
+    let z = &c.zonotope;
+    let _ = writeln!(
+        md,
+        "The constrained-zonotope filter `czf-nl` (docs/constrained-zonotopes.md) on the figure run's data, with the \
+         ellipsoids' bounding boxes (±3σ; the same noise lies in them): {} steps{}, **{}** steps with a state or β \
+         outside its interval, certified β width {}° median, {}° largest — {} times `smf-nl`'s (median); step {} µs \
+         median, {} µs p99.\n",
+        z.steps,
+        z.stopped.as_ref().map_or(String::new(), |s| format!(" (stopped at {s})")),
+        z.misses,
+        sig3(z.median_beta_width_deg),
+        sig3(z.max_beta_width_deg),
+        sig3(z.median_ratio_to_smf),
+        sig3(z.timing.median_us),
+        sig3(z.timing.p99_us),
     );
     md
 }

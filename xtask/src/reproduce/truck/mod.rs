@@ -304,6 +304,8 @@ impl Summary {
                 "guarantee_lost": self.certified.guarantee_lost,
                 "median_beta_width_deg": r(self.certified.median_beta_width_deg),
                 "median_ekf_band_width_deg": r(self.certified.median_ekf_band_width_deg),
+                "zonotope_misses": self.certified.zonotope.misses,
+                "zonotope_stopped": self.certified.zonotope.stopped.is_some(),
                 "monte_carlo": {
                     "seeds": self.certified.monte_carlo.seeds,
                     "steps": self.certified.monte_carlo.steps,
