@@ -328,6 +328,27 @@ fn an_unmeasured_random_walk_is_marked_diverging() {
     let (l, h) = smf.estimate().bounds(1).unwrap();
     assert!(h - l > 4.0 && marked, "width {} after 200 steps", h - l);
     assert_eq!(smf.estimate().status().guarantee, Guarantee::Diverging);
+    // smf-nl told |x₂| ≤ 3: marked exactly when the published interval spans [−3, 3], although it
+    // is wider than twice its initial width (2) long before.
+    let s = Setup {
+        x0: dvector![0.0, 0.0],
+        p0: DMatrix::identity(2, 2),
+        process_noise: DMatrix::from_diagonal(&dvector![1e-4, 1e-2]),
+        measurement_noise: DMatrix::identity(1, 1) * 1e-2,
+        inputs: 1,
+    };
+    let inf = f64::INFINITY;
+    let mut nl = NonlinearSetMembershipFilter::new(s).unwrap().with_state_bounds(&[-inf, -3.0], &[inf, 3.0]).unwrap();
+    let (mut wide_unmarked, mut marked) = (false, false);
+    for k in 0..400 {
+        let e = nl.step(&model, &dvector![0.0], &dvector![0.0]).unwrap();
+        let (l, h) = e.bounds(1).unwrap();
+        let spans = l <= -3.0 && h >= 3.0;
+        assert_eq!(e.status().guarantee == Guarantee::Diverging, spans, "step {k}: [{l}, {h}]");
+        wide_unmarked |= !spans && h - l > 4.0;
+        marked |= spans;
+    }
+    assert!(wide_unmarked && marked);
 }
 
 #[test]

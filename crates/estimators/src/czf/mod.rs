@@ -43,7 +43,7 @@ pub struct ConstrainedZonotopeSettings {
     pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
     /// A state's published width above this many times its initial width marks the step
     /// diverging ([`Guarantee::Diverging`]); a state with finite declared bounds is diverging
-    /// when its set (before the cut) is wider than their range instead.
+    /// when its published interval spans their whole range instead.
     pub divergence_factor: f64,
 }
 
@@ -373,9 +373,6 @@ impl ConstrainedZonotopeFilter {
             let mut x = Interval::new(hull.lower[i], hull.upper[i]);
             let own = x;
             if let Some((lo, hi)) = &self.bounds {
-                if own.width() > hi[i] - lo[i] {
-                    diverging += 1;
-                }
                 x = x.meet(Interval::new(lo[i], hi[i])).ok_or(EstimatorError::OutsideStateBounds {
                     step,
                     state: i,
@@ -390,11 +387,15 @@ impl ConstrainedZonotopeFilter {
             if x != own {
                 tightened += 1;
             }
-            // A state with finite declared bounds is held to their range (above); the others to
-            // `divergence_factor` times their initial width.
-            let bounded = self.bounds.as_ref().is_some_and(|(lo, hi)| lo[i].is_finite() && hi[i].is_finite());
-            if !bounded && x.width() > self.divergence_factor * self.initial_width[i] {
-                diverging += 1;
+            // A state with finite declared bounds is diverging when its interval spans them (it
+            // says nothing they did not); the others when wider than `divergence_factor` times
+            // their initial width.
+            let spans = |lo: f64, hi: f64| lo.is_finite() && hi.is_finite() && x.lo() <= lo && x.hi() >= hi;
+            match &self.bounds {
+                Some((lo, hi)) if lo[i].is_finite() && hi[i].is_finite() => {
+                    diverging += usize::from(spans(lo[i], hi[i]))
+                }
+                _ => diverging += usize::from(x.width() > self.divergence_factor * self.initial_width[i]),
             }
             lower[i] = x.lo();
             upper[i] = x.hi();

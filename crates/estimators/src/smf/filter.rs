@@ -68,18 +68,18 @@ pub struct SetEstimate {
     /// What the step did (for the initial set: `τ = (⅓, ⅓, ⅓)`, status unsolved).
     pub report: StepReport,
     /// Whether some state's interval is wider than [`DIVERGENCE_FACTOR`] times its initial width,
-    /// or, for a state with finite declared bounds (`smf-nl`), than their range: the status says
-    /// `diverging`.
+    /// or, for a state with finite declared bounds (`smf-nl`), spans their whole range: the status
+    /// says `diverging`.
     pub diverging: bool,
-    /// Per state, [`DIVERGENCE_FACTOR`] times the initial interval's width, or the declared
-    /// bounds' range.
+    /// Per state, [`DIVERGENCE_FACTOR`] times the initial interval's width (`+∞` for a state with
+    /// finite declared bounds, held to them instead).
     width_limit: DVector<f64>,
 }
 
 /// A state's interval wider than this many times its initial width marks the step diverging
 /// ([`Guarantee::Diverging`]; the constrained-zonotope filters' default rule). A state with finite
-/// declared bounds is held to their range instead: inside them a set is as wide as the user said
-/// the state may be, however it compares with the initial set.
+/// declared bounds is held to them instead: diverging when its set spans their whole range (the
+/// estimate then says nothing the bounds did not), whatever it is compared with the initial set.
 pub const DIVERGENCE_FACTOR: f64 = 2.0;
 
 impl StepReport {
@@ -122,12 +122,12 @@ impl SetEstimate {
         }
     }
 
-    /// Holds each state with finite `bounds` to their range in the divergence rule (instead of
-    /// [`DIVERGENCE_FACTOR`] times its initial width).
+    /// Holds each state with finite `bounds` to them in the divergence rule (instead of
+    /// [`DIVERGENCE_FACTOR`] times its initial width; [`Self::cut_bounds`] applies it).
     pub(crate) fn limit_widths_to(&mut self, bounds: &[Interval]) {
         for (i, b) in bounds.iter().enumerate() {
             if b.lo().is_finite() && b.hi().is_finite() {
-                self.width_limit[i] = b.hi() - b.lo();
+                self.width_limit[i] = f64::INFINITY;
             }
         }
     }
@@ -135,7 +135,8 @@ impl SetEstimate {
     /// Cuts the published interval by bounds the true state always respects.
     pub(crate) fn cut_bounds(&mut self, bounds: &[Interval]) {
         for (i, b) in bounds.iter().enumerate() {
-            self.diverging |= self.upper[i] - self.lower[i] > b.hi() - b.lo();
+            let bounded = b.lo().is_finite() && b.hi().is_finite();
+            self.diverging |= bounded && self.lower[i] <= b.lo() && self.upper[i] >= b.hi();
             self.lower[i] = self.lower[i].max(b.lo());
             self.upper[i] = self.upper[i].min(b.hi());
         }
