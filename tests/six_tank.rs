@@ -4,7 +4,9 @@
 //! data with every noise on the boundary of its box.
 
 use equation_models::EquationModel;
-use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, Setup};
+use estimators::{
+    ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, NonlinearSetMembershipFilter, Setup,
+};
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
@@ -167,4 +169,62 @@ fn six_tank_holds_the_truth_with_every_noise_on_the_boundary() {
             }
         }
     }
+}
+
+/// `smf-nl` on CORA's data with the least-trace ellipsoids around CORA's boxes (the model file's
+/// `p0`, `q`, `r`), from X₀ without CORA's update at t = 0: its published interval is the ellipsoid's, cut by the interval observer run
+/// beside it (docs/nonlinear-smf.md (N7)–(N8)).
+fn run_smf_nl() -> (Vec<Vec<(f64, f64)>>, Vec<f64>) {
+    let model = model();
+    let ellipsoids = Setup {
+        x0: DVector::from_element(6, 20.0),
+        p0: DMatrix::identity(6, 6) * 96.0,
+        process_noise: DMatrix::identity(6, 6) * 6e-6,
+        measurement_noise: DMatrix::identity(3, 3) * 0.12,
+        inputs: 3,
+    };
+    let mut f = NonlinearSetMembershipFilter::new(ellipsoids).unwrap();
+    let bounds = |e: &dyn Estimate| (0..6).map(|i| e.bounds(i).unwrap()).collect::<Vec<_>>();
+    // No update with y_1: this filter updates only after a prediction (the witnesses start in X₀).
+    let mut out = vec![bounds(f.estimate())];
+    for (u, y) in log() {
+        let e = f.step(&model, &u, &y).unwrap();
+        // Inside the ellipsoid's own projection, always.
+        for i in 0..6 {
+            let r = e.shape[(i, i)].sqrt();
+            let (l, h) = e.bounds(i).unwrap();
+            assert!(l >= e.center[i] - r * (1.0 + 1e-12) && h <= e.center[i] + r * (1.0 + 1e-12));
+        }
+        out.push(bounds(e));
+    }
+    let projection = (0..6).map(|i| 2.0 * f.estimate().shape[(i, i)].sqrt()).collect();
+    (out, projection)
+}
+
+#[test]
+fn the_ellipsoid_filter_s_interval_is_cut_by_its_interval_observer_and_holds_every_witness() {
+    let (bounds, projection) = run_smf_nl();
+    for p in witnesses(20_000, 300, 11) {
+        for (k, x) in p.iter().enumerate() {
+            for i in 0..6 {
+                let (l, h) = bounds[k][i];
+                assert!(l <= x[i] && x[i] <= h, "step {k}, x{}: {} outside [{l}, {h}]", i + 1, x[i]);
+            }
+        }
+    }
+    let last = bounds.last().unwrap();
+    let widths: Vec<f64> = last.iter().map(|(l, h)| h - l).collect();
+    let mean = widths.iter().sum::<f64>() / 6.0;
+    let alone = projection.iter().sum::<f64>() / 6.0;
+    eprintln!(
+        "smf-nl: final widths {widths:.4?}, mean {mean:.4}; the ellipsoid's own projection {projection:.4?}, mean \
+         {alone:.4}"
+    );
+    // Each measured tank within its strip, 2·√0.12 (the box around the ellipsoid V); the
+    // ellipsoid's projection alone leaves them wider.
+    for i in [1, 3, 4] {
+        assert!(widths[i] <= 2.0 * 0.12f64.sqrt() + 1e-9, "x{}: {}", i + 1, widths[i]);
+        assert!(widths[i] < projection[i], "x{}: {} against {}", i + 1, widths[i], projection[i]);
+    }
+    assert!(mean < alone, "mean {mean} against {alone}");
 }

@@ -108,8 +108,9 @@ pub enum EstimatorError {
         excess: f64,
     },
     /// A constrained-zonotope filter's measurement (with its noise set) misses the predicted set,
-    /// or its certified hull misses the interval observer's box: proved, not a tolerance. The
-    /// filter is unchanged.
+    /// or its certified hull misses the interval observer's box, or `smf-nl`'s interval observer
+    /// meets a measurement whose strip misses its box: proved, not a tolerance. The filter is
+    /// unchanged.
     #[error("data inconsistent with the noise bounds at step {step}: {reason}")]
     SetMissed {
         /// The step (0 for an update of the initial set).

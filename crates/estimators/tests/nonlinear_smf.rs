@@ -427,3 +427,46 @@ fn state_bounds_that_do_not_cut_the_set_change_nothing_and_a_set_outside_them_is
     let e = new().with_state_bounds(&[f64::INFINITY, 0.0], &[f64::INFINITY, 1.0]).unwrap_err();
     assert!(matches!(e, EstimatorError::InvalidSetting { .. }), "{e}");
 }
+
+#[test]
+fn the_interval_observer_cuts_the_interval_and_refuses_contradicting_data() {
+    use estimators::checks::InconsistencyPolicy;
+    use estimators::{DataCheck, DataChecks, Estimate, Guarantee};
+    // x₂ drifts unmeasured, x₁ measured to ±0.1 (box around V): the published x₁ interval is the
+    // measurement's strip met with the prediction, narrower than the ellipsoid's projection.
+    let model = models::ConstantModel::new(
+        DMatrix::from_row_slice(2, 2, &[1.0, 0.1, 0.0, 1.0]),
+        DMatrix::zeros(2, 1),
+        DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+    )
+    .unwrap();
+    let setup = Setup {
+        x0: dvector![0.0, 0.0],
+        p0: DMatrix::identity(2, 2),
+        process_noise: DMatrix::from_diagonal(&dvector![1e-4, 1e-4]),
+        measurement_noise: DMatrix::identity(1, 1) * 1e-2,
+        inputs: 1,
+    };
+    let mut f = NonlinearSetMembershipFilter::new(setup.clone()).unwrap();
+    for k in 0..50 {
+        let e = f.step(&model, &dvector![0.0], &dvector![0.05 * (k as f64 * 0.3).sin()]).unwrap();
+        let r = e.shape[(0, 0)].sqrt();
+        let (l, h) = e.bounds(0).unwrap();
+        assert!(l >= e.center[0] - r * (1.0 + 1e-12) && h <= e.center[0] + r * (1.0 + 1e-12), "step {k}");
+        assert!(h - l <= 0.2 + 1e-12, "step {k}: x₁ width {} beyond the strip's 0.2", h - l);
+    }
+    // A measurement 5 units off: the observer proves it contradicts the box and V; refused (the
+    // default policy), the filter unchanged.
+    let before = f.estimate().clone();
+    let err = f.step(&model, &dvector![0.0], &dvector![5.0]).unwrap_err();
+    assert!(matches!(err, EstimatorError::SetMissed { step: 51, .. }), "{err}");
+    assert_eq!(f.estimate().center, before.center);
+    assert_eq!((&f.estimate().lower, &f.estimate().upper), (&before.lower, &before.upper));
+    // Flagged instead: published, marked inconsistent, no longer guaranteed (nor later).
+    f.set_data_checks(DataChecks::with_policy(InconsistencyPolicy::FlagAndContinue)).unwrap();
+    let e = f.step(&model, &dvector![0.0], &dvector![5.0]).unwrap();
+    assert_eq!(e.status().data, DataCheck::Inconsistent);
+    assert_eq!(e.status().guarantee, Guarantee::Lost);
+    let e = f.step(&model, &dvector![0.0], &dvector![0.0]).unwrap();
+    assert_eq!(e.status().guarantee, Guarantee::Lost);
+}

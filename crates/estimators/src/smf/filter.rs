@@ -132,6 +132,32 @@ impl SetEstimate {
         }
     }
 
+    /// Cuts the published interval by declared `bounds` and by a certified `observer` box, and
+    /// decides divergence on the result; `false` (and that state left as the bounds cut it) where
+    /// the observer's box misses the set's interval — both hold the true state, so the data
+    /// contradict the assumptions.
+    pub(crate) fn cut_by(&mut self, bounds: &[Interval], observer: &[Interval]) -> bool {
+        self.cut_bounds(bounds);
+        let mut met = true;
+        self.diverging = false;
+        for (i, (b, o)) in bounds.iter().zip(observer).enumerate() {
+            let (lo, hi) = (self.lower[i].max(o.lo()), self.upper[i].min(o.hi()));
+            if lo <= hi {
+                self.lower[i] = lo;
+                self.upper[i] = hi;
+            } else {
+                met = false;
+            }
+            let bounded = b.lo().is_finite() && b.hi().is_finite();
+            self.diverging |= if bounded {
+                self.lower[i] <= b.lo() && self.upper[i] >= b.hi()
+            } else {
+                self.upper[i] - self.lower[i] > self.width_limit[i]
+            };
+        }
+        met
+    }
+
     /// Cuts the published interval by bounds the true state always respects.
     pub(crate) fn cut_bounds(&mut self, bounds: &[Interval]) {
         for (i, b) in bounds.iter().enumerate() {
@@ -352,6 +378,23 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     /// The current set estimate, for a wrapper that refines its published interval.
     pub(crate) fn estimate_mut(&mut self) -> &mut SetEstimate {
         &mut self.est
+    }
+
+    /// Marks the current estimate inconsistent, its data contradicted by a proof found outside
+    /// the update (`smf-nl`'s interval observer) under a policy that publishes such steps: no set
+    /// from now on is guaranteed, as after [`InconsistencyPolicy::FlagAndContinue`].
+    pub(crate) fn mark_inconsistent(&mut self) {
+        self.guarantee_lost = true;
+        self.est.report.guaranteed = false;
+        if self.policy != InconsistencyPolicy::Off {
+            // How far outside is not measured by the observer's proof.
+            self.est.report.consistency = Consistency::Inconsistent { excess: f64::NAN };
+        }
+    }
+
+    /// The policy for inconsistent data.
+    pub(crate) fn inconsistency_policy(&self) -> InconsistencyPolicy {
+        self.policy
     }
 
     /// The solver.

@@ -34,7 +34,7 @@ use nalgebra::{DMatrix, DVector};
 use super::filter::{SetEstimate, SetMembershipFilter};
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::UpdateSolver;
-use crate::checks::DataChecks;
+use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
 use crate::traits::Setup;
 use crate::validate::check_vec;
@@ -82,6 +82,12 @@ struct Work {
     q_eff: DMatrix<f64>,
     r_eff: DMatrix<f64>,
     remainders: RemainderBounds,
+    /// The interval observer's box of the step (N7)–(N8), before it is published.
+    obs: Vec<Interval>,
+    /// The point about which `h` is expanded in (N8).
+    obs_point: Vec<Interval>,
+    /// `J_ik (x_k − p_k)` of one output row (N8).
+    terms: Vec<Interval>,
 }
 
 /// The nonlinear set-membership filter over any [`SecondOrderModel`], generic over the solver of
@@ -98,6 +104,11 @@ pub struct NonlinearSetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
     ws: Work,
     /// The input of the pending prediction (for `h(x, u)` at the update).
     u_last: DVector<f64>,
+    /// The interval observer's box (N7)–(N8): the published interval of the last step.
+    observer: Vec<Interval>,
+    /// Half-widths of the boxes around `Q` and `R` (`√Q_ii`, `√R_ii`, rounded up).
+    w_half: Vec<f64>,
+    v_half: Vec<f64>,
 }
 
 impl NonlinearSetMembershipFilter<TwoMultiplierSolver> {
@@ -109,6 +120,10 @@ impl NonlinearSetMembershipFilter<TwoMultiplierSolver> {
         Self::with_solver(setup, TwoMultiplierSolver::new())
     }
 }
+
+/// Why (N8) refused a step.
+const OBSERVER_MISSED: &str = "the interval observer's box and the measurement's strip do not meet (a certified \
+                               contradiction of the data and the noise bounds)";
 
 fn guarantee_lost(step: u64, reason: impl Into<String>) -> EstimatorError {
     EstimatorError::GuaranteeLost { step, reason: reason.into() }
@@ -289,7 +304,16 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             q_eff: q.clone(),
             r_eff: r.clone(),
             remainders: RemainderBounds { process: DVector::zeros(n), measurement: DVector::zeros(m) },
+            obs: vec![Interval::ZERO; n],
+            obs_point: vec![Interval::ZERO; n],
+            terms: vec![Interval::ZERO; n],
         };
+        let half = |m: &DMatrix<f64>| -> Vec<f64> {
+            (0..m.nrows()).map(|i| Interval::point(m[(i, i)].max(0.0)).sqrt().hi()).collect()
+        };
+        let (w_half, v_half) = (half(&q), half(&r));
+        let est = inner.estimate();
+        let observer = (0..n).map(|i| Interval::new(est.lower[i], est.upper[i])).collect();
         Ok(Self {
             inner,
             dims: Dims::new(n, p, m),
@@ -299,6 +323,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             bounds: vec![Interval::ENTIRE; n],
             ws,
             u_last: DVector::zeros(p),
+            observer,
+            w_half,
+            v_half,
         })
     }
 
@@ -536,7 +563,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         check_vec("u", u, self.dims.inputs)?;
         check_vec("y", y, self.dims.outputs)?;
         self.linearise_f(model, u)?;
+        self.observer_predict(model, u)?;
         self.linearise_h(model, u, y)?;
+        let contradicted = self.observer_update(model, u, y)?;
         self.apply_noise()?;
         let Self { inner, ws, .. } = self;
         if let Err(e) = inner.step(&ws.lin, &ws.one, &ws.y_lin) {
@@ -544,15 +573,112 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             return Err(e);
         }
         self.u_last.copy_from(u);
-        Ok(self.published())
+        Ok(self.published(contradicted))
     }
 
-    /// The inner filter's estimate, its interval cut by the declared bounds (N1'): the true state
-    /// respects them, so the cut interval still holds it.
-    fn published(&mut self) -> &SetEstimate {
-        let Self { inner, bounds, .. } = self;
-        inner.estimate_mut().cut_bounds(bounds);
-        self.inner.estimate()
+    /// (N7): the interval observer's prediction over its last box `O`: `f`'s natural interval
+    /// extension plus `W`'s box, met with the linearisation's predicted box (N4); the latter is
+    /// then narrowed, about its centre, to what the meet leaves (a sound box for the remainder of
+    /// `h`). Into `ws.obs`.
+    fn observer_predict<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+    ) -> Result<(), EstimatorError> {
+        let ws = &mut self.ws;
+        model.f_value_enclosure(&self.observer, u, &mut ws.box_f)?;
+        for i in 0..self.dims.states {
+            let linearised = Interval::centered(ws.xbar[i], ws.radius[i]);
+            let natural = ws.box_f.value(i) + Interval::new(-self.w_half[i], self.w_half[i]);
+            let met = if natural.is_bounded() { natural.meet(linearised) } else { None };
+            ws.obs[i] = met.unwrap_or(linearised);
+            if let Some(b) = met {
+                let c = Interval::point(ws.xbar[i]);
+                let reach = (c - Interval::point(b.lo())).hi().max((Interval::point(b.hi()) - c).hi());
+                ws.radius[i] = ws.radius[i].min(reach);
+            }
+        }
+        Ok(())
+    }
+
+    /// (N8): `ws.obs` contracted by the measurement: `yᵢ − vᵢ ∈ hᵢ(p) + Σ_k J_ik (x_k − p_k)` for
+    /// every `x` in the box (`J` the Jacobian enclosure over it, `p` its midpoint), solved for each
+    /// `x_j` whose `J_ij` excludes 0, two sweeps. Returns whether the data contradict the box and the
+    /// noise bounds (a range became empty: certified); the box is then left uncontracted, and with
+    /// the default policy the step is refused ([`EstimatorError::SetMissed`]).
+    fn observer_update<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<bool, EstimatorError> {
+        let (n, m) = (self.dims.states, self.dims.outputs);
+        let ws = &mut self.ws;
+        model.h_enclosure(&ws.obs, u, &mut ws.box_h)?;
+        for k in 0..n {
+            ws.obs_point[k] = Interval::point(mid(ws.obs[k]));
+        }
+        model.h_value_enclosure(&ws.obs_point, u, &mut ws.point_h)?;
+        if !ws.box_h.is_bounded() || !ws.point_h.values_bounded() {
+            return Ok(false);
+        }
+        // Contract a copy (in `ws.boxed`), so a contradiction leaves `ws.obs` as predicted.
+        ws.boxed.copy_from_slice(&ws.obs);
+        for _ in 0..2 {
+            for i in 0..m {
+                let target =
+                    Interval::point(y[i]) - Interval::new(-self.v_half[i], self.v_half[i]) - ws.point_h.value(i);
+                for k in 0..n {
+                    ws.terms[k] = ws.box_h.jacobian(i, k) * (ws.boxed[k] - ws.obs_point[k]);
+                }
+                for j in 0..n {
+                    let jij = ws.box_h.jacobian(i, j);
+                    if jij.lo() <= 0.0 && jij.hi() >= 0.0 {
+                        continue;
+                    }
+                    let mut rest = Interval::ZERO;
+                    for (k, t) in ws.terms.iter().enumerate() {
+                        if k != j {
+                            rest = rest + *t;
+                        }
+                    }
+                    let implied = (target - rest) / jij + ws.obs_point[j];
+                    if implied.is_bounded() {
+                        let Some(narrowed) = ws.boxed[j].meet(implied) else {
+                            if self.inner.inconsistency_policy() == InconsistencyPolicy::Error {
+                                return Err(EstimatorError::SetMissed {
+                                    step: self.inner.steps() + 1,
+                                    reason: OBSERVER_MISSED,
+                                });
+                            }
+                            return Ok(true);
+                        };
+                        ws.boxed[j] = narrowed;
+                        ws.terms[j] = jij * (narrowed - ws.obs_point[j]);
+                    }
+                }
+            }
+        }
+        ws.obs.copy_from_slice(&ws.boxed);
+        Ok(false)
+    }
+
+    /// The inner filter's estimate, its interval cut by the declared bounds (N1') and by the
+    /// interval observer's box (N7)–(N8): both hold the true state, so the cut interval does. The
+    /// observer then continues from the published interval. `contradicted`: the observer proved the
+    /// data inconsistent (a policy other than the default let the step through); the step is
+    /// published marked inconsistent and no later set is guaranteed, as the linear filter does.
+    fn published(&mut self, contradicted: bool) -> &SetEstimate {
+        let Self { inner, bounds, ws, observer, .. } = self;
+        let est = inner.estimate_mut();
+        if !est.cut_by(bounds, &ws.obs) || contradicted {
+            inner.mark_inconsistent();
+        }
+        let est = inner.estimate();
+        for (o, (l, h)) in observer.iter_mut().zip(est.lower.iter().zip(est.upper.iter())) {
+            *o = Interval::new(*l, *h);
+        }
+        est
     }
 
     /// The prediction alone: (N1)–(N3) and the linear filter's prediction with `Q'`.
@@ -567,6 +693,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         self.check(model)?;
         check_vec("u", u, self.dims.inputs)?;
         self.linearise_f(model, u)?;
+        self.observer_predict(model, u)?;
         self.inner.set_process_noise(&self.ws.q_eff)?;
         let Self { inner, ws, .. } = self;
         if let Err(e) = inner.predict(&ws.lin, &ws.one) {
@@ -574,7 +701,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             return Err(e);
         }
         self.u_last.copy_from(u);
-        Ok(self.published())
+        Ok(self.published(false))
     }
 
     /// The update after [`NonlinearSetMembershipFilter::predict`]: `h` linearised about the
@@ -596,17 +723,19 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             self.ws.xbar[i] = est.center[i];
             self.ws.radius[i] = Interval::point(est.shape[(i, i)].max(0.0)).sqrt().hi();
         }
+        self.ws.obs.copy_from_slice(&self.observer);
         let u = std::mem::take(&mut self.u_last);
         let linearised = self.linearise_h(model, &u, y);
+        let contradicted = linearised.and_then(|()| self.observer_update(model, &u, y));
         self.u_last = u;
-        linearised?;
+        let contradicted = contradicted?;
         self.inner.set_measurement_noise(&self.ws.r_eff)?;
         let Self { inner, ws, .. } = self;
         if let Err(e) = inner.update(&ws.lin, &ws.y_lin) {
             let _ = self.inner.set_measurement_noise(&self.r);
             return Err(e);
         }
-        Ok(self.published())
+        Ok(self.published(contradicted))
     }
 
     fn apply_noise(&mut self) -> Result<(), EstimatorError> {
