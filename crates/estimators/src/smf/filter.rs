@@ -61,9 +61,10 @@ pub struct SetEstimate {
     pub center: DVector<f64>,
     /// `P_{k+1}` (symmetric positive definite, certified).
     pub shape: DMatrix<f64>,
-    /// `x̂_i − √P_ii`.
+    /// `x̂_i − √P_ii`, rounded down; for `smf-nl` cut by its declared bounds and its interval
+    /// observer (docs/nonlinear-smf.md (N1'), (N7)–(N8)), which may leave `x̂_i` outside.
     pub lower: DVector<f64>,
-    /// `x̂_i + √P_ii`.
+    /// `x̂_i + √P_ii`, rounded up; cut likewise.
     pub upper: DVector<f64>,
     /// What the step did (for the initial set: `τ = (⅓, ⅓, ⅓)`, status unsolved).
     pub report: StepReport,
