@@ -26,7 +26,7 @@ type Bounds = (DVector<f64>, DVector<f64>);
 /// The top-level keys of a model file that `port-est` reads itself; the rest of a model written
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
-pub const NOISE_KEYS: [&str; 13] = [
+pub const NOISE_KEYS: [&str; 16] = [
     "x0",
     "p0",
     "q",
@@ -40,6 +40,9 @@ pub const NOISE_KEYS: [&str; 13] = [
     "x0_radius",
     "w_radius",
     "v_radius",
+    "x0_generators",
+    "w_generators",
+    "v_generators",
 ];
 
 impl std::fmt::Debug for Dynamics {
@@ -80,6 +83,9 @@ struct ModelFile {
     x0_radius: Option<Spanned<Vec<f64>>>,
     w_radius: Option<Spanned<Vec<f64>>>,
     v_radius: Option<Spanned<Vec<f64>>>,
+    x0_generators: Option<Spanned<Vec<Vec<f64>>>>,
+    w_generators: Option<Spanned<Vec<Vec<f64>>>>,
+    v_generators: Option<Spanned<Vec<Vec<f64>>>>,
     mhe: Option<Spanned<crate::mhe_table::MheTable>>,
     ukf: Option<Spanned<UkfTable>>,
     // The equation tables, read by `equation-models`.
@@ -138,8 +144,8 @@ pub struct Model {
     /// Bounds `(x_lower, x_upper)` the true state always respects (±inf where none), if given:
     /// used by `smf-nl` (docs/nonlinear-smf.md (N1')).
     pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
-    /// The boxes `x0_radius`, `w_radius`, `v_radius` (half-widths of `X₀` about `x₀`, of `W` and of
-    /// `V`) of the constrained-zonotope filters, if given.
+    /// The zonotopes `X₀`, `W`, `V` of the constrained-zonotope filters, if given (each as a box,
+    /// `*_radius`, or a generator matrix, `*_generators`).
     pub boxes: Option<Boxes>,
     /// The moving-horizon settings of the `[mhe]` table, if given (checked structurally; the
     /// estimator validates them when built, see [`Model::estimator_error`]).
@@ -151,16 +157,20 @@ pub struct Model {
     source: Source,
 }
 
-/// The half-widths of the initial set, the process-noise box and the measurement-noise box.
+/// The generator matrices of the initial set `X₀ = {x₀ + G ξ : ‖ξ‖∞ ≤ 1}`, of `W` and of `V`
+/// (centred at 0): `*_generators` as given, or `diag(*_radius)` for a box.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Boxes {
-    /// `X₀ = x₀ ± x0_radius` (length `n`).
-    pub x0: DVector<f64>,
-    /// `W = ±w_radius` (length `n`).
-    pub w: DVector<f64>,
-    /// `V = ±v_radius` (length `m`).
-    pub v: DVector<f64>,
+    /// `X₀`'s generators (`n` rows).
+    pub x0: DMatrix<f64>,
+    /// `W`'s generators (`n` rows).
+    pub w: DMatrix<f64>,
+    /// `V`'s generators (`m` rows).
+    pub v: DMatrix<f64>,
 }
+
+/// The most columns a generator matrix of a model file may have.
+pub const MAX_GENERATOR_COLUMNS: usize = 1000;
 
 /// Where the keys of a model file are.
 #[derive(Debug, Clone, Default)]
@@ -257,8 +267,8 @@ impl Model {
     }
 
     /// The initial data an estimator of `kind` reads from the file. A constrained-zonotope
-    /// filter reads generator matrices: the boxes `x0_radius`, `w_radius`, `v_radius` when the
-    /// file gives them, else the boxes around the ellipsoids `p0`, `q`, `r` (half-widths `√Pᵢᵢ`:
+    /// filter reads generator matrices: the file's zonotopes (`*_radius` or `*_generators`) when it
+    /// gives them, else the boxes around the ellipsoids `p0`, `q`, `r` (half-widths `√Pᵢᵢ`:
     /// every ellipsoid lies in its box, so the filter's guarantee covers the ellipsoidal bounds);
     /// every other kind reads `p0`, `q`, `r` as they are.
     #[must_use]
@@ -266,11 +276,14 @@ impl Model {
         let (p0, q, r) = if kind == EstimateKind::GuaranteedConstrainedZonotope {
             let around =
                 |m: &DMatrix<f64>| DVector::from_iterator(m.nrows(), (0..m.nrows()).map(|i| m[(i, i)].max(0.0).sqrt()));
-            let (x0, w, v) = match &self.boxes {
+            match &self.boxes {
                 Some(b) => (b.x0.clone(), b.w.clone(), b.v.clone()),
-                None => (around(&self.p0), around(&self.q), around(&self.r)),
-            };
-            (DMatrix::from_diagonal(&x0), DMatrix::from_diagonal(&w), DMatrix::from_diagonal(&v))
+                None => (
+                    DMatrix::from_diagonal(&around(&self.p0)),
+                    DMatrix::from_diagonal(&around(&self.q)),
+                    DMatrix::from_diagonal(&around(&self.r)),
+                ),
+            }
         } else {
             (self.p0.clone(), self.q.clone(), self.r.clone())
         };
@@ -504,6 +517,9 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         .chain(f.x0_radius.as_ref().map(|v| ("x0_radius", v.span())))
         .chain(f.w_radius.as_ref().map(|v| ("w_radius", v.span())))
         .chain(f.v_radius.as_ref().map(|v| ("v_radius", v.span())))
+        .chain(f.x0_generators.as_ref().map(|v| ("x0_generators", v.span())))
+        .chain(f.w_generators.as_ref().map(|v| ("w_generators", v.span())))
+        .chain(f.v_generators.as_ref().map(|v| ("v_generators", v.span())))
         .chain(f.a.as_ref().map(|v| ("a", v.span())))
         .chain(f.b.as_ref().map(|v| ("b", v.span())))
         .chain(f.c.as_ref().map(|v| ("c", v.span())))
@@ -544,32 +560,67 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
     Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, source })
 }
 
-/// The boxes `x0_radius`, `w_radius`, `v_radius`: all three or none, finite and non-negative.
+/// The zonotopes `X₀`, `W`, `V`: for each, a box `NAME_radius` (finite, non-negative half-widths)
+/// or a generator matrix `NAME_generators` (finite, one row per state or output, at most
+/// [`MAX_GENERATOR_COLUMNS`] columns), not both; all three sets or none.
 fn boxes(cx: &Ctx<'_>, f: &ModelFile, n: usize, m: usize) -> Result<Option<Boxes>, Error> {
-    let keys = [("x0_radius", &f.x0_radius, n), ("w_radius", &f.w_radius, n), ("v_radius", &f.v_radius, m)];
-    let given: Vec<_> = keys.iter().filter(|(_, v, _)| v.is_some()).collect();
-    if given.is_empty() {
+    let sets = [
+        ("x0", &f.x0_radius, &f.x0_generators, n),
+        ("w", &f.w_radius, &f.w_generators, n),
+        ("v", &f.v_radius, &f.v_generators, m),
+    ];
+    let given = sets.iter().filter(|(_, r, g, _)| r.is_some() || g.is_some()).count();
+    if given == 0 {
         return Ok(None);
     }
-    if given.len() < 3 {
-        let (_, v, _) = given[0];
-        let v = v.as_ref().map_or(0..0, |v| v.span());
-        return Err(Error::at(cx.at(v), "give all three boxes `x0_radius`, `w_radius`, `v_radius`, or none"));
-    }
-    let mut radii = Vec::with_capacity(3);
-    for (name, v, len) in keys {
-        let Some(v) = v else { return Ok(None) };
-        let r = cx.vector(name, v, len)?;
-        if let Some(i) = r.iter().position(|x| *x < 0.0) {
-            return Err(Error::at(
-                cx.at(v.span()),
-                format!("`{name}`: entry {} is {} (a half-width must be ≥ 0)", i + 1, r[i]),
-            ));
+    // Where a missing set is reported: the first one given.
+    let first_given = sets
+        .iter()
+        .find_map(|(_, r, g, _)| r.as_ref().map(Spanned::span).or_else(|| g.as_ref().map(Spanned::span)))
+        .unwrap_or(0..0);
+    let mut out = Vec::with_capacity(3);
+    for (name, radius, generators, len) in sets {
+        match (radius, generators) {
+            (Some(_), Some(g)) => {
+                return Err(Error::at(
+                    cx.at(g.span()),
+                    format!("give `{name}_radius` (a box) or `{name}_generators` (a zonotope), not both"),
+                ));
+            }
+            (Some(v), None) => {
+                let r = cx.vector(&format!("{name}_radius"), v, len)?;
+                if let Some(i) = r.iter().position(|x| *x < 0.0) {
+                    return Err(Error::at(
+                        cx.at(v.span()),
+                        format!("`{name}_radius`: entry {} is {} (a half-width must be ≥ 0)", i + 1, r[i]),
+                    ));
+                }
+                out.push(DMatrix::from_diagonal(&r));
+            }
+            (None, Some(g)) => {
+                let key = format!("{name}_generators");
+                let columns = g.get_ref().first().map_or(0, Vec::len);
+                if columns > MAX_GENERATOR_COLUMNS {
+                    return Err(Error::at(
+                        cx.at(g.span()),
+                        format!("`{key}`: {columns} columns, more than the {MAX_GENERATOR_COLUMNS} allowed"),
+                    ));
+                }
+                out.push(cx.matrix(&key, g, Some(len), None)?);
+            }
+            (None, None) => {
+                return Err(Error::at(
+                    cx.at(first_given.clone()),
+                    format!(
+                        "`{name}` has no set: give all three sets (`x0_`, `w_`, `v_` with `_radius` or \
+                         `_generators`), or none"
+                    ),
+                ));
+            }
         }
-        radii.push(r);
     }
-    let [x0, w, v]: [DVector<f64>; 3] = match radii.try_into() {
-        Ok(r) => r,
+    let [x0, w, v]: [DMatrix<f64>; 3] = match out.try_into() {
+        Ok(sets) => sets,
         Err(_) => return Ok(None),
     };
     Ok(Some(Boxes { x0, w, v }))
