@@ -55,3 +55,34 @@ def test_cora_six_tank_from_its_model_file_beats_cora_s_published_widths():
     # has no row for it) the sets are a little wider than the Rust test's, still far inside.
     cora = np.array([0.4900, 0.4895, 15.924, 0.6332, 0.4207, 7.5405])
     assert np.all(widths < cora), widths
+
+
+def test_a_model_file_s_generator_matrices_are_the_filter_s_sets():
+    base = """
+a = [[1.0, 0.1], [0.0, 1.0]]
+b = [[0.0], [0.1]]
+c = [[1.0, 0.0]]
+q = [[1e-4, 0.0], [0.0, 1e-4]]
+r = [[1e-2]]
+p0 = [[1.0, 0.0], [0.0, 1.0]]
+x0 = [0.0, 0.0]
+"""
+    skewed = base + "x0_radius = [0.5, 0.5]\nw_generators = [[0.01, 0.004], [-0.004, 0.01]]\nv_radius = [0.05]\n"
+    boxed = base + "x0_radius = [0.5, 0.5]\nw_radius = [0.014, 0.014]\nv_radius = [0.05]\n"
+    rng = np.random.default_rng(5)
+    gw = np.array([[0.01, 0.004], [-0.004, 0.01]])
+    x, us, ys, truth = np.array([0.3, -0.2]), [], [], []
+    for k in range(60):
+        u = np.sin(0.1 * k)
+        x = np.array([[1.0, 0.1], [0.0, 1.0]]) @ x + np.array([0.0, 0.1 * u]) + gw @ rng.choice([-1.0, 1.0], 2)
+        us.append([u])
+        ys.append([x[0] + rng.choice([-0.05, 0.05])])
+        truth.append(x)
+    truth = np.array(truth)
+    runs = [pe.parse_model(text).estimator("czf").run(np.array(us), np.array(ys)) for text in (skewed, boxed)]
+    for log in runs:
+        assert np.all(log.lower <= truth) and np.all(truth <= log.upper)
+    # The skewed zonotope is tighter than the box around it (its hull, w_radius = row sums).
+    assert np.sum(runs[0].upper - runs[0].lower) < np.sum(runs[1].upper - runs[1].lower)
+    with pytest.raises(ValueError, match="not both"):
+        pe.parse_model(skewed + "w_radius = [0.1, 0.1]\n")
