@@ -511,7 +511,7 @@ pub fn markdown(c: &CertifiedVessel) -> String {
          | steps | {} |\n\
          | truth outside a published interval (any state) | **{}** |\n\
          | runs stopped (GuaranteeLost or a refused measurement) | {} |\n\
-         | steps marked diverging | {} |\n\
+         | steps marked diverging (an unmeasured velocity's interval spans its declared limit) | {} |\n\
          | median certified width of x / y / ψ | {:.3} m / {:.3} m / {:.3}° |\n\
          | `smf-nl`'s median x width on the same steps | {:.3} m |\n\
          | median x width, first / last fifth of the steps | {:.3} m / {:.3} m |\n\
