@@ -8,6 +8,8 @@
 //!   and step times side by side.
 //! * **reach-stacker** — `czf-nl` on examples/reach-stacker (kinematic bicycle, GNSS x/y ±0.5 m,
 //!   yaw-rate gyro, no compass): whether the heading's interval stays bounded.
+//! * **range-bearing** — `czf-nl` on examples/range-bearing (a yard tractor measured by range and
+//!   bearing to two landmarks, no GNSS, no compass), driving back and forth.
 //! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank, order 8, 6 constraints).
 
 use std::path::Path;
@@ -144,6 +146,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
     };
     let (stacker, stacker_setup) = equations(root, "examples/reach-stacker/model.toml")?;
     let (tanks, tank_setup) = equations(root, "examples/six-tank/model.toml")?;
+    let (tractor, tractor_setup) = equations(root, "examples/range-bearing/model.toml")?;
     let size = |full: (usize, usize), small: (usize, usize)| {
         let (r, s) = if quick { small } else { full };
         (runs.unwrap_or(r), s)
@@ -176,6 +179,22 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
         },
         runs: runs_r,
         steps: steps_r,
+    });
+    let (runs_b, steps_b) = size((5, 10_000), (2, 1000));
+    out.push(Scenario {
+        name: "range-bearing",
+        plant: Plant::Equations(tractor),
+        w: radii(&tractor_setup.process_noise),
+        v: radii(&tractor_setup.measurement_noise),
+        setup: tractor_setup,
+        settings: ConstrainedZonotopeSettings { order: 6, max_constraints: 6, ..Default::default() },
+        // Back and forth along the quay (speed 2 sin(t/40)), weaving gently, heading held near 0.
+        input: |k, x| {
+            let t = k as f64 * 0.1;
+            DVector::from_column_slice(&[0.5 * (2.0 * (t / 40.0).sin() - x[3]), 0.1 * (0.2 * t).sin() - 0.3 * x[2]])
+        },
+        runs: runs_b,
+        steps: steps_b,
     });
     let (runs_t, steps_t) = size((20, 5000), (2, 200));
     out.push(Scenario {
