@@ -9,9 +9,7 @@ use estimators::{
 };
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
-
-/// CORA's first measurement (at t = 0), which the log's rows cannot hold (examples/six-tank/README.md).
-const Y1: [f64; 3] = [18.587107801413037, 20.225990245627816, 19.112251238495777];
+use xtask::reproduce::certified_sets::six_tank::{self, Row, Y1};
 
 /// CORA's FRad-A final hull widths (cora_hulls.csv), the best of its three observers per state but
 /// x4 and x5, where FRad-B's are smaller.
@@ -29,15 +27,8 @@ fn model() -> EquationModel {
 }
 
 /// The log: `(u_k, y_{k+1})`, 19 rows.
-fn log() -> Vec<(DVector<f64>, DVector<f64>)> {
-    let text = std::fs::read_to_string(root().join("examples/six-tank/data.csv")).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|c| c.trim().parse().unwrap()).collect();
-            (DVector::from_column_slice(&v[1..4]), DVector::from_column_slice(&v[4..7]))
-        })
-        .collect()
+fn log() -> Vec<Row> {
+    six_tank::log(&root().join("examples/six-tank/data.csv")).unwrap()
 }
 
 /// CORA's sets: `X₀ = 20 ± 4`, `W = ±0.001`, `V = ±0.2` (boxes as generator matrices).

@@ -164,6 +164,14 @@ impl Simplex {
         if !invert(&mut self.work, &mut self.binv) {
             return false;
         }
+        self.basic_values();
+        self.pivots_since_refactor = 0;
+        true
+    }
+
+    /// `x_B = B⁻¹ (b − N x_N)` with the current inverse.
+    fn basic_values(&mut self) {
+        let nc = self.basis.len();
         // w ← b − N x_N (w as scratch), then x_B = B⁻¹ w.
         self.w.copy_from_slice(self.b.as_slice());
         for j in (0..self.cols.ncols()).filter(|&j| !self.basic[j]) {
@@ -177,8 +185,6 @@ impl Simplex {
         for k in 0..nc {
             self.xb[k] = (0..nc).map(|i| self.binv[(k, i)] * self.w[i]).sum();
         }
-        self.pivots_since_refactor = 0;
-        true
     }
 
     /// The duals `y = B⁻ᵀ c_B` and the reduced costs of the nonbasic variables.
@@ -231,7 +237,12 @@ impl Simplex {
         let total = self.cols.ncols();
         let max_iter = 50 + 20 * total;
         let mut degenerate = 0usize;
-        if !self.refactor() {
+        // The inverse is fresh when no pivot followed the last factorisation (the previous
+        // objective's optimum): only the basic values are recomputed (bound flips and fixed
+        // artificials moved the nonbasic ones).
+        if self.pivots_since_refactor == 0 {
+            self.basic_values();
+        } else if !self.refactor() {
             return Err(());
         }
         self.price();

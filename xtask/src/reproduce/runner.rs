@@ -147,6 +147,27 @@ pub struct Metrics {
     pub timed_steps: usize,
 }
 
+/// The median (the upper one for an even count), NaN for no values.
+#[must_use]
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
+}
+
+/// The constrained-zonotope filters' sets for a set-membership `setup` of diagonal ellipsoids:
+/// their bounding boxes, half-widths `√P_ii` as diagonal generator matrices (each ellipsoid lies
+/// in its box, so noise drawn in the ellipsoids respects the boxes).
+#[must_use]
+pub fn bounding_boxes(setup: &Setup) -> Setup {
+    let sqrt_diag = |m: &DMatrix<f64>| DMatrix::from_diagonal(&m.diagonal().map(f64::sqrt));
+    Setup {
+        p0: sqrt_diag(&setup.p0),
+        process_noise: sqrt_diag(&setup.process_noise),
+        measurement_noise: sqrt_diag(&setup.measurement_noise),
+        ..setup.clone()
+    }
+}
+
 /// Median of a sample of nanoseconds, in microseconds.
 pub fn median_us(ns: &[u64]) -> f64 {
     if ns.is_empty() {

@@ -72,8 +72,7 @@ pub struct SetEstimate {
     /// or, for a state with finite declared bounds (`smf-nl`), spans their whole range: the status
     /// says `diverging`.
     pub diverging: bool,
-    /// Per state, [`DIVERGENCE_FACTOR`] times the initial interval's width (`+∞` for a state with
-    /// finite declared bounds, held to them instead).
+    /// Per state, [`DIVERGENCE_FACTOR`] times the initial interval's width.
     width_limit: DVector<f64>,
 }
 
@@ -123,25 +122,17 @@ impl SetEstimate {
         }
     }
 
-    /// Holds each state with finite `bounds` to them in the divergence rule (instead of
-    /// [`DIVERGENCE_FACTOR`] times its initial width; [`Self::cut_bounds`] applies it).
-    pub(crate) fn limit_widths_to(&mut self, bounds: &[Interval]) {
-        for (i, b) in bounds.iter().enumerate() {
-            if b.lo().is_finite() && b.hi().is_finite() {
-                self.width_limit[i] = f64::INFINITY;
-            }
-        }
-    }
-
-    /// Cuts the published interval by declared `bounds` and by a certified `observer` box, and
-    /// decides divergence on the result; `false` (and that state left as the bounds cut it) where
-    /// the observer's box misses the set's interval — both hold the true state, so the data
-    /// contradict the assumptions.
+    /// Cuts the published interval by declared `bounds` the true state always respects and by a
+    /// certified `observer` box, and decides divergence on the result (a state with finite bounds
+    /// when it spans them, the others by [`DIVERGENCE_FACTOR`]); `false` (and that state left as
+    /// the bounds cut it) where the observer's box misses the set's interval — both hold the true
+    /// state, so the data contradict the assumptions.
     pub(crate) fn cut_by(&mut self, bounds: &[Interval], observer: &[Interval]) -> bool {
-        self.cut_bounds(bounds);
         let mut met = true;
         self.diverging = false;
         for (i, (b, o)) in bounds.iter().zip(observer).enumerate() {
+            self.lower[i] = self.lower[i].max(b.lo());
+            self.upper[i] = self.upper[i].min(b.hi());
             let (lo, hi) = (self.lower[i].max(o.lo()), self.upper[i].min(o.hi()));
             if lo <= hi {
                 self.lower[i] = lo;
@@ -157,16 +148,6 @@ impl SetEstimate {
             };
         }
         met
-    }
-
-    /// Cuts the published interval by bounds the true state always respects.
-    pub(crate) fn cut_bounds(&mut self, bounds: &[Interval]) {
-        for (i, b) in bounds.iter().enumerate() {
-            let bounded = b.lo().is_finite() && b.hi().is_finite();
-            self.diverging |= bounded && self.lower[i] <= b.lo() && self.upper[i] >= b.hi();
-            self.lower[i] = self.lower[i].max(b.lo());
-            self.upper[i] = self.upper[i].min(b.hi());
-        }
     }
 }
 

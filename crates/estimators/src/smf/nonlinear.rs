@@ -379,7 +379,6 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         for (b, (&lo, &hi)) in self.bounds.iter_mut().zip(lower.iter().zip(upper)) {
             *b = Interval::new(lo, hi);
         }
-        self.inner.estimate_mut().limit_widths_to(&self.bounds);
         Ok(self)
     }
 

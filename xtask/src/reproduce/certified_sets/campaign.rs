@@ -25,16 +25,14 @@ use models::{ConstantModel, DiscreteModel, SecondOrderModel, Xoshiro256StarStar}
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-use crate::reproduce::runner::StepTiming;
+use crate::reproduce::runner::{StepTiming, median};
 
 /// One model's runs.
 struct Scenario {
     name: &'static str,
     plant: Plant,
+    /// The boxes (diagonal generator matrices): `X₀`, `W`, `V`.
     setup: Setup,
-    /// Half-widths of `W` and `V`.
-    w: Vec<f64>,
-    v: Vec<f64>,
     settings: ConstrainedZonotopeSettings,
     /// The input at step `k` for the true state `x`.
     input: fn(usize, &DVector<f64>) -> DVector<f64>,
@@ -108,11 +106,6 @@ struct RunTally {
     ratios: Vec<Vec<f64>>,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
-}
-
 fn equations(root: &Path, file: &str) -> Result<(Box<EquationModel>, Setup), String> {
     let path = root.join(file);
     let model = port_est::model::read_model(&path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -127,7 +120,7 @@ fn radii(m: &DMatrix<f64>) -> Vec<f64> {
     (0..m.nrows()).map(|i| m[(i, i)]).collect()
 }
 
-/// The three scenarios at full (`quick = false`) or `--quick` sizes; `runs` overrides the runs
+/// The four scenarios at full (`quick = false`) or `--quick` sizes; `runs` overrides the runs
 /// per model.
 fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenario>, String> {
     let d = carrier_dynamics::CarrierModel::new(carrier_dynamics::CarrierParams::paper_preset())
@@ -151,63 +144,58 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
         let (r, s) = if quick { small } else { full };
         (runs.unwrap_or(r), s)
     };
-    let mut out = Vec::new();
-    let (runs_c, steps_c) = size((30, 25_000), (2, 1000));
-    out.push(Scenario {
-        name: "carrier",
-        plant: Plant::Linear(carrier),
-        w: radii(&carrier_setup.process_noise),
-        v: radii(&carrier_setup.measurement_noise),
-        setup: carrier_setup,
-        settings: ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() },
-        input: |k, _| DVector::from_fn(8, |j, _| 0.01 * (1.0 + (1e-3 * k as f64 + j as f64).sin())),
-        runs: runs_c,
-        steps: steps_c,
-    });
-    let (runs_r, steps_r) = size((20, 10_000), (2, 1000));
-    out.push(Scenario {
-        name: "reach-stacker",
-        plant: Plant::Equations(stacker),
-        w: radii(&stacker_setup.process_noise),
-        v: radii(&stacker_setup.measurement_noise),
-        setup: stacker_setup,
-        settings: ConstrainedZonotopeSettings { order: 6, max_constraints: 6, ..Default::default() },
+    // Order `order`, 6 constraints.
+    let scenario = |name, plant, setup, order, input: fn(usize, &DVector<f64>) -> DVector<f64>, full, small| {
+        let (runs, steps) = size(full, small);
+        let settings = ConstrainedZonotopeSettings { order, max_constraints: 6, ..Default::default() };
+        Scenario { name, plant, setup, settings, input, runs, steps }
+    };
+    let out = vec![
+        scenario(
+            "carrier",
+            Plant::Linear(carrier),
+            carrier_setup,
+            8,
+            |k, _| DVector::from_fn(8, |j, _| 0.01 * (1.0 + (1e-3 * k as f64 + j as f64).sin())),
+            (30, 25_000),
+            (2, 1000),
+        ),
         // Driving between the stacks: speed held near 2 m/s, slaloms and turns.
-        input: |k, x| {
-            let t = k as f64 * 0.1;
-            DVector::from_column_slice(&[0.5 * (2.0 - x[3]) + 0.2 * (0.05 * t).sin(), 0.25 * (0.07 * t).sin()])
-        },
-        runs: runs_r,
-        steps: steps_r,
-    });
-    let (runs_b, steps_b) = size((5, 10_000), (2, 1000));
-    out.push(Scenario {
-        name: "range-bearing",
-        plant: Plant::Equations(tractor),
-        w: radii(&tractor_setup.process_noise),
-        v: radii(&tractor_setup.measurement_noise),
-        setup: tractor_setup,
-        settings: ConstrainedZonotopeSettings { order: 6, max_constraints: 6, ..Default::default() },
+        scenario(
+            "reach-stacker",
+            Plant::Equations(stacker),
+            stacker_setup,
+            6,
+            |k, x| {
+                let t = k as f64 * 0.1;
+                DVector::from_column_slice(&[0.5 * (2.0 - x[3]) + 0.2 * (0.05 * t).sin(), 0.25 * (0.07 * t).sin()])
+            },
+            (20, 10_000),
+            (2, 1000),
+        ),
         // Back and forth along the quay (speed 2 sin(t/40)), weaving gently, heading held near 0.
-        input: |k, x| {
-            let t = k as f64 * 0.1;
-            DVector::from_column_slice(&[0.5 * (2.0 * (t / 40.0).sin() - x[3]), 0.1 * (0.2 * t).sin() - 0.3 * x[2]])
-        },
-        runs: runs_b,
-        steps: steps_b,
-    });
-    let (runs_t, steps_t) = size((20, 5000), (2, 200));
-    out.push(Scenario {
-        name: "six-tank",
-        plant: Plant::Equations(tanks),
-        w: radii(&tank_setup.process_noise),
-        v: radii(&tank_setup.measurement_noise),
-        setup: tank_setup,
-        settings: ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() },
-        input: |k, _| DVector::from_fn(3, |i, _| 0.1 + 0.05 * ((k as f64 * 0.05) + i as f64).sin()),
-        runs: runs_t,
-        steps: steps_t,
-    });
+        scenario(
+            "range-bearing",
+            Plant::Equations(tractor),
+            tractor_setup,
+            6,
+            |k, x| {
+                let t = k as f64 * 0.1;
+                DVector::from_column_slice(&[0.5 * (2.0 * (t / 40.0).sin() - x[3]), 0.1 * (0.2 * t).sin() - 0.3 * x[2]])
+            },
+            (5, 10_000),
+            (2, 1000),
+        ),
+        scenario(
+            "six-tank",
+            Plant::Equations(tanks),
+            tank_setup,
+            8,
+            |k, _| DVector::from_fn(3, |i, _| 0.1 + 0.05 * ((k as f64 * 0.05) + i as f64).sin()),
+            (20, 5000),
+            (2, 200),
+        ),
+    ];
     Ok(out)
 }
 
@@ -219,7 +207,8 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
     seed: u64,
     progress: &indicatif::ProgressBar,
 ) -> Result<RunTally, String> {
-    let (n, m) = (sc.setup.x0.len(), sc.v.len());
+    let (w, v) = (radii(&sc.setup.process_noise), radii(&sc.setup.measurement_noise));
+    let (n, m) = (sc.setup.x0.len(), v.len());
     let mut rng = Xoshiro256StarStar::seed_from_u64(seed);
     let mut sign = move || if rng.uniform(-1.0, 1.0) < 0.0 { -1.0 } else { 1.0 };
     let x0_radius = radii(&sc.setup.p0);
@@ -233,8 +222,8 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
         Some(_) => Some(
             SetMembershipFilter::new(Setup {
                 p0: around(&x0_radius),
-                process_noise: around(&sc.w),
-                measurement_noise: around(&sc.v),
+                process_noise: around(&w),
+                measurement_noise: around(&v),
                 ..sc.setup.clone()
             })
             .map_err(|e| format!("{} smf: {e}", sc.name))?,
@@ -247,9 +236,9 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
     for k in 0..sc.steps {
         let u = (sc.input)(k, &x);
         model.f(&x, &u, &mut next).map_err(|e| format!("{} truth: {e}", sc.name))?;
-        x = &next + DVector::from_fn(n, |i, _| sc.w[i] * sign());
+        x = &next + DVector::from_fn(n, |i, _| w[i] * sign());
         model.h(&x, &u, &mut y).map_err(|e| format!("{} truth: {e}", sc.name))?;
-        let y = &y + DVector::from_fn(m, |i, _| sc.v[i] * sign());
+        let y = &y + DVector::from_fn(m, |i, _| v[i] * sign());
         let t0 = Instant::now();
         let est = match czf.step(model, &u, &y) {
             Ok(e) => e,

@@ -13,7 +13,7 @@ use serde::Serialize;
 use crate::reproduce::runner::StepTiming;
 
 /// CORA's first measurement (at t = 0), which the log's rows cannot hold (examples/six-tank/README.md).
-const Y1: [f64; 3] = [18.587107801413037, 20.225990245627816, 19.112251238495777];
+pub const Y1: [f64; 3] = [18.587107801413037, 20.225990245627816, 19.112251238495777];
 
 /// Repetitions of the 19-step log for the step time.
 const TIMING_REPEATS: [usize; 2] = [50, 3];
@@ -46,10 +46,13 @@ fn number(path: &Path, line: usize, cell: &str) -> Result<f64, String> {
 }
 
 /// One row of the log: `(u_k, y_{k+1})`.
-type Row = (DVector<f64>, DVector<f64>);
+pub type Row = (DVector<f64>, DVector<f64>);
 
 /// The log of examples/six-tank/data.csv.
-fn log(path: &Path) -> Result<Vec<Row>, String> {
+///
+/// # Errors
+/// A file that cannot be read, or a row that is not seven numbers (named by `file:line`).
+pub fn log(path: &Path) -> Result<Vec<Row>, String> {
     let text = read(path)?;
     let mut rows = Vec::new();
     for (line, l) in text.lines().enumerate().skip(1) {

@@ -30,6 +30,7 @@ use svg_plot::{Chart, Grid, PALETTE, Series};
 use vessel_dynamics::{DiscreteVessel, VesselParams};
 
 use super::outputs::WriteFigure as _;
+use crate::reproduce::runner::{bounding_boxes, median};
 
 /// Seeds and steps per seed of the full run and of `--quick`.
 const SIZES: [(usize, usize); 2] = [(20, 5000), (2, 1000)];
@@ -123,11 +124,6 @@ fn diag(v: &[f64]) -> DMatrix<f64> {
     DMatrix::from_diagonal(&DVector::from_column_slice(v))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
-}
-
 /// One step of the figure run: `t`, then per coordinate (`x`, `y`, `ψ`) the certified interval
 /// and the EKF's band `[x̂ − 3σ, x̂ + 3σ]`, both relative to the truth; then per coordinate
 /// `czf-nl`'s interval relative to the truth.
@@ -189,13 +185,7 @@ fn monte_carlo(
     let noise = |shape: &DMatrix<f64>| Noise::ellipsoid_boundary(shape.clone()).map_err(|e| format!("noise: {e}"));
     let (w, v, x0) = (noise(&setup.process_noise)?, noise(&setup.measurement_noise)?, noise(&setup.p0)?);
     // czf-nl: the bounding boxes of the same ellipsoids (half-widths √P_ii), as generator matrices.
-    let sqrt_diag = |m: &DMatrix<f64>| DMatrix::from_diagonal(&m.diagonal().map(f64::sqrt));
-    let boxes = Setup {
-        p0: sqrt_diag(&setup.p0),
-        process_noise: sqrt_diag(&setup.process_noise),
-        measurement_noise: sqrt_diag(&setup.measurement_noise),
-        ..setup.clone()
-    };
+    let boxes = bounding_boxes(&setup);
     let inf = f64::INFINITY;
     let zonotope_settings = ConstrainedZonotopeSettings {
         state_bounds: limits.map(|l| {

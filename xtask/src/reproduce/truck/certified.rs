@@ -31,6 +31,7 @@ use truck_dynamics::{TruckEkfModel, TruthTrajectory};
 use super::outputs::{self, WriteFigure as _};
 use super::report::sig3;
 use super::run::{P0_SIGMA, QC, SIGMA, StepTiming, X0};
+use crate::reproduce::runner::{bounding_boxes, median};
 
 /// Half-width of the noise boxes in standard deviations of the EKF's Gaussian settings.
 pub const SIGMAS: f64 = 3.0;
@@ -197,18 +198,13 @@ fn run_seed(truth: &TruthTrajectory, model: &TruckEkfModel, seed: u64, record: b
     let mut x = &setup.x0 + x0.sample(&mut rng);
     let mut smf = NonlinearSetMembershipFilter::new(setup).map_err(|e| format!("smf-nl: {e}"))?;
     let mut ekf = ExtendedKalmanFilter::new(ekf_setup(ts)).map_err(|e| format!("EKF: {e}"))?;
-    let sqrt_diag = |m: &DMatrix<f64>| DMatrix::from_diagonal(&m.diagonal().map(f64::sqrt));
-    let setup = certified_setup(ts);
-    let boxes = Setup {
-        p0: sqrt_diag(&setup.p0),
-        process_noise: sqrt_diag(&setup.process_noise),
-        measurement_noise: sqrt_diag(&setup.measurement_noise),
-        ..setup
-    };
     let mut czf = if record {
         Some(
-            ConstrainedZonotopeFilter::new(boxes, ConstrainedZonotopeSettings::default())
-                .map_err(|e| format!("czf-nl: {e}"))?,
+            ConstrainedZonotopeFilter::new(
+                bounding_boxes(&certified_setup(ts)),
+                ConstrainedZonotopeSettings::default(),
+            )
+            .map_err(|e| format!("czf-nl: {e}"))?,
         )
     } else {
         None
@@ -281,11 +277,6 @@ fn run_seed(truth: &TruthTrajectory, model: &TruckEkfModel, seed: u64, record: b
         }
     }
     Ok(run)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
 }
 
 /// Runs the scenario over the nominal `truth`: the figure run (seed `seed`) and the Monte Carlo
