@@ -223,13 +223,7 @@ impl LinearModel for DiscreteInsModel {
     }
 }
 
-/// Wraps an angle to `(−π, π]` (NaN stays NaN).
-#[must_use]
-pub fn wrap_angle(a: f64) -> f64 {
-    use std::f64::consts::{PI, TAU};
-    let r = a.rem_euclid(TAU);
-    if r > PI { r - TAU } else { r }
-}
+pub use models::wrap_angle;
 
 /// The measurement (13) from the INS and BDS solutions `[x_E (m), y_N (m), ψ (rad, azimuth)]`:
 /// `[x_INS − x_BDS, y_INS − y_BDS, wrap(ψ_INS − ψ_BDS)]`.

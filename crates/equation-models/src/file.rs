@@ -62,6 +62,9 @@ pub(crate) struct Spec {
     pub rhs: Vec<Equation>,
     /// One equation per output, in the order of the outputs.
     pub out: Vec<Equation>,
+    /// Indices of the states and of the outputs declared in `angles` (sorted).
+    pub angle_states: Vec<usize>,
+    pub angle_outputs: Vec<usize>,
     /// The `discretization` key of `[model]` (the `[model]` table without it): where a zero-order
     /// hold of nonlinear equations is refused.
     pub discretization_at: Location,
@@ -216,7 +219,7 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
     let model_span = model_entry.0.span();
     let model = as_table(&cx, model_entry)?;
     for (k, _) in model.iter() {
-        if !["states", "inputs", "outputs", "ts", "discretization"].contains(&k.get_ref().as_ref()) {
+        if !["states", "inputs", "outputs", "ts", "discretization", "angles"].contains(&k.get_ref().as_ref()) {
             return Err(cx.format(&k.span(), format!("unknown key `{}` in [model]", k.get_ref())));
         }
     }
@@ -227,6 +230,7 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
     }
     let inputs = names.list(model, "inputs", false, &model_span)?;
     let outputs = names.list(model, "outputs", true, &model_span)?;
+    let (angle_states, angle_outputs) = angle_list(&cx, model, &states, &outputs)?;
 
     let mut parameters = Vec::new();
     if let Some(entry) = find(root, "parameters") {
@@ -346,7 +350,54 @@ pub(crate) fn read(text: &str, file: &str, foreign: &[&str]) -> Result<Spec, Equ
         }
     };
     let discretization_at = cx.at(&find(model, "discretization").map_or(model_span.clone(), |(k, _)| k.span()));
-    Ok(Spec { states, inputs, outputs, parameters, time, graph, rhs, out, discretization_at })
+    Ok(Spec {
+        states,
+        inputs,
+        outputs,
+        parameters,
+        time,
+        graph,
+        rhs,
+        out,
+        angle_states,
+        angle_outputs,
+        discretization_at,
+    })
+}
+
+/// `angles = ["psi", "bearing_1"]` in `[model]`: names of states and outputs that are angles in
+/// radians, as sorted indices `(states, outputs)`. Each name must be a state or an output, once.
+fn angle_list(
+    cx: &Ctx<'_>,
+    model: &DeTable<'_>,
+    states: &[String],
+    outputs: &[String],
+) -> Result<(Vec<usize>, Vec<usize>), EquationError> {
+    let Some((k, v)) = find(model, "angles") else {
+        return Ok((Vec::new(), Vec::new()));
+    };
+    let array = v
+        .get_ref()
+        .as_array()
+        .ok_or_else(|| cx.format(&k.span(), "`angles` must be an array of state and output names"))?;
+    let (mut on_states, mut on_outputs) = (Vec::new(), Vec::new());
+    for item in array.iter() {
+        let name = item.get_ref().as_str().ok_or_else(|| cx.format(&item.span(), "`angles` must hold strings"))?;
+        let (list, index) = if let Some(i) = states.iter().position(|s| s == name) {
+            (&mut on_states, i)
+        } else if let Some(i) = outputs.iter().position(|s| s == name) {
+            (&mut on_outputs, i)
+        } else {
+            return Err(cx.format(&item.span(), format!("`{name}` in `angles` is neither a state nor an output")));
+        };
+        if list.contains(&index) {
+            return Err(cx.format(&item.span(), format!("`{name}` appears twice in `angles`")));
+        }
+        list.push(index);
+    }
+    on_states.sort_unstable();
+    on_outputs.sort_unstable();
+    Ok((on_states, on_outputs))
 }
 
 fn check_count(cx: &Ctx<'_>, entry: Entry<'_, '_>, count: usize) -> Result<(), EquationError> {

@@ -4,7 +4,7 @@ use std::path::Path;
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::Duration;
 
-use models::{AnyModel, ConstantModel, DifferentiableModel, Dims, DiscreteModel, LinearModel, ModelError};
+use models::{Angles, AnyModel, ConstantModel, DifferentiableModel, Dims, DiscreteModel, LinearModel, ModelError};
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{EquationError, Location};
@@ -51,6 +51,8 @@ pub struct EquationModel {
     /// `(A_d, B_d)` of an exact zero-order hold.
     pub(crate) zoh: Option<(DMatrix<f64>, DMatrix<f64>)>,
     linear: Option<ConstantModel>,
+    angle_states: Vec<usize>,
+    angle_outputs: Vec<usize>,
 }
 
 /// Dependencies of every node (see [`Graph::dependencies`]).
@@ -163,6 +165,8 @@ impl EquationModel {
             varies,
             zoh: None,
             linear: None,
+            angle_states: spec.angle_states,
+            angle_outputs: spec.angle_outputs,
         };
         if let TimeModel::Continuous { ts, discretization: Discretization::Zoh } = model.time {
             let (ac, bc) = model.coefficients(&model.rhs, &deps).map_err(|(equation, reason)| {
@@ -174,7 +178,7 @@ impl EquationModel {
             })?;
             model.zoh = Some((d.a_p, d.b_p));
         }
-        model.linear = model.linear_matrices(&deps);
+        model.linear = model.linear_matrices(&deps).and_then(|m| m.with_angles(model.angles()).ok());
         Ok(model)
     }
 
@@ -596,6 +600,11 @@ impl DiscreteModel for EquationModel {
 
     fn h(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
         self.measure(x, u, Some(out), None)
+    }
+
+    /// The `angles` of the model file's `[model]` table.
+    fn angles(&self) -> Angles<'_> {
+        Angles::new(&self.angle_states, &self.angle_outputs)
     }
 }
 

@@ -127,7 +127,7 @@ impl ExtendedKalmanFilter {
         model: &M,
         u: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         self.predict_into_buffers(model, u)?;
         commit_prediction(&mut self.est, &mut self.x_pred, &mut self.p_pred)?;
@@ -146,7 +146,7 @@ impl ExtendedKalmanFilter {
         model: &M,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("y", y, self.m)?;
         self.x_pred.copy_from(&self.est.center);
         self.p_pred.copy_from(&self.est.covariance);
@@ -171,15 +171,13 @@ impl ExtendedKalmanFilter {
         // Gain (9), update (10), covariance (11) in Joseph form.
         self.innov.copy_from(y);
         self.innov -= &self.y_pred;
+        model.angles().wrap_outputs(self.innov.as_mut_slice());
         let nis = self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov, self.gate.is_on())?;
         self.upd.commit_gated(&self.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
         Ok(&self.est)
     }
 
     /// The model's dimensions must be the filter's.
-    fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
-        crate::validate::check_dims(d, self.n, self.p, self.m)
-    }
 
     /// (7), (8): `x⁻ = f(x̂, u)`, `F = ∂f/∂x`, `P⁻ = F P Fᵀ + Q` into the prediction buffers.
     fn predict_into_buffers<M: DifferentiableModel + ?Sized>(
@@ -208,7 +206,7 @@ impl ExtendedKalmanFilter {
         u: &DVector<f64>,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(model, u)?;

@@ -12,7 +12,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use dense_kernels as dense;
-use models::{Dims, LinearModel};
+use models::{Angles, Dims, LinearModel};
 
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
@@ -215,8 +215,7 @@ impl KalmanFilter {
         check_vec("y", y, self.m)?;
         self.x_pred.copy_from(&self.est.center);
         self.p_pred.copy_from(&self.est.covariance);
-        self.innov.copy_from(y);
-        (self.upd.kernels.gemv_m)(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        self.innovate(model.c(), y, model.angles());
         self.gated_update(model.c(), None, self.steps.max(1))
     }
 
@@ -232,6 +231,13 @@ impl KalmanFilter {
         let nis = self.upd.compute(&self.x_pred, &self.p_pred, c, r, &self.innov, self.gate.is_on())?;
         self.upd.commit_gated(&self.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
         Ok(&self.est)
+    }
+
+    /// `ν = y − C x⁻` with angle outputs wrapped to `(−π, π]`, into the innovation buffer.
+    fn innovate(&mut self, c: &DMatrix<f64>, y: &DVector<f64>, angles: Angles<'_>) {
+        self.innov.copy_from(y);
+        (self.upd.kernels.gemv_m)(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
+        angles.wrap_outputs(self.innov.as_mut_slice());
     }
 
     /// `x⁻ = A x + B u`, `P⁻ = A P Aᵀ + Q` into the prediction buffers (allocation-free).
@@ -253,8 +259,7 @@ impl KalmanFilter {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(model.a(), model.b(), u);
-        self.innov.copy_from(y);
-        (self.upd.kernels.gemv_m)(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        self.innovate(model.c(), y, model.angles());
         Ok(())
     }
 
@@ -288,8 +293,7 @@ impl KalmanFilter {
         check_vec("y", y, self.m)?;
         self.x_pred.copy_from(&self.est.center);
         self.p_pred.copy_from(&self.est.covariance);
-        self.innov.copy_from(y);
-        (self.upd.kernels.gemv_m)(-1.0, model.c(), &self.x_pred, 1.0, &mut self.innov);
+        self.innovate(model.c(), y, model.angles());
         Ok(())
     }
 
@@ -321,8 +325,7 @@ impl KalmanFilter {
         check_vec("y", y, self.m)?;
         self.predict_into_buffers(a, b, u);
         // Gain, mean and Joseph-form covariance, judged by the innovation gate.
-        self.innov.copy_from(y);
-        (self.upd.kernels.gemv_m)(-1.0, c, &self.x_pred, 1.0, &mut self.innov);
+        self.innovate(c, y, model.angles());
         self.gated_update(c, None, self.steps + 1)?;
         self.steps += 1;
         Ok(&self.est)

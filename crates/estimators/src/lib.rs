@@ -70,6 +70,7 @@
 //! step) and adaptive steps perform no heap allocation (tested with a counting allocator).
 
 pub mod adaptive;
+mod angle_branch;
 pub mod checks;
 pub mod czf;
 pub mod ekf;

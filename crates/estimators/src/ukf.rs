@@ -47,7 +47,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use dense_kernels as dense;
-use models::{Dims, DiscreteModel};
+use models::{Dims, DiscreteModel, wrap_angle};
 
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
@@ -189,13 +189,15 @@ fn factor_pd(src: &DMatrix<f64>, dst: &mut DMatrix<f64>) -> bool {
 
 /// `dev = points − centre` column by column and `dev_w` = its columns times `Wc₀` (the first)
 /// and `Wc_i` (the others); `centre` is a vector (`Some`) or the first point (`None`, whose own
-/// deviation is then exactly 0, as the guard's sum leaves it out).
+/// deviation is then exactly 0, as the guard's sum leaves it out). Deviations of the
+/// `angle_rows` are wrapped to `(−π, π]`.
 fn deviations(
     points: &DMatrix<f64>,
     centre: Option<&DVector<f64>>,
     (w0, wi): (f64, f64),
     dev: &mut DMatrix<f64>,
     dev_w: &mut DMatrix<f64>,
+    angle_rows: &[usize],
 ) {
     let rows = points.nrows();
     let src = points.as_slice();
@@ -212,11 +214,22 @@ fn deviations(
             *d = p - c;
             *dw = w * *d;
         }
+        for &r in angle_rows {
+            d[r] = wrap_angle(d[r]);
+            dw[r] = w * d[r];
+        }
     }
 }
 
 /// `out = Σ_j w_j points_j` (the weighted mean, `Wm₀` for the first point, `Wm_i` for the others).
-fn weighted_mean(points: &DMatrix<f64>, (w0, wi): (f64, f64), out: &mut DVector<f64>) {
+///
+/// The `angle_rows` take the circular mean about the first (central) point,
+/// `p₀ + Σ_j w_j wrap(p_j − p₀)` (the weights sum to one): the linear mean whenever no point
+/// lies more than π from the central one (then it is left as computed, bit for bit), and the
+/// mean on the circle, continuous with the central point, when the points straddle ±π. Unlike
+/// `atan2(Σ w sin, Σ w cos)` it does not shrink the mean of a wide spread, and it keeps the
+/// branch of the central point, so a heading is never wrapped by the filter.
+fn weighted_mean(points: &DMatrix<f64>, (w0, wi): (f64, f64), out: &mut DVector<f64>, angle_rows: &[usize]) {
     let rows = points.nrows();
     let out = out.as_mut_slice();
     out.fill(0.0);
@@ -224,6 +237,19 @@ fn weighted_mean(points: &DMatrix<f64>, (w0, wi): (f64, f64), out: &mut DVector<
         let w = if j == 0 { w0 } else { wi };
         for (o, p) in out.iter_mut().zip(col) {
             *o += w * p;
+        }
+    }
+    let src = points.as_slice();
+    for &r in angle_rows {
+        let centre = src[r];
+        let straddles = src.chunks_exact(rows).any(|col| wrap_angle(col[r] - centre) != col[r] - centre);
+        if straddles {
+            let sum: f64 = src
+                .chunks_exact(rows)
+                .enumerate()
+                .map(|(j, col)| if j == 0 { 0.0 } else { wi * wrap_angle(col[r] - centre) })
+                .sum();
+            out[r] = centre + sum;
         }
     }
 }
@@ -340,10 +366,6 @@ impl UnscentedKalmanFilter {
         replace_spd("R", &mut self.r, r, &mut self.pzz_chol)
     }
 
-    fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
-        crate::validate::check_dims(d, self.n, self.p, self.m)
-    }
-
     /// Sigma points (24) of `mean` with the lower factor `l` into `sig`.
     fn draw(sig: &mut DMatrix<f64>, mean: &DVector<f64>, l: &DMatrix<f64>, gamma: f64) {
         let n = mean.len();
@@ -382,12 +404,19 @@ impl UnscentedKalmanFilter {
         if self.prop.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's prediction of a sigma point is not finite"));
         }
-        weighted_mean(&self.prop, (self.wm0, self.wi), &mut self.x_pred);
+        weighted_mean(&self.prop, (self.wm0, self.wi), &mut self.x_pred, model.angles().states);
         // P⁻ about the mean; the guard recomputes it about the central point.
         let mut guarded = false;
         for attempt in 0..2 {
             let centre = (attempt == 0).then_some(&self.x_pred);
-            deviations(&self.prop, centre, (self.wc0, self.wi), &mut self.dev_x, &mut self.dev_xw);
+            deviations(
+                &self.prop,
+                centre,
+                (self.wc0, self.wi),
+                &mut self.dev_x,
+                &mut self.dev_xw,
+                model.angles().states,
+            );
             self.p_pred.copy_from(&self.q);
             dense::mul_nt(1.0, &self.dev_xw, &self.dev_x, 1.0, &mut self.p_pred);
             dense::symmetrize(&mut self.p_pred);
@@ -408,7 +437,7 @@ impl UnscentedKalmanFilter {
         model: &M,
         u: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         let guarded = self.predict_into_buffers(model, u)?;
         std::mem::swap(&mut self.est.center, &mut self.x_pred);
@@ -444,7 +473,7 @@ impl UnscentedKalmanFilter {
         model: &M,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("y", y, self.m)?;
         self.load_prediction_from_estimate()?;
         self.update_from_prediction(model, None, y, false, self.steps.max(1))
@@ -473,7 +502,7 @@ impl UnscentedKalmanFilter {
         u: &DVector<f64>,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         let guarded_prediction = self.predict_into_buffers(model, u)?;
@@ -527,7 +556,7 @@ impl UnscentedKalmanFilter {
         u: &DVector<f64>,
         y: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         self.load_prediction_from_estimate()?;
@@ -556,15 +585,29 @@ impl UnscentedKalmanFilter {
         if self.zsig.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's output at a sigma point is not finite"));
         }
-        weighted_mean(&self.zsig, (self.wm0, self.wi), &mut self.z_pred);
+        weighted_mean(&self.zsig, (self.wm0, self.wi), &mut self.z_pred, model.angles().outputs);
         // Pzz, Pxz (30)–(31); guard: about the central point. X₀ = x⁻: the sigma points'
         // centre is the same in both forms, and the first column of `dev_x` is exactly 0.
-        deviations(&self.sig, Some(&self.x_pred), (self.wc0, self.wi), &mut self.dev_x, &mut self.dev_xw);
+        deviations(
+            &self.sig,
+            Some(&self.x_pred),
+            (self.wc0, self.wi),
+            &mut self.dev_x,
+            &mut self.dev_xw,
+            model.angles().states,
+        );
         let mut guarded_innovation = false;
         let mut ok = false;
         for attempt in 0..2 {
             let centre = (attempt == 0).then_some(&self.z_pred);
-            deviations(&self.zsig, centre, (self.wc0, self.wi), &mut self.dev_z, &mut self.dev_zw);
+            deviations(
+                &self.zsig,
+                centre,
+                (self.wc0, self.wi),
+                &mut self.dev_z,
+                &mut self.dev_zw,
+                model.angles().outputs,
+            );
             self.pzz.copy_from(&self.r);
             dense::mul_nt(1.0, &self.dev_zw, &self.dev_z, 1.0, &mut self.pzz);
             dense::mul_nt(1.0, &self.dev_x, &self.dev_zw, 0.0, &mut self.pxz);
@@ -580,6 +623,7 @@ impl UnscentedKalmanFilter {
         }
         self.innov.copy_from(y);
         self.innov -= &self.z_pred;
+        model.angles().wrap_outputs(self.innov.as_mut_slice());
         // The innovation gate on Pzz, before anything changes.
         let nis = if self.gate.is_on() { nis(&self.pzz_chol, &self.innov, &mut self.dz) } else { f64::NAN };
         let verdict = self.gate.judge(nis, step)?;

@@ -2,7 +2,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use models::LinearModel;
+use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
 use crate::traits::Setup;
@@ -54,6 +54,17 @@ pub(crate) fn check_dims(found: models::Dims, n: usize, p: usize, m: usize) -> R
     Ok(())
 }
 
+/// [`check_dims`] for a model, and its declaration of angles against its dimensions.
+pub(crate) fn check_discrete<M: models::DiscreteModel + ?Sized>(
+    model: &M,
+    n: usize,
+    p: usize,
+    m: usize,
+) -> Result<(), EstimatorError> {
+    check_dims(model.dims(), n, p, m)?;
+    Ok(model.angles().validate(Dims::new(n, p, m))?)
+}
+
 pub(crate) fn check_vec(what: &'static str, v: &DVector<f64>, len: usize) -> Result<(), EstimatorError> {
     if v.len() != len {
         return Err(EstimatorError::DimensionMismatch { what, expected: len, found: v.len() });
@@ -73,7 +84,8 @@ pub(crate) fn check_model<M: LinearModel + ?Sized>(
     check_shape(("rows of C", "columns of C"), model.c(), m, n)?;
     check_finite("A", model.a().as_slice())?;
     check_finite("B", model.b().as_slice())?;
-    check_finite("C", model.c().as_slice())
+    check_finite("C", model.c().as_slice())?;
+    Ok(LinearModel::angles(model).validate(Dims::new(n, p, m))?)
 }
 
 /// Validates a square symmetric positive definite matrix of order `n` and returns its

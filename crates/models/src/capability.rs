@@ -147,6 +147,9 @@ impl<M: LinearModel + ?Sized> LinearModel for LinearView<'_, M> {
     fn c(&self) -> &nalgebra::DMatrix<f64> {
         self.0.c()
     }
+    fn angles(&self) -> crate::Angles<'_> {
+        LinearModel::angles(self.0)
+    }
 }
 
 impl<M: LinearModel + ?Sized> AnyModel for LinearView<'_, M> {
@@ -186,6 +189,9 @@ macro_rules! forward_discrete {
                 out: &mut nalgebra::DVector<f64>,
             ) -> Result<(), crate::ModelError> {
                 self.0.h(x, u, out)
+            }
+            fn angles(&self) -> crate::Angles<'_> {
+                self.0.angles()
             }
         }
     };

@@ -4,6 +4,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::angles::Angles;
 use crate::discretize::{expm, zoh_discretize};
 use crate::error::{ModelError, check_dims, check_finite};
 use crate::model::{DifferentiableModel, Dims, DiscreteModel, StepMatrices};
@@ -22,6 +23,10 @@ pub trait ContinuousModel {
     /// # Errors
     /// As [`ContinuousModel::derivative`].
     fn output(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError>;
+    /// Which states and outputs are angles (module [`crate::angles`]); none by default.
+    fn angles(&self) -> Angles<'_> {
+        Angles::NONE
+    }
 }
 
 /// A continuous model with analytic Jacobians `∂f_c/∂x` and `∂h/∂x`.
@@ -101,6 +106,10 @@ fn check_vec(what: &str, v: &DVector<f64>, n: usize) -> Result<(), ModelError> {
 impl<M: ContinuousModel> DiscreteModel for Discretized<M> {
     fn dims(&self) -> Dims {
         self.model.dims()
+    }
+
+    fn angles(&self) -> Angles<'_> {
+        self.model.angles()
     }
 
     fn f(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {

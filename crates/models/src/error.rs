@@ -31,6 +31,16 @@ pub enum ModelError {
         /// Column of the first offending entry.
         col: usize,
     },
+    /// A declaration of angle states or outputs names an index outside the model or repeats one.
+    #[error("angle {what}: index {index} is {reason}")]
+    InvalidAngles {
+        /// `"states"` or `"outputs"`.
+        what: &'static str,
+        /// The offending index.
+        index: usize,
+        /// Why it is refused.
+        reason: &'static str,
+    },
     /// The sampling period (or integration step) is not positive and finite.
     #[error("sampling period T_s must be positive and finite, got {0}")]
     InvalidSamplingPeriod(f64),

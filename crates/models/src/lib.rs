@@ -4,6 +4,8 @@
 //!   [`DifferentiableModel`] (plus Jacobians; [`check_jacobians`] against central
 //!   differences), [`LinearModel`] (`A`, `B`, `C`; every linear model is a differentiable
 //!   discrete model), and [`LinearTimeVarying`] (the matrices of each step).
+//! * [`angles`]: which states and outputs are angles ([`Angles`], declared by the model,
+//!   none by default) and [`wrap_angle`].
 //! * [`capability`]: [`AnyModel`], a model seen through the capabilities it offers (for
 //!   estimators chosen at run time), and [`Capability`].
 //! * [`enclosure`]: [`SecondOrderModel`], rigorous enclosures of `f`, `h` and their first and
@@ -46,6 +48,7 @@
 //! # Ok::<(), models::ModelError>(())
 //! ```
 
+pub mod angles;
 pub mod capability;
 pub mod continuous;
 pub mod discretize;
@@ -57,6 +60,7 @@ pub mod rng;
 pub mod simulate;
 pub mod validate;
 
+pub use angles::{Angles, angle_branch, wrap_angle};
 pub use capability::{AnyModel, Capability, DifferentiableView, DiscreteView, LinearView};
 pub use continuous::{
     ContinuousModel, DifferentiableContinuousModel, Discretized, Integrator, LinearContinuous, van_loan,

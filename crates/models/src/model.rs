@@ -15,6 +15,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::angles::Angles;
 use crate::error::{ModelError, check_dims, check_finite};
 
 /// Dimensions of a model: `n` states, `p` inputs, `m` outputs.
@@ -50,6 +51,10 @@ pub trait DiscreteModel {
     /// # Errors
     /// As [`DiscreteModel::f`].
     fn h(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError>;
+    /// Which states and outputs are angles (module [`crate::angles`]); none by default.
+    fn angles(&self) -> Angles<'_> {
+        Angles::NONE
+    }
 }
 
 /// A discrete model with analytic Jacobians `F = ∂f/∂x` (`n × n`) and `H = ∂h/∂x` (`m × n`).
@@ -108,6 +113,10 @@ pub trait LinearModel {
     fn b(&self) -> &DMatrix<f64>;
     /// `C_{k+1}`.
     fn c(&self) -> &DMatrix<f64>;
+    /// Which states and outputs are angles (module [`crate::angles`]); none by default.
+    fn angles(&self) -> Angles<'_> {
+        Angles::NONE
+    }
 
     /// Checks the three matrices' shapes against each other and their entries for NaN/∞.
     ///
@@ -153,6 +162,10 @@ impl<T: LinearModel + ?Sized> DiscreteModel for T {
         check_len("h(x, u)", out, d.outputs)?;
         dense_kernels::gemv(1.0, self.c(), x, 0.0, out);
         Ok(())
+    }
+
+    fn angles(&self) -> Angles<'_> {
+        LinearModel::angles(self)
     }
 }
 
@@ -249,6 +262,8 @@ pub trait LinearTimeVarying {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConstantModel {
     matrices: StepMatrices,
+    angle_states: Vec<usize>,
+    angle_outputs: Vec<usize>,
 }
 
 impl ConstantModel {
@@ -259,7 +274,18 @@ impl ConstantModel {
     pub fn new(a: DMatrix<f64>, b: DMatrix<f64>, c: DMatrix<f64>) -> Result<Self, ModelError> {
         let matrices = StepMatrices { a, b, c };
         matrices.validate()?;
-        Ok(Self { matrices })
+        Ok(Self { matrices, angle_states: Vec::new(), angle_outputs: Vec::new() })
+    }
+
+    /// The same model with the states and outputs of `angles` declared angles.
+    ///
+    /// # Errors
+    /// [`ModelError::InvalidAngles`] for an index outside the model or out of order.
+    pub fn with_angles(mut self, angles: Angles<'_>) -> Result<Self, ModelError> {
+        angles.validate(DiscreteModel::dims(&self))?;
+        self.angle_states = angles.states.to_vec();
+        self.angle_outputs = angles.outputs.to_vec();
+        Ok(self)
     }
 
     /// The constant matrices.
@@ -278,6 +304,9 @@ impl LinearModel for ConstantModel {
     }
     fn c(&self) -> &DMatrix<f64> {
         &self.matrices.c
+    }
+    fn angles(&self) -> Angles<'_> {
+        Angles::new(&self.angle_states, &self.angle_outputs)
     }
 }
 

@@ -5,6 +5,7 @@
 
 use nalgebra::DVector;
 
+use crate::angles::Angles;
 use crate::error::{ModelError, check_dims, check_finite};
 use crate::model::{Dims, DiscreteModel, LinearTimeVarying, StepMatrices};
 use crate::noise::Noise;
@@ -109,15 +110,20 @@ fn check_matrices(m: StepMatrices, dims: Dims, k: usize) -> Result<StepMatrices,
 /// two sequences are independent streams and changing one noise model leaves the other's draws
 /// unchanged. `w_k` is the `k`-th draw of its stream and `v_k` the `k`-th of its own.
 ///
+/// Angle outputs ([`DiscreteModel::angles`]) are published wrapped to `(−π, π]`, as a sensor
+/// reports them: `y = wrap(h(x) + v)`; states are not wrapped.
+///
 /// # Errors
 /// [`ModelError::DimensionMismatch`] / [`ModelError::NonFiniteEntry`] naming `x_0`, `u_k` or a
-/// noise model; evaluation errors of the model; [`ModelError::Diverged`] if a state or a
+/// noise model; [`ModelError::InvalidAngles`]; evaluation errors of the model; [`ModelError::Diverged`] if a state or a
 /// measurement is not finite.
 pub fn simulate<M>(model: &M, config: &SimulationConfig) -> Result<Trajectory, ModelError>
 where
     M: DiscreteModel + ?Sized,
 {
-    run(model.dims(), |_| Ok(StepOf::Fixed(model)), config)
+    let angles = model.angles();
+    angles.validate(model.dims())?;
+    run(model.dims(), |_| Ok(StepOf::Fixed(model)), config, angles)
 }
 
 /// Simulates `N = config.inputs.len()` steps of a linear time-varying model:
@@ -132,10 +138,15 @@ where
     M: LinearTimeVarying + ?Sized,
 {
     let dims = model.dims();
-    run::<StepMatrices, _>(dims, |k| Ok(StepOf::Linear(check_matrices(model.matrices(k)?, dims, k)?)), config)
+    run::<StepMatrices, _>(
+        dims,
+        |k| Ok(StepOf::Linear(check_matrices(model.matrices(k)?, dims, k)?)),
+        config,
+        Angles::NONE,
+    )
 }
 
-fn run<'a, M, F>(dims: Dims, mut at: F, config: &SimulationConfig) -> Result<Trajectory, ModelError>
+fn run<'a, M, F>(dims: Dims, mut at: F, config: &SimulationConfig, angles: Angles<'_>) -> Result<Trajectory, ModelError>
 where
     M: DiscreteModel + ?Sized + 'a,
     F: FnMut(usize) -> Result<StepOf<'a, M>, ModelError>,
@@ -179,7 +190,9 @@ where
     let v0 = config.measurement_noise.sample(&mut v_rng);
     let mut y = DVector::zeros(q);
     current.h(&x, config.inputs.first().unwrap_or(&zero_u), &mut y)?;
-    measurements.push(y + &v0);
+    y += &v0;
+    angles.wrap_outputs(y.as_mut_slice());
+    measurements.push(y);
     measurement_noises.push(v0);
     for (k, u) in config.inputs.iter().enumerate() {
         let w = config.process_noise.sample(&mut w_rng);
@@ -194,6 +207,7 @@ where
         let mut y = DVector::zeros(q);
         next.h(&next_x, u, &mut y)?;
         y += &v;
+        angles.wrap_outputs(y.as_mut_slice());
         if y.iter().any(|e| !e.is_finite()) {
             return Err(ModelError::Diverged { step: k + 1 });
         }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use car_dynamics::{CarModel, CarParams};
 use carrier_dynamics::{CarrierModel, CarrierParams};
 use equation_models::EquationModel;
-use models::{AnyModel, Capability, ConstantModel, Dims, Integrator};
+use models::{Angles, AnyModel, Capability, ConstantModel, Dims, Integrator};
 use nalgebra::{DMatrix, DVector};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -25,7 +25,8 @@ pub type SharedModel = Arc<dyn AnyModel + Send + Sync>;
 /// How a model was built: enough to build it again.
 #[derive(Debug, Clone)]
 enum Recipe {
-    Linear(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>),
+    /// `(A, B, C)` and the indices of the angle states and angle outputs.
+    Linear(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Vec<usize>, Vec<usize>),
     Truck {
         ts: f64,
     },
@@ -106,13 +107,28 @@ impl Model {
         self.inner.discrete().dims()
     }
 
-    /// A linear model from validated matrices.
+    /// A linear model from validated matrices, without angles.
     pub fn from_matrices(a: DMatrix<f64>, b: DMatrix<f64>, c: DMatrix<f64>) -> PyResult<Self> {
-        let m = ConstantModel::new(a.clone(), b.clone(), c.clone()).map_err(|e| value_error(e.to_string()))?;
+        Self::linear_with_angles(a, b, c, Vec::new(), Vec::new())
+    }
+
+    /// A linear model whose states `angle_states` and outputs `angle_outputs` are angles.
+    fn linear_with_angles(
+        a: DMatrix<f64>,
+        b: DMatrix<f64>,
+        c: DMatrix<f64>,
+        mut angle_states: Vec<usize>,
+        mut angle_outputs: Vec<usize>,
+    ) -> PyResult<Self> {
+        angle_states.sort_unstable();
+        angle_outputs.sort_unstable();
+        let m = ConstantModel::new(a.clone(), b.clone(), c.clone())
+            .and_then(|m| m.with_angles(Angles::new(&angle_states, &angle_outputs)))
+            .map_err(|e| value_error(e.to_string()))?;
         let (n, p, q) = (a.nrows(), b.ncols(), c.nrows());
         Ok(Self {
             inner: Arc::new(m),
-            recipe: Recipe::Linear(a, b, c),
+            recipe: Recipe::Linear(a, b, c, angle_states, angle_outputs),
             description: format!("linear model, {n} states, {p} inputs, {q} outputs"),
         })
     }
@@ -125,7 +141,12 @@ impl Model {
     }
 
     #[allow(non_snake_case)]
-    fn from_array_likes(A: &Bound<'_, PyAny>, B: &Bound<'_, PyAny>, C: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn from_array_likes(
+        A: &Bound<'_, PyAny>,
+        B: &Bound<'_, PyAny>,
+        C: &Bound<'_, PyAny>,
+        angles: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
         let a = matrix(A, "A", None, None)?;
         let n = a.nrows();
         if a.ncols() != n {
@@ -133,13 +154,19 @@ impl Model {
         }
         let b = matrix(B, "B", Some(n), None)?;
         let c = matrix(C, "C", None, Some(n))?;
-        Self::from_matrices(a, b, c)
+        let (states, outputs) = match angles {
+            Some(a) if !a.is_none() => angle_indices(a)?,
+            _ => (Vec::new(), Vec::new()),
+        };
+        Self::linear_with_angles(a, b, c, states, outputs)
     }
 
     fn build(recipe: Recipe) -> PyResult<Self> {
         let err = |e: &dyn std::fmt::Display| value_error(e.to_string());
         let (inner, description): (SharedModel, String) = match &recipe {
-            Recipe::Linear(a, b, c) => return Self::from_matrices(a.clone(), b.clone(), c.clone()),
+            Recipe::Linear(a, b, c, s, o) => {
+                return Self::linear_with_angles(a.clone(), b.clone(), c.clone(), s.clone(), o.clone());
+            }
             Recipe::Truck { ts } => {
                 let m = TruckEkfModel::new(TruckParams::digest_preset(), *ts).map_err(|e| err(&e))?;
                 (Arc::new(m), format!("3-axle port truck, Pacejka tyres, Euler at {ts} s"))
@@ -199,6 +226,26 @@ impl Model {
     }
 }
 
+/// `{"states": [...], "outputs": [...]}` (either key may be left out) as index lists.
+fn angle_indices(angles: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<usize>)> {
+    let dict = angles
+        .cast::<pyo3::types::PyDict>()
+        .map_err(|_| value_error("angles must be a dict {\"states\": [indices], \"outputs\": [indices]}"))?;
+    let (mut states, mut outputs) = (Vec::new(), Vec::new());
+    for (key, value) in dict.iter() {
+        let key: String = key.extract().map_err(|_| value_error("angles: keys must be \"states\" or \"outputs\""))?;
+        let list: Vec<usize> = value
+            .extract()
+            .map_err(|_| value_error(format!("angles[{key:?}] must be a list of non-negative integer indices")))?;
+        match key.as_str() {
+            "states" => states = list,
+            "outputs" => outputs = list,
+            _ => return Err(value_error(format!("angles: unknown key {key:?} (expected \"states\" or \"outputs\")"))),
+        }
+    }
+    Ok((states, outputs))
+}
+
 fn model_error(e: models::ModelError) -> PyErr {
     value_error(format!("the model cannot be evaluated there: {e}"))
 }
@@ -206,10 +253,31 @@ fn model_error(e: models::ModelError) -> PyErr {
 #[pymethods]
 impl Model {
     /// A linear time-invariant model ``x[k+1] = A x[k] + B u[k]``, ``y[k+1] = C x[k+1]``.
+    ///
+    /// ``angles={"states": [i, ...], "outputs": [j, ...]}`` declares which states and outputs are
+    /// angles in radians: innovations of angle outputs are wrapped to (−π, π], the UKF's means of
+    /// angle rows are circular. Estimators never wrap a state.
     #[new]
     #[allow(non_snake_case)]
-    fn new(A: &Bound<'_, PyAny>, B: &Bound<'_, PyAny>, C: &Bound<'_, PyAny>) -> PyResult<Self> {
-        no_panic(|| Self::from_array_likes(A, B, C))
+    #[pyo3(signature = (A, B, C, *, angles = None))]
+    fn new(
+        A: &Bound<'_, PyAny>,
+        B: &Bound<'_, PyAny>,
+        C: &Bound<'_, PyAny>,
+        angles: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        no_panic(|| Self::from_array_likes(A, B, C, angles))
+    }
+
+    /// ``{"states": [...], "outputs": [...]}``: the indices of the states and outputs that are
+    /// angles (declared by ``Model(..., angles=...)``, a model file's ``angles`` or the vehicle).
+    #[getter]
+    fn angles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let a = self.inner.discrete().angles();
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("states", a.states.to_vec())?;
+        d.set_item("outputs", a.outputs.to_vec())?;
+        Ok(d)
     }
 
     /// The truck paper's EKF model (3-axle port truck, Pacejka-89 tyres): state ``[V_x, V_y, gamma]``,
@@ -385,7 +453,10 @@ impl Model {
             "linear" => {
                 let m =
                     |i: usize, what: &str| -> PyResult<DMatrix<f64>> { matrix(&args.get_item(i)?, what, None, None) };
-                Recipe::Linear(m(0, "A")?, m(1, "B")?, m(2, "C")?)
+                let indices = |i: usize| -> PyResult<Vec<usize>> {
+                    if args.len() > i { args.get_item(i)?.extract() } else { Ok(Vec::new()) }
+                };
+                Recipe::Linear(m(0, "A")?, m(1, "B")?, m(2, "C")?, indices(3)?, indices(4)?)
             }
             "truck" => Recipe::Truck { ts: f(0)? },
             "vessel" => Recipe::Vessel { ts: f(0)?, rk4_substeps: args.get_item(1)?.extract()? },
@@ -406,9 +477,9 @@ impl Model {
         // A module-level function of the package, so that pickle finds it by name.
         let restore = py.import("port_estimation")?.getattr("_restore_model")?;
         let args: Bound<'py, PyTuple> = match &this.recipe {
-            Recipe::Linear(a, b, c) => {
-                let inner = PyTuple::new(py, [mat_out(py, a)?, mat_out(py, b)?, mat_out(py, c)?])?;
-                ("linear", inner).into_pyobject(py)?
+            Recipe::Linear(a, b, c, s, o) => {
+                let (a, b, c) = (mat_out(py, a)?, mat_out(py, b)?, mat_out(py, c)?);
+                ("linear", (a, b, c, s.clone(), o.clone())).into_pyobject(py)?
             }
             Recipe::Truck { ts } => ("truck", (*ts,)).into_pyobject(py)?,
             Recipe::Vessel { ts, rk4_substeps } => ("vessel", (*ts, *rk4_substeps)).into_pyobject(py)?,

@@ -41,5 +41,7 @@ pub mod model;
 pub mod params;
 
 pub use error::VesselError;
-pub use model::{DiscreteVessel, INPUT_DIM, OUTPUT_DIM, PAPER_SAMPLE_PERIOD, STATE_DIM, STATE_NAMES, Vessel, rotation};
+pub use model::{
+    DiscreteVessel, INPUT_DIM, OUTPUT_DIM, PAPER_SAMPLE_PERIOD, STATE_DIM, STATE_NAMES, VESSEL_ANGLES, Vessel, rotation,
+};
 pub use params::{BisCoefficients, ForceNoise, SiMatrices, ThrustLimits, VesselParams, bis_to_si};

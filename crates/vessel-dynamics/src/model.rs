@@ -13,8 +13,8 @@
 
 use models::error::{check_dims, check_finite};
 use models::{
-    ContinuousModel, DifferentiableContinuousModel, DifferentiableModel, Dims, DiscreteModel, Discretized, Integrator,
-    ModelError,
+    Angles, ContinuousModel, DifferentiableContinuousModel, DifferentiableModel, Dims, DiscreteModel, Discretized,
+    Integrator, ModelError,
 };
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
@@ -122,7 +122,15 @@ impl ContinuousModel for Vessel {
         }
         Ok(())
     }
+
+    /// The heading `ψ`: state 2 and output 2.
+    fn angles(&self) -> Angles<'_> {
+        VESSEL_ANGLES
+    }
 }
+
+/// The vessel's angles: the heading `ψ` (state 2, output 2).
+pub const VESSEL_ANGLES: Angles<'static> = Angles::new(&[2], &[2]);
 
 impl DifferentiableContinuousModel for Vessel {
     /// `∂f/∂x`: the kinematic rows `∂(R(ψ) ν)/∂(ψ, ν)` and the kinetic block `−M⁻¹ D`
@@ -210,6 +218,9 @@ impl DiscreteModel for DiscreteVessel {
     }
     fn h(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DVector<f64>) -> Result<(), ModelError> {
         self.inner.h(x, u, out)
+    }
+    fn angles(&self) -> Angles<'_> {
+        VESSEL_ANGLES
     }
 }
 

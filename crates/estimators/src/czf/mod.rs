@@ -25,6 +25,7 @@ use nalgebra::{DMatrix, DVector};
 use constrained_zonotope::{ConstrainedZonotope, ReductionLimits, SetError};
 use models::{Dims, SecondOrderModel, TaylorEnclosure};
 
+use crate::angle_branch::{self, Branch};
 use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
@@ -346,7 +347,7 @@ impl ConstrainedZonotopeFilter {
     }
 
     fn check_model<M: SecondOrderModel + ?Sized>(&self, model: &M) -> Result<(), EstimatorError> {
-        crate::validate::check_dims(model.dims(), self.dims.states, self.dims.inputs, self.dims.outputs)
+        crate::validate::check_discrete(model, self.dims.states, self.dims.inputs, self.dims.outputs)
     }
 
     /// The box the next extension is taken over: the published interval.
@@ -455,6 +456,15 @@ impl ConstrainedZonotopeFilter {
         let u = self.last_u.clone();
         let mv = mean_value(model, Function::Measurement, &x, &u, &mut self.h_enclosure)?
             .map_err(|reason| guarantee_lost(step, reason))?;
+        // Angle outputs on the branch of h's enclosure over the box (module `angle_branch`).
+        let n = self.dims.states;
+        let mut y_err = vec![0.0; m];
+        let mut y_used = DVector::zeros(m);
+        let h_over_box =
+            |i: usize| (0..n).fold(mv.value[i], |h, k| h + mv.jacobian[i * n + k] * (x[k] - Interval::point(mv.p[k])));
+        let branch =
+            angle_branch::branch(model.angles().outputs, y, h_over_box, &self.v_radius, &mut y_used, &mut y_err, step)?;
+        let y = &y_used;
         // Y = (y − mid E_h) ⊕ □(rad E_h + rounding) ⊕ (−V).
         let mut yc = DVector::zeros(m);
         let mut rad = DVector::zeros(m);
@@ -462,7 +472,12 @@ impl ConstrainedZonotopeFilter {
             let (em, er) = mv.e[i].mid_rad();
             yc[i] = y[i] - em;
             rad[i] = intervals::up(er + intervals::up(f64::EPSILON * yc[i].abs()));
+            if y_err[i] > 0.0 {
+                rad[i] = intervals::up(rad[i] + y_err[i]);
+            }
         }
+        let v_radius: Vec<f64> =
+            self.v_radius.iter().zip(&y_err).map(|(&v, &e)| if e > 0.0 { intervals::up(v + e) } else { v }).collect();
         let lost = |e: SetError| guarantee_lost(step, format!("the measurement update: {e}"));
         let strip =
             ConstrainedZonotope::zonotope(yc, -&self.v_generators).and_then(|s| s.add_box(&rad)).map_err(lost)?;
@@ -470,9 +485,8 @@ impl ConstrainedZonotopeFilter {
         let candidate = set.intersect(&mv.m, &strip).map_err(lost)?;
         let hull = candidate.interval_hull().map_err(lost)?;
         let mut contracted: Vec<Interval> = observer.iter().zip(&x).filter_map(|(o, b)| o.meet(*b)).collect();
-        let observer_ok =
-            contracted.len() == x.len() && contract_box(&mut contracted, &mv, y, &self.v_radius).is_some();
-        let consistent = !hull.certified_empty && observer_ok;
+        let observer_ok = contracted.len() == x.len() && contract_box(&mut contracted, &mv, y, &v_radius).is_some();
+        let consistent = !hull.certified_empty && observer_ok && branch == Branch::Chosen;
         let status = |data, lost: bool| StepStatus {
             outcome: SolveOutcome::Converged,
             data,

@@ -363,6 +363,7 @@ impl MovingHorizonEstimator {
         match y {
             Some(y) => {
                 self.y_ring[sn * m..(sn + 1) * m].copy_from_slice(y.as_slice());
+                self.unwrap_angles(model, st, sn);
                 self.has_y[sn] = true;
             }
             None => self.has_y[sn] = false,
@@ -380,6 +381,31 @@ impl MovingHorizonEstimator {
             Err(e) => {
                 self.has_y[sn] = old_has;
                 Err(e)
+            }
+        }
+    }
+
+    /// Angle outputs of the measurement in slot `sn` moved to the branch of their prediction
+    /// `C (A x̂ + B u)` from the published estimate (slot `st` holds `A`, `B u`): the window's
+    /// residuals `y − C x` of an angle are then those wrapped to `(−π, π]` near the prediction,
+    /// and the quadratic programme stays convex. Allocation-free.
+    fn unwrap_angles<M: LinearModel + ?Sized>(&mut self, model: &M, st: usize, sn: usize) {
+        let (n, m) = (self.n, self.m);
+        let a = &self.a_ring[st * n * n..(st + 1) * n * n];
+        let c = model.c();
+        for &k in LinearModel::angles(model).outputs {
+            let mut reference = 0.0;
+            for i in 0..n {
+                let mut pred = self.bu_ring[st * n + i];
+                for j in 0..n {
+                    pred += a[j * n + i] * self.est.center[j];
+                }
+                reference += c[(k, i)] * pred;
+            }
+            let y = &mut self.y_ring[sn * m + k];
+            let d = models::wrap_angle(*y - reference);
+            if d != *y - reference {
+                *y = reference + d;
             }
         }
     }

@@ -404,6 +404,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         u: &DVector<f64>,
     ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
+        refuse_angle_outputs(model)?;
         let model = &StepModel::new(model.a(), model.b(), model.c());
         check_vec("u", u, self.p)?;
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
@@ -461,6 +462,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         y: &DVector<f64>,
     ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
+        refuse_angle_outputs(model)?;
         check_vec("y", y, self.m)?;
         if !self.pending.armed {
             return Err(EstimatorError::UpdateWithoutPrediction { estimator: "the set-membership filter" });
@@ -714,3 +716,19 @@ impl Estimate for SetEstimate {
 }
 
 forward_estimator!(impl<S: UpdateSolver> for SetMembershipFilter<S>, LinearModel, SetEstimate);
+
+/// The linear filter takes `y = C x + v` as exact data: a measured angle's branch needs an
+/// enclosure of `h` that it does not carry, so models declaring angle outputs are refused here
+/// (the nonlinear filter and the constrained-zonotope filter choose the branch soundly and accept
+/// linear models).
+fn refuse_angle_outputs<M: LinearModel + ?Sized>(model: &M) -> Result<(), EstimatorError> {
+    if LinearModel::angles(model).outputs.is_empty() {
+        Ok(())
+    } else {
+        Err(EstimatorError::Unsupported {
+            estimator: "the linear set-membership filter",
+            operation: "angle outputs",
+            reason: "a measured angle's branch needs an enclosure of h: use smf-nl or czf, which accept linear models",
+        })
+    }
+}

@@ -34,6 +34,7 @@ use nalgebra::{DMatrix, DVector};
 use super::filter::{SetEstimate, SetMembershipFilter};
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::UpdateSolver;
+use crate::angle_branch::{Branch, branch, measured};
 use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
 use crate::traits::Setup;
@@ -88,6 +89,9 @@ struct Work {
     obs_point: Vec<Interval>,
     /// `J_ik (x_k − p_k)` of one output row (N8).
     terms: Vec<Interval>,
+    /// The measurement with its angle outputs on their branch, and the rounding bound of each.
+    y_used: DVector<f64>,
+    y_err: Vec<f64>,
 }
 
 /// The nonlinear set-membership filter over any [`SecondOrderModel`], generic over the solver of
@@ -124,6 +128,10 @@ impl NonlinearSetMembershipFilter<TwoMultiplierSolver> {
 /// Why (N8) refused a step.
 const OBSERVER_MISSED: &str = "the interval observer's box and the measurement's strip do not meet (a certified \
                                contradiction of the data and the noise bounds)";
+
+/// Why an angle measurement refused a step.
+const ANGLE_MISSED: &str = "an angle output has no branch within h over the predicted box plus the noise bound (a \
+                            certified contradiction of the data and the noise bounds)";
 
 fn guarantee_lost(step: u64, reason: impl Into<String>) -> EstimatorError {
     EstimatorError::GuaranteeLost { step, reason: reason.into() }
@@ -307,6 +315,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             obs: vec![Interval::ZERO; n],
             obs_point: vec![Interval::ZERO; n],
             terms: vec![Interval::ZERO; n],
+            y_used: DVector::zeros(m),
+            y_err: vec![0.0; m],
         };
         let half = |m: &DMatrix<f64>| -> Vec<f64> {
             (0..m.nrows()).map(|i| Interval::point(m[(i, i)].max(0.0)).sqrt().hi()).collect()
@@ -419,7 +429,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
                 return Err(EstimatorError::DimensionMismatch { what, expected, found });
             }
         }
-        Ok(())
+        Ok(model.angles().validate(d)?)
     }
 
     /// (N1)–(N3): linearises `f` about the centre of the current set: `ws.lin.a`, `ws.lin.b`,
@@ -497,12 +507,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
 
     /// (N4)–(N5): linearises `h` about `ws.xbar` over `ws.xbar ± ws.radius`: `ws.lin.c`,
     /// `ws.y_lin`, `ws.remainders.measurement`, `ws.r_eff`.
-    fn linearise_h<M: SecondOrderModel + ?Sized>(
-        &mut self,
-        model: &M,
-        u: &DVector<f64>,
-        y: &DVector<f64>,
-    ) -> Result<(), EstimatorError> {
+    fn linearise_h<M: SecondOrderModel + ?Sized>(&mut self, model: &M, u: &DVector<f64>) -> Result<(), EstimatorError> {
         let step = self.inner.steps() + 1;
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
@@ -520,7 +525,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         for i in 0..m {
             let value = ws.point_h.value(i);
             let h_hat = mid(value);
-            let mut y_lin = Interval::point(y[i]) - h_hat;
+            let mut y_lin = measured(ws.y_used[i], ws.y_err[i]) - h_hat;
             for j in 0..n {
                 let c = mid(jacobian.jacobian(i, j));
                 ws.lin.c[(i, j)] = c;
@@ -563,8 +568,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         check_vec("y", y, self.dims.outputs)?;
         self.linearise_f(model, u)?;
         self.observer_predict(model, u)?;
-        self.linearise_h(model, u, y)?;
-        let contradicted = self.observer_update(model, u, y)?;
+        let off_branch = self.branch_angles(model, u, y)?;
+        self.linearise_h(model, u)?;
+        let contradicted = self.observer_update(model, u)? || off_branch;
         self.apply_noise()?;
         let Self { inner, ws, .. } = self;
         if let Err(e) = inner.step(&ws.lin, &ws.one, &ws.y_lin) {
@@ -573,6 +579,30 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         }
         self.u_last.copy_from(u);
         Ok(self.published(contradicted))
+    }
+
+    /// The measurement into `ws.y_used`, its angle outputs moved to their branch in `h` over the
+    /// predicted observer box `ws.obs` widened by `V`'s box (module `angle_branch`). Returns whether
+    /// an angle output has no representative there (the data contradict the set; with the default
+    /// policy the step is refused).
+    fn branch_angles<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<bool, EstimatorError> {
+        let step = self.inner.steps() + 1;
+        let ws = &mut self.ws;
+        let outputs = model.angles().outputs;
+        if !outputs.is_empty() {
+            model.h_value_enclosure(&ws.obs, u, &mut ws.box_h)?;
+        }
+        let box_h = &ws.box_h;
+        let found = branch(outputs, y, |i| box_h.value(i), &self.v_half, &mut ws.y_used, &mut ws.y_err, step)?;
+        if found == Branch::Contradicted && self.inner.inconsistency_policy() == InconsistencyPolicy::Error {
+            return Err(EstimatorError::SetMissed { step, reason: ANGLE_MISSED });
+        }
+        Ok(found == Branch::Contradicted)
     }
 
     /// (N7): the interval observer's prediction over its last box `O`: `f`'s natural interval
@@ -609,7 +639,6 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         &mut self,
         model: &M,
         u: &DVector<f64>,
-        y: &DVector<f64>,
     ) -> Result<bool, EstimatorError> {
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
@@ -625,8 +654,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         ws.boxed.copy_from_slice(&ws.obs);
         for _ in 0..2 {
             for i in 0..m {
-                let target =
-                    Interval::point(y[i]) - Interval::new(-self.v_half[i], self.v_half[i]) - ws.point_h.value(i);
+                let target = measured(ws.y_used[i], ws.y_err[i])
+                    - Interval::new(-self.v_half[i], self.v_half[i])
+                    - ws.point_h.value(i);
                 for k in 0..n {
                     ws.terms[k] = ws.box_h.jacobian(i, k) * (ws.boxed[k] - ws.obs_point[k]);
                 }
@@ -724,8 +754,10 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         }
         self.ws.obs.copy_from_slice(&self.observer);
         let u = std::mem::take(&mut self.u_last);
-        let linearised = self.linearise_h(model, &u, y);
-        let contradicted = linearised.and_then(|()| self.observer_update(model, &u, y));
+        let contradicted = self.branch_angles(model, &u, y).and_then(|off_branch| {
+            self.linearise_h(model, &u)?;
+            Ok(self.observer_update(model, &u)? || off_branch)
+        });
         self.u_last = u;
         let contradicted = contradicted?;
         self.inner.set_measurement_noise(&self.ws.r_eff)?;

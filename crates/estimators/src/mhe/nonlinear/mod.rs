@@ -203,10 +203,6 @@ impl NonlinearMhe {
         &self.traj[..self.len]
     }
 
-    fn check_dims(&self, d: Dims) -> Result<(), EstimatorError> {
-        crate::validate::check_dims(d, self.n, self.p, self.m)
-    }
-
     /// Adds a measurement of `x_0` (with input `u` for `h`, usually zeros) before the first step.
     ///
     /// # Errors
@@ -223,7 +219,7 @@ impl NonlinearMhe {
                 message: "the initial measurement can be given once, before the first step".into(),
             });
         }
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         check_vec("y", y0, self.m)?;
         let start = Instant::now();
@@ -248,7 +244,7 @@ impl NonlinearMhe {
         u: &DVector<f64>,
         y: Option<&DVector<f64>>,
     ) -> Result<&NonlinearMheEstimate, EstimatorError> {
-        self.check_dims(model.dims())?;
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
         check_vec("u", u, self.p)?;
         if let Some(y) = y {
             check_vec("y", y, self.m)?;

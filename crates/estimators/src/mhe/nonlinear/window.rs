@@ -156,6 +156,7 @@ impl Window {
                 model.h(&xs[j], &rings.uh[sl], &mut self.hx[j])?;
                 self.tmp_m.copy_from(&rings.y[sl]);
                 self.tmp_m -= &self.hx[j];
+                model.angles().wrap_outputs(self.tmp_m.as_mut_slice());
                 total += quad(wts.r_inv, &self.tmp_m);
             }
         }
@@ -201,6 +202,7 @@ impl Window {
             if rings.has_y[sl] {
                 self.tmp_m.copy_from(&rings.y[sl]);
                 self.tmp_m -= &self.hx[j];
+                model.angles().wrap_outputs(self.tmp_m.as_mut_slice());
                 self.tmp_m2.gemv(1.0, wts.r_inv, &self.tmp_m, 0.0);
                 self.g[j].gemv_tr(-1.0, &self.c[j], &self.tmp_m2, 1.0);
             }
