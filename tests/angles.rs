@@ -25,8 +25,11 @@ fn compile(text: &str) -> EquationModel {
     EquationModel::from_toml_str_with_foreign_keys(text, "model.toml", &port_est::model::NOISE_KEYS).unwrap()
 }
 
-/// The circling drive with noise on the vertices of its boxes: states, inputs, wrapped measurements.
-fn circling(model: &EquationModel) -> (Vec<DVector<f64>>, Vec<DVector<f64>>, Vec<DVector<f64>>) {
+/// States, inputs and wrapped measurements of a run.
+type Run = (Vec<DVector<f64>>, Vec<DVector<f64>>, Vec<DVector<f64>>);
+
+/// The circling drive with noise on the vertices of its boxes.
+fn circling(model: &EquationModel) -> Run {
     let (w, v) = ([0.01, 0.01, 0.002, 0.02], [0.3, 0.005, 0.3, 0.005]);
     let mut rng = Xoshiro256StarStar::seed_from_u64(5);
     let mut sign = move || if rng.uniform(-1.0, 1.0) < 0.0 { -1.0 } else { 1.0 };

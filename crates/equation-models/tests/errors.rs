@@ -146,3 +146,21 @@ fn non_finite_evaluations_name_the_equation_and_the_values() {
     // Wrong dimensions are reported, not panics.
     assert!(matches!(model.f(&DVector::zeros(3), &u, &mut out), Err(ModelError::DimensionMismatch { .. })));
 }
+
+#[test]
+fn angles_name_states_and_outputs_once() {
+    let body = "[f]\nx = \"x + v\"\nv = \"v + a\"\n[h]\ny = \"x\"\n";
+    let ok = EquationModel::from_toml_str(&format!("{HEAD}angles = [\"y\", \"x\"]\n{body}"), "car.toml").unwrap();
+    assert_eq!(ok.angles(), models::Angles::new(&[0], &[0]));
+    // The linear view of a linear model carries them too.
+    use models::AnyModel;
+    assert_eq!(models::LinearModel::angles(ok.linear().unwrap()), models::Angles::new(&[0], &[0]));
+    let e = error(&format!("{HEAD}angles = [\"x\", \"a\"]\n{body}"));
+    assert_at(&e, "car.toml:5:16", "`a` in `angles` is neither a state nor an output");
+    let e = error(&format!("{HEAD}angles = [\"x\", \"x\"]\n{body}"));
+    assert_at(&e, "car.toml:5:16", "twice");
+    let e = error(&format!("{HEAD}angles = \"x\"\n{body}"));
+    assert_at(&e, "car.toml:5:1", "array");
+    let e = error(&format!("{HEAD}angles = [1]\n{body}"));
+    assert_at(&e, "car.toml:5:11", "strings");
+}

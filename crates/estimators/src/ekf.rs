@@ -177,8 +177,6 @@ impl ExtendedKalmanFilter {
         Ok(&self.est)
     }
 
-    /// The model's dimensions must be the filter's.
-
     /// (7), (8): `x⁻ = f(x̂, u)`, `F = ∂f/∂x`, `P⁻ = F P Fᵀ + Q` into the prediction buffers.
     fn predict_into_buffers<M: DifferentiableModel + ?Sized>(
         &mut self,

@@ -693,6 +693,34 @@ forward_estimator!(impl<> for UnscentedKalmanFilter, DiscreteModel, GaussianEsti
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn angle_rows_take_the_circular_mean_and_wrapped_deviations() {
+        // Row 0 an ordinary value, row 1 an angle whose points straddle ±π about the central one.
+        let pts = DMatrix::from_column_slice(2, 5, &[1.0, 3.1, 2.0, -3.1, 0.0, 3.05, 1.5, PI, 0.5, -3.05]);
+        let (w0, wi) = (0.2, 0.2);
+        let mut mean = DVector::zeros(2);
+        weighted_mean(&pts, (w0, wi), &mut mean, &[]);
+        assert!((mean[1] - (3.1 - 3.1 + 3.05 + PI - 3.05) / 5.0).abs() < 1e-15, "linear mean {}", mean[1]);
+        weighted_mean(&pts, (w0, wi), &mut mean, &[1]);
+        // The deviations from 3.1 are 0, 2π − 6.2, −0.05, π − 3.1, 2π − 6.15: the mean on the
+        // circle, on the central point's branch (not wrapped to −π).
+        let expected = 3.1 + 0.2 * ((2.0 * PI - 6.2) - 0.05 + (PI - 3.1) + (2.0 * PI - 6.15));
+        assert!((mean[1] - expected).abs() < 1e-14, "{} vs {expected}", mean[1]);
+        assert_eq!(mean[0], 1.0);
+        let (mut dev, mut dev_w) = (DMatrix::zeros(2, 5), DMatrix::zeros(2, 5));
+        deviations(&pts, Some(&mean), (w0, wi), &mut dev, &mut dev_w, &[1]);
+        assert!(dev.row(1).iter().all(|d| d.abs() < 0.1), "{dev}");
+        assert!((dev[(1, 1)] - wrap_angle(-3.1 - expected)).abs() < 1e-15);
+        assert!((dev_w[(1, 3)] - 0.2 * dev[(1, 3)]).abs() < 1e-17);
+        // Points that do not straddle are averaged exactly as an ordinary row.
+        let calm = DMatrix::from_column_slice(1, 3, &[0.3, 0.31, 0.29]);
+        let (mut a, mut b) = (DVector::zeros(1), DVector::zeros(1));
+        weighted_mean(&calm, (0.5, 0.25), &mut a, &[]);
+        weighted_mean(&calm, (0.5, 0.25), &mut b, &[0]);
+        assert_eq!(a[0].to_bits(), b[0].to_bits());
+    }
 
     #[test]
     fn paper_weights() {

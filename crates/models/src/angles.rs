@@ -103,7 +103,8 @@ pub fn wrap_angle(a: f64) -> f64 {
 /// representative on the enclosure's edge is kept; two candidates inside is again `Err`.
 pub fn angle_branch(y: f64, lo: f64, hi: f64) -> Result<Option<f64>, f64> {
     let width = hi - lo;
-    if !(width < TAU - 8.0 * f64::EPSILON * PI) || !y.is_finite() || !lo.is_finite() {
+    let finite = y.is_finite() && lo.is_finite() && hi.is_finite();
+    if !finite || width >= TAU - 8.0 * f64::EPSILON * PI {
         return Err(width);
     }
     let margin = 8.0 * f64::EPSILON * (lo.abs().max(hi.abs()) + PI);

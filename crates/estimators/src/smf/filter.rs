@@ -513,6 +513,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         y: &DVector<f64>,
     ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
+        refuse_angle_outputs(model)?;
         let model = &StepModel::new(model.a(), model.b(), model.c());
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
