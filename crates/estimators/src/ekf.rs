@@ -22,6 +22,7 @@ use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
 use crate::kalman::{GaussianEstimate, commit_prediction};
+use crate::partial::{GaussianSubset, Subsets, check_measured, measured_rows};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
 use crate::validate::{InitialData, all_finite, check_initial, check_vec, replace_spd};
@@ -46,6 +47,8 @@ pub struct ExtendedKalmanFilter {
     u_last: DVector<f64>,
     upd: GaussianUpdate,
     gate: InnovationGate,
+    /// The updates of partial measurements, by measured count.
+    subsets: Subsets<GaussianSubset>,
     /// Steps (predictions, with or without their update) so far.
     steps: u64,
 }
@@ -75,6 +78,7 @@ impl ExtendedKalmanFilter {
             u_last: DVector::zeros(inputs),
             upd: GaussianUpdate::new(n, m),
             gate: InnovationGate::new(DataChecks::default(), m)?,
+            subsets: Subsets::new(m),
             steps: 0,
         })
     }
@@ -86,6 +90,7 @@ impl ExtendedKalmanFilter {
     /// A gate probability outside `(0, 1)`; the filter is unchanged.
     pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
         self.gate = InnovationGate::new(checks, self.m)?;
+        self.subsets.clear();
         Ok(())
     }
 
@@ -213,6 +218,49 @@ impl ExtendedKalmanFilter {
         self.steps += 1;
         Ok(&self.est)
     }
+
+    /// One step with the outputs `measured[i]` only (module `partial`): the rows of `h` and `H`,
+    /// the sub-block `R_SS`, the gate with `|S|` degrees of freedom; none measured is
+    /// [`ExtendedKalmanFilter::predict`], all is [`ExtendedKalmanFilter::step`]. Unmeasured
+    /// entries of `y` are ignored. Allocation-free after the first step with that many measured.
+    ///
+    /// # Errors
+    /// As [`ExtendedKalmanFilter::step`]; a mask of another length.
+    pub fn step_partial<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
+        let k = measured_rows(measured, self.m, &mut self.subsets.rows)?;
+        if k == self.m {
+            return self.step(model, u, y);
+        }
+        if k == 0 {
+            check_measured(y, self.m, &[])?;
+            return self.predict(model, u);
+        }
+        check_vec("u", u, self.p)?;
+        check_measured(y, self.m, &self.subsets.rows)?;
+        self.predict_into_buffers(model, u)?;
+        model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
+        if !all_finite(self.y_pred.as_slice()) || !all_finite(self.h.as_slice()) {
+            return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
+        }
+        self.innov.copy_from(y);
+        self.innov -= &self.y_pred;
+        model.angles().wrap_outputs(self.innov.as_mut_slice());
+        let (n, checks, step) = (self.n, self.gate.checks(), self.steps + 1);
+        let (sub, rows) = self.subsets.get(k, || GaussianSubset::new(n, k, checks))?;
+        sub.gather(rows, &self.h, &self.r, &self.innov);
+        let nis = sub.upd.compute(&self.x_pred, &self.p_pred, &sub.h, &sub.r, &sub.innov, sub.gate.is_on())?;
+        sub.upd.commit_gated(&sub.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        self.u_last.copy_from(u);
+        self.steps += 1;
+        Ok(&self.est)
+    }
 }
 
-forward_estimator!(impl<> for ExtendedKalmanFilter, DifferentiableModel, GaussianEstimate);
+forward_estimator!(impl<> for ExtendedKalmanFilter, DifferentiableModel, GaussianEstimate, partial);

@@ -17,6 +17,7 @@ use models::{Angles, Dims, LinearModel};
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
+use crate::partial::{GaussianSubset, Subsets, check_measured, measured_rows};
 use crate::traits::forward_estimator;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::all_finite;
@@ -72,6 +73,8 @@ pub struct KalmanFilter {
     innov: DVector<f64>,
     upd: GaussianUpdate,
     gate: InnovationGate,
+    /// The updates of partial measurements, by measured count.
+    subsets: Subsets<GaussianSubset>,
     /// Steps (predictions, with or without their update) so far.
     steps: u64,
 }
@@ -131,6 +134,7 @@ impl KalmanFilter {
             innov: DVector::zeros(m),
             upd: GaussianUpdate::new(n, m),
             gate: InnovationGate::new(DataChecks::default(), m)?,
+            subsets: Subsets::new(m),
             steps: 0,
         })
     }
@@ -142,6 +146,7 @@ impl KalmanFilter {
     /// A gate probability outside `(0, 1)`; the filter is unchanged.
     pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
         self.gate = InnovationGate::new(checks, self.m)?;
+        self.subsets.clear();
         Ok(())
     }
 
@@ -332,6 +337,44 @@ impl KalmanFilter {
     }
 }
 
+impl KalmanFilter {
+    /// One step with the outputs `measured[i]` only (module `partial`): the rows `C_S`, the
+    /// sub-block `R_SS`, the innovation gate with `|S|` degrees of freedom; none measured is
+    /// [`KalmanFilter::predict`], all is [`KalmanFilter::step`]. Unmeasured entries of `y` are
+    /// ignored. Allocation-free after the first step with that many outputs measured.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::step`]; a mask of another length.
+    pub fn step_partial<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        let k = measured_rows(measured, self.m, &mut self.subsets.rows)?;
+        if k == self.m {
+            return self.step(model, u, y);
+        }
+        if k == 0 {
+            check_measured(y, self.m, &[])?;
+            return self.predict(model, u);
+        }
+        check_vec("u", u, self.p)?;
+        check_measured(y, self.m, &self.subsets.rows)?;
+        self.predict_into_buffers(model.a(), model.b(), u);
+        self.innovate(model.c(), y, model.angles());
+        let (n, checks, step) = (self.n, self.gate.checks(), self.steps + 1);
+        let (sub, rows) = self.subsets.get(k, || GaussianSubset::new(n, k, checks))?;
+        sub.gather(rows, model.c(), &self.r, &self.innov);
+        let nis = sub.upd.compute(&self.x_pred, &self.p_pred, &sub.h, &sub.r, &sub.innov, sub.gate.is_on())?;
+        sub.upd.commit_gated(&sub.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        self.steps += 1;
+        Ok(&self.est)
+    }
+}
+
 impl Estimate for GaussianEstimate {
     fn kind(&self) -> EstimateKind {
         EstimateKind::Gaussian
@@ -353,4 +396,4 @@ impl Estimate for GaussianEstimate {
     }
 }
 
-forward_estimator!(impl<> for KalmanFilter, LinearModel, GaussianEstimate);
+forward_estimator!(impl<> for KalmanFilter, LinearModel, GaussianEstimate, partial);

@@ -78,6 +78,7 @@ pub mod error;
 mod gaussian_update;
 pub mod kalman;
 pub mod mhe;
+mod partial;
 pub mod registry;
 pub mod smf;
 mod status;

@@ -644,6 +644,28 @@ impl AnyEstimator {
         self.inner.update_dyn(model, y)
     }
 
+    /// A step in which only the outputs with `measured[i]` were taken (see
+    /// [`Estimator::step_partial`](crate::Estimator::step_partial)); an estimator that updates
+    /// with every output at once refuses a proper subset by its registry name.
+    ///
+    /// # Errors
+    /// As [`AnyEstimator::step`].
+    pub fn step_partial(
+        &mut self,
+        model: &dyn AnyModel,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&dyn Estimate, EstimatorError> {
+        let name = self.entry.name;
+        self.inner.step_partial_dyn(model, u, y, measured).map_err(|e| match e {
+            EstimatorError::Unsupported { estimator: "this estimator", operation, reason } => {
+                EstimatorError::Unsupported { estimator: name, operation, reason }
+            }
+            e => e,
+        })
+    }
+
     /// The current estimate.
     #[must_use]
     pub fn estimate(&self) -> &dyn Estimate {
@@ -679,6 +701,15 @@ impl<'m> DynEstimator<dyn AnyModel + 'm> for AnyEstimator {
     }
     fn update_dyn(&mut self, model: &(dyn AnyModel + 'm), y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError> {
         self.inner.update_dyn(model, y)
+    }
+    fn step_partial_dyn(
+        &mut self,
+        model: &(dyn AnyModel + 'm),
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&dyn Estimate, EstimatorError> {
+        self.step_partial(model, u, y, measured)
     }
     fn estimate_dyn(&self) -> &dyn Estimate {
         self.inner.estimate_dyn()
@@ -839,6 +870,16 @@ macro_rules! capability_adapter {
             ) -> Result<&dyn Estimate, EstimatorError> {
                 let m = $get(model).ok_or_else(|| missing(self.name, $capability, model))?;
                 self.inner.update_dyn(m, y)
+            }
+            fn step_partial_dyn(
+                &mut self,
+                model: &(dyn AnyModel + 'm),
+                u: &DVector<f64>,
+                y: &DVector<f64>,
+                measured: &[bool],
+            ) -> Result<&dyn Estimate, EstimatorError> {
+                let m = $get(model).ok_or_else(|| missing(self.name, $capability, model))?;
+                self.inner.step_partial_dyn(m, u, y, measured)
             }
             fn estimate_dyn(&self) -> &dyn Estimate {
                 self.inner.estimate_dyn()

@@ -103,6 +103,43 @@ pub trait Estimator<M: ?Sized> {
     /// # Errors
     /// As [`Estimator::step`]; the state is unchanged.
     fn update(&mut self, model: &M, y: &DVector<f64>) -> Result<&Self::Estimate, EstimatorError>;
+    /// One step in which only the outputs with `measured[i]` were taken (sensors at their own
+    /// rates, dropouts): the update uses those rows of `h` and the sub-block of `R` (for a
+    /// set-valued noise its projection onto them); unmeasured entries of `y` are ignored and may
+    /// be NaN. Every output measured is [`Estimator::step`], none is [`Estimator::predict`].
+    ///
+    /// The default does those two and refuses a proper subset
+    /// ([`EstimatorError::Unsupported`]); the Kalman filter, the EKF, the UKF and the
+    /// constrained-zonotope filters update with any subset.
+    ///
+    /// # Errors
+    /// As [`Estimator::step`]; a mask of another length than `y`.
+    fn step_partial(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&Self::Estimate, EstimatorError> {
+        if measured.len() != y.len() {
+            return Err(EstimatorError::DimensionMismatch {
+                what: "measured",
+                expected: y.len(),
+                found: measured.len(),
+            });
+        }
+        if measured.iter().all(|&b| b) {
+            self.step(model, u, y)
+        } else if measured.iter().all(|&b| !b) {
+            self.predict(model, u)
+        } else {
+            Err(EstimatorError::Unsupported {
+                estimator: "this estimator",
+                operation: "a partial measurement",
+                reason: "it updates with every output at once; use kf, ekf, ukf, czf or czf-nl, or give every output",
+            })
+        }
+    }
     /// The current estimate.
     fn estimate(&self) -> &Self::Estimate;
     /// The lengths of the state, of the input `u` and of the measurement `y` the estimator
@@ -137,6 +174,17 @@ pub trait DynEstimator<M: ?Sized> {
     /// # Errors
     /// As [`Estimator::update`].
     fn update_dyn(&mut self, model: &M, y: &DVector<f64>) -> Result<&dyn Estimate, EstimatorError>;
+    /// A step with a partial measurement (see [`Estimator::step_partial`]).
+    ///
+    /// # Errors
+    /// As [`Estimator::step_partial`].
+    fn step_partial_dyn(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&dyn Estimate, EstimatorError>;
     /// The current estimate.
     fn estimate_dyn(&self) -> &dyn Estimate;
     /// The lengths of the state, the input and the measurement.
@@ -167,6 +215,18 @@ impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
             Err(e) => Err(e),
         }
     }
+    fn step_partial_dyn(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&dyn Estimate, EstimatorError> {
+        match self.step_partial(model, u, y, measured) {
+            Ok(e) => Ok(e),
+            Err(e) => Err(e),
+        }
+    }
     fn estimate_dyn(&self) -> &dyn Estimate {
         self.estimate()
     }
@@ -183,6 +243,22 @@ impl<M: ?Sized, E: Estimator<M>> DynEstimator<M> for E {
 /// `forward_estimator!(impl<S: UpdateSolver> for Filter<S>, LinearModel, Estimate)`.
 macro_rules! forward_estimator {
     (impl<$($g:ident: $gb:path),*> for $ty:ty, $bound:path, $est:ty) => {
+        $crate::traits::forward_estimator!(@impl [$($g: $gb),*] $ty, $bound, $est, {});
+    };
+    (impl<$($g:ident: $gb:path),*> for $ty:ty, $bound:path, $est:ty, partial) => {
+        $crate::traits::forward_estimator!(@impl [$($g: $gb),*] $ty, $bound, $est, {
+            fn step_partial(
+                &mut self,
+                model: &M,
+                u: &nalgebra::DVector<f64>,
+                y: &nalgebra::DVector<f64>,
+                measured: &[bool],
+            ) -> Result<&$est, $crate::error::EstimatorError> {
+                <$ty>::step_partial(self, model, u, y, measured)
+            }
+        });
+    };
+    (@impl [$($g:ident: $gb:path),*] $ty:ty, $bound:path, $est:ty, { $($extra:tt)* }) => {
         impl<$($g: $gb,)* M: $bound + ?Sized> $crate::traits::Estimator<M> for $ty {
             type Estimate = $est;
             fn step(
@@ -208,6 +284,7 @@ macro_rules! forward_estimator {
             fn set_data_checks(&mut self, checks: $crate::checks::DataChecks) -> Result<(), $crate::error::EstimatorError> {
                 <$ty>::set_data_checks(self, checks)
             }
+            $($extra)*
         }
     };
 }

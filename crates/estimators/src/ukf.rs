@@ -47,11 +47,12 @@
 use nalgebra::{DMatrix, DVector};
 
 use dense_kernels as dense;
-use models::{Dims, DiscreteModel, wrap_angle};
+use models::{Angles, Dims, DiscreteModel, wrap_angle};
 
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, data_check, nis};
+use crate::partial::{self, Subsets, check_measured, measured_rows};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
@@ -176,8 +177,57 @@ pub struct UnscentedKalmanFilter {
     /// The input of the last prediction, for `h` in a following update.
     u_last: DVector<f64>,
     gate: InnovationGate,
+    /// The update's buffers for partial measurements, by measured count.
+    subsets: Subsets<MeasurementBuffers>,
     /// Steps (predictions, with or without their update) so far.
     steps: u64,
+}
+
+/// The buffers of the update sized by the measured outputs (`k` of `m`): swapped with the
+/// filter's own for a partial measurement ([`UnscentedKalmanFilter::step_partial`]).
+#[derive(Debug, Clone)]
+struct MeasurementBuffers {
+    zsig: DMatrix<f64>,
+    z_pred: DVector<f64>,
+    pzz: DMatrix<f64>,
+    pzz_chol: DMatrix<f64>,
+    pxz: DMatrix<f64>,
+    k: DMatrix<f64>,
+    h_stat: DMatrix<f64>,
+    kr: DMatrix<f64>,
+    dev_z: DMatrix<f64>,
+    dev_zw: DMatrix<f64>,
+    dz: DVector<f64>,
+    innov: DVector<f64>,
+    r: DMatrix<f64>,
+    gate: InnovationGate,
+    /// The measured entries of `y`, and the positions of the angle outputs among them.
+    y: DVector<f64>,
+    angle_outputs: Vec<usize>,
+}
+
+impl MeasurementBuffers {
+    fn new(n: usize, k: usize, m: usize, checks: DataChecks) -> Result<Self, EstimatorError> {
+        let s = 2 * n + 1;
+        Ok(Self {
+            zsig: DMatrix::zeros(k, s),
+            z_pred: DVector::zeros(k),
+            pzz: DMatrix::zeros(k, k),
+            pzz_chol: DMatrix::zeros(k, k),
+            pxz: DMatrix::zeros(n, k),
+            k: DMatrix::zeros(n, k),
+            h_stat: DMatrix::zeros(k, n),
+            kr: DMatrix::zeros(n, k),
+            dev_z: DMatrix::zeros(k, s),
+            dev_zw: DMatrix::zeros(k, s),
+            dz: DVector::zeros(k),
+            innov: DVector::zeros(k),
+            r: DMatrix::zeros(k, k),
+            gate: InnovationGate::new(checks, k)?,
+            y: DVector::zeros(k),
+            angle_outputs: Vec::with_capacity(m),
+        })
+    }
 }
 
 /// Copies the symmetric `src` into `dst` and factorises it there; `true` if it is positive
@@ -309,6 +359,7 @@ impl UnscentedKalmanFilter {
             innov: DVector::zeros(m),
             u_last: DVector::zeros(inputs),
             gate: InnovationGate::new(DataChecks::default(), m)?,
+            subsets: Subsets::new(m),
             steps: 0,
         })
     }
@@ -320,6 +371,7 @@ impl UnscentedKalmanFilter {
     /// A gate probability outside `(0, 1)`; the filter is unchanged.
     pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
         self.gate = InnovationGate::new(checks, self.m)?;
+        self.subsets.clear();
         Ok(())
     }
 
@@ -512,6 +564,81 @@ impl UnscentedKalmanFilter {
         Ok(&self.est)
     }
 
+    /// One step with the outputs `measured[i]` only (module `partial`): the sigma points mapped
+    /// through the whole `h`, then the update (30)–(32) with their measured rows, `R_SS` and the
+    /// gate with `|S|` degrees of freedom; none measured is [`UnscentedKalmanFilter::predict`],
+    /// all is [`UnscentedKalmanFilter::step`]. Unmeasured entries of `y` are ignored.
+    /// Allocation-free after the first step with that many outputs measured.
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::step`]; a mask of another length.
+    pub fn step_partial<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
+        let k = measured_rows(measured, self.m, &mut self.subsets.rows)?;
+        if k == self.m {
+            return self.step(model, u, y);
+        }
+        if k == 0 {
+            check_measured(y, self.m, &[])?;
+            return self.predict(model, u);
+        }
+        check_vec("u", u, self.p)?;
+        check_measured(y, self.m, &self.subsets.rows)?;
+        let (n, m, checks, step) = (self.n, self.m, self.gate.checks(), self.steps + 1);
+        self.subsets.get(k, || MeasurementBuffers::new(n, k, m, checks))?;
+        let (guarded_prediction, saved_chol) = (self.predict_into_buffers(model, u)?, self.chol_current);
+        self.sigma_outputs(model, Some(u))?;
+        let Some(mut sub) = self.subsets.take(k) else {
+            return Err(EstimatorError::NumericalFailure("the partial update's buffers are missing"));
+        };
+        let rows = &self.subsets.rows;
+        partial::gather_rows(&self.zsig, rows, &mut sub.zsig);
+        partial::gather_block(&self.r, rows, &mut sub.r);
+        for (a, &i) in rows.iter().enumerate() {
+            sub.y[a] = y[i];
+        }
+        partial::angle_positions(rows, model.angles().outputs, &mut sub.angle_outputs);
+        self.swap_measurement(&mut sub);
+        let y_sub = std::mem::replace(&mut sub.y, DVector::zeros(0));
+        let angles = Angles::new(model.angles().states, &sub.angle_outputs);
+        let result = self.update_core(&y_sub, angles, guarded_prediction, step).map(|_| ());
+        self.swap_measurement(&mut sub);
+        sub.y = y_sub;
+        self.subsets.put(k, sub);
+        if let Err(e) = result {
+            self.chol_current = saved_chol;
+            return Err(e);
+        }
+        self.u_last.copy_from(u);
+        self.steps += 1;
+        Ok(&self.est)
+    }
+
+    /// Exchanges the update's measurement-sized buffers with `b`'s.
+    fn swap_measurement(&mut self, b: &mut MeasurementBuffers) {
+        use std::mem::swap;
+        swap(&mut self.zsig, &mut b.zsig);
+        swap(&mut self.z_pred, &mut b.z_pred);
+        swap(&mut self.pzz, &mut b.pzz);
+        swap(&mut self.pzz_chol, &mut b.pzz_chol);
+        swap(&mut self.pxz, &mut b.pxz);
+        swap(&mut self.k, &mut b.k);
+        swap(&mut self.h_stat, &mut b.h_stat);
+        swap(&mut self.kr, &mut b.kr);
+        swap(&mut self.dev_z, &mut b.dev_z);
+        swap(&mut self.dev_zw, &mut b.dev_zw);
+        swap(&mut self.dz, &mut b.dz);
+        swap(&mut self.innov, &mut b.innov);
+        swap(&mut self.r, &mut b.r);
+        swap(&mut self.gate, &mut b.gate);
+    }
+
     /// Replaces the state by `(mean, covariance)` (for an arrival-cost update that starts from
     /// another estimator's estimate). Allocation-free; on error the filter is unchanged.
     ///
@@ -573,9 +700,20 @@ impl UnscentedKalmanFilter {
         guarded_prediction: bool,
         step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        let (n, m, s) = (self.n, self.m, 2 * self.n + 1);
+        self.sigma_outputs(model, u)?;
+        let angles = model.angles();
+        self.update_core(y, angles, guarded_prediction, step)
+    }
+
+    /// Redraws the sigma points from `(x⁻, P⁻)` and maps them through `h` (29) into `zsig`
+    /// (`u`: the input for `h`, `None` for the last prediction's).
+    fn sigma_outputs<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: Option<&DVector<f64>>,
+    ) -> Result<(), EstimatorError> {
+        let (n, m, s) = (self.n, self.zcol.len(), 2 * self.n + 1);
         let u = u.unwrap_or(&self.u_last);
-        // Redraw from (x⁻, P⁻) and map through h (29).
         Self::draw(&mut self.sig, &self.x_pred, &self.p_pred_chol, self.gamma);
         for j in 0..s {
             self.xcol.as_mut_slice().copy_from_slice(&self.sig.as_slice()[j * n..(j + 1) * n]);
@@ -585,7 +723,19 @@ impl UnscentedKalmanFilter {
         if self.zsig.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's output at a sigma point is not finite"));
         }
-        weighted_mean(&self.zsig, (self.wm0, self.wi), &mut self.z_pred, model.angles().outputs);
+        Ok(())
+    }
+
+    /// The update (30)–(32) from the sigma points' images in `zsig` and the measurement `y`
+    /// (the rows the measurement buffers hold; `angles.outputs` indexes them).
+    fn update_core(
+        &mut self,
+        y: &DVector<f64>,
+        angles: Angles<'_>,
+        guarded_prediction: bool,
+        step: u64,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        weighted_mean(&self.zsig, (self.wm0, self.wi), &mut self.z_pred, angles.outputs);
         // Pzz, Pxz (30)–(31); guard: about the central point. X₀ = x⁻: the sigma points'
         // centre is the same in both forms, and the first column of `dev_x` is exactly 0.
         deviations(
@@ -594,20 +744,13 @@ impl UnscentedKalmanFilter {
             (self.wc0, self.wi),
             &mut self.dev_x,
             &mut self.dev_xw,
-            model.angles().states,
+            angles.states,
         );
         let mut guarded_innovation = false;
         let mut ok = false;
         for attempt in 0..2 {
             let centre = (attempt == 0).then_some(&self.z_pred);
-            deviations(
-                &self.zsig,
-                centre,
-                (self.wc0, self.wi),
-                &mut self.dev_z,
-                &mut self.dev_zw,
-                model.angles().outputs,
-            );
+            deviations(&self.zsig, centre, (self.wc0, self.wi), &mut self.dev_z, &mut self.dev_zw, angles.outputs);
             self.pzz.copy_from(&self.r);
             dense::mul_nt(1.0, &self.dev_zw, &self.dev_z, 1.0, &mut self.pzz);
             dense::mul_nt(1.0, &self.dev_x, &self.dev_zw, 0.0, &mut self.pxz);
@@ -623,7 +766,7 @@ impl UnscentedKalmanFilter {
         }
         self.innov.copy_from(y);
         self.innov -= &self.z_pred;
-        model.angles().wrap_outputs(self.innov.as_mut_slice());
+        angles.wrap_outputs(self.innov.as_mut_slice());
         // The innovation gate on Pzz, before anything changes.
         let nis = if self.gate.is_on() { nis(&self.pzz_chol, &self.innov, &mut self.dz) } else { f64::NAN };
         let verdict = self.gate.judge(nis, step)?;
@@ -688,7 +831,7 @@ impl UnscentedKalmanFilter {
     }
 }
 
-forward_estimator!(impl<> for UnscentedKalmanFilter, DiscreteModel, GaussianEstimate);
+forward_estimator!(impl<> for UnscentedKalmanFilter, DiscreteModel, GaussianEstimate, partial);
 
 #[cfg(test)]
 mod tests {

@@ -77,15 +77,24 @@ pub struct DataRow {
     pub k: u64,
     /// `u_k` (p entries).
     pub u: DVector<f64>,
-    /// `y_{k+1}` (m entries).
+    /// `y_{k+1}` (m entries; 0 where not measured).
     pub y: DVector<f64>,
+    /// Which outputs the row measured (an empty cell is not measured, where the reader allows it:
+    /// [`DataReader::set_allow_empty_outputs`]).
+    pub measured: Vec<bool>,
 }
 
 impl DataRow {
-    /// A zero row for `p` inputs and `m` outputs.
+    /// A zero row for `p` inputs and `m` outputs, every output measured.
     #[must_use]
     pub fn zeros(p: usize, m: usize) -> Self {
-        Self { k: 0, u: DVector::zeros(p), y: DVector::zeros(m) }
+        Self { k: 0, u: DVector::zeros(p), y: DVector::zeros(m), measured: vec![true; m] }
+    }
+
+    /// Whether every output was measured.
+    #[must_use]
+    pub fn complete(&self) -> bool {
+        self.measured.iter().all(|&b| b)
     }
 }
 
@@ -112,6 +121,8 @@ pub struct DataReader<R: Read> {
     allow_gaps: bool,
     /// The most missing steps accepted at one gap.
     max_gap: u64,
+    /// Whether an output cell may be empty (a partial measurement).
+    allow_empty_outputs: bool,
 }
 
 impl DataReader<File> {
@@ -230,6 +241,7 @@ impl<R: Read> DataReader<R> {
             last_k: None,
             allow_gaps: false,
             max_gap: crate::limits::DEFAULT_MAX_GAP,
+            allow_empty_outputs: false,
         };
         r.read_header()?;
         Ok(r)
@@ -239,6 +251,12 @@ impl<R: Read> DataReader<R> {
     /// missing steps (`port-est filter --gaps bridge`).
     pub fn set_allow_gaps(&mut self, allow: bool) {
         self.allow_gaps = allow;
+    }
+
+    /// Whether an output cell may be empty: the output was not measured at that row (a partial
+    /// measurement, [`DataRow::measured`]). Off by default: an empty cell is an error at its place.
+    pub fn set_allow_empty_outputs(&mut self, allow: bool) {
+        self.allow_empty_outputs = allow;
     }
 
     /// The most missing steps accepted at one gap when gaps are allowed (default
@@ -402,6 +420,23 @@ impl<R: Read> DataReader<R> {
         row.k = k;
         for j in 1..n {
             let s = &self.record[j];
+            if s.trim().is_empty() {
+                if j <= self.p {
+                    let message = format!("{} is empty: an input must be given at every row", self.names[j]);
+                    return Err(Error::at(self.locate(Some(j)), message));
+                }
+                if !self.allow_empty_outputs {
+                    let message = format!(
+                        "{} is empty: this command needs every output at every row (`port-est filter` takes \
+                         partial measurements)",
+                        self.names[j]
+                    );
+                    return Err(Error::at(self.locate(Some(j)), message));
+                }
+                row.y[j - 1 - self.p] = 0.0;
+                row.measured[j - 1 - self.p] = false;
+                continue;
+            }
             let v = match s.parse::<f64>() {
                 Ok(v) if v.is_finite() => v,
                 Ok(_) => {
@@ -417,6 +452,7 @@ impl<R: Read> DataReader<R> {
                 row.u[j - 1] = v;
             } else {
                 row.y[j - 1 - self.p] = v;
+                row.measured[j - 1 - self.p] = true;
             }
         }
         self.rows += 1;

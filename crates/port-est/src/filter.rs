@@ -128,6 +128,7 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (p, m) = (model.inputs(), entry.measurement_len(model.outputs()));
     let mut data = DataReader::open_named(&options.input, p, m, model.column_names())?;
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
+    data.set_allow_empty_outputs(true);
     data.set_max_gap(options.limits.max_gap);
     let mut tally = StatusTally::default();
     let policy = (options.status, options.checks);
@@ -291,7 +292,10 @@ fn run_filter_into<R: Read, W: Write>(
             let message = format!("k = {} is too large (the output row is labelled k + 1)", row.k);
             return Err(Error::at(data.locate(Some(0)), message));
         };
-        let e = match est.step(sm, &row.u, &row.y) {
+        let complete = row.complete();
+        let stepped =
+            if complete { est.step(sm, &row.u, &row.y) } else { est.step_partial(sm, &row.u, &row.y, &row.measured) };
+        let e = match stepped {
             Ok(e) => e,
             Err(EstimatorError::NumericalFailure(what)) => {
                 let last_u = last.as_ref().map(|(_, u)| u);
@@ -307,6 +311,18 @@ fn run_filter_into<R: Read, W: Write>(
         enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
         write!(out, "{label}").map_err(wio)?;
         columns.write(out, e).map_err(wio)?;
+        if !complete {
+            // A partial measurement: the status says which outputs the step used.
+            let names = data.columns();
+            let used: Vec<&str> = row
+                .measured
+                .iter()
+                .enumerate()
+                .filter(|&(_, &b)| b)
+                .map(|(i, _)| names.get(1 + model.inputs() + i).map_or("?", String::as_str))
+                .collect();
+            write!(out, "+measured:{}", used.join(";")).map_err(wio)?;
+        }
         writeln!(out).map_err(wio)?;
         tally.record(e.status());
         largest.observe(&row, model.outputs(), data);

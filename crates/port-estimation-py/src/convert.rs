@@ -44,6 +44,54 @@ pub fn vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<DVecto
     vector_with(obj, what, len, false)
 }
 
+/// A measurement of `len` outputs that may be partial: a NumPy masked array (masked entries were
+/// not measured), or `measured` (a boolean array-like of length `len`, True where measured), not
+/// both. Returns `y` with its unmeasured entries set to 0 (their values, NaN included, are
+/// ignored) and the mask, `None` when every output was measured and no mask was given.
+pub fn measurement(
+    obj: &Bound<'_, PyAny>,
+    measured: Option<&Bound<'_, PyAny>>,
+    len: usize,
+) -> PyResult<(DVector<f64>, Option<Vec<bool>>)> {
+    let py = obj.py();
+    let ma = py.import("numpy.ma")?;
+    let masked: bool = ma.call_method1("isMaskedArray", (obj,))?.extract()?;
+    let mask = match (masked, measured) {
+        (true, Some(_)) => return Err(value_error("y: give a masked array or measured=, not both")),
+        (false, None) => return Ok((vector(obj, "y", len)?, None)),
+        (true, None) => {
+            let hidden: Vec<bool> =
+                ma.call_method1("getmaskarray", (obj,))?.call_method0("ravel")?.call_method0("tolist")?.extract()?;
+            hidden.into_iter().map(|h| !h).collect::<Vec<bool>>()
+        }
+        (false, Some(m)) => {
+            let a = py.import("numpy")?.call_method1("asarray", (m,))?;
+            let kind: String = a.getattr("dtype")?.getattr("kind")?.extract()?;
+            if kind != "b" {
+                return Err(value_error(format!("measured must be an array of booleans, got dtype kind {kind:?}")));
+            }
+            a.call_method0("ravel")?.call_method0("tolist")?.extract()?
+        }
+    };
+    if mask.len() != len {
+        return Err(value_error(format!("measured must have {len} entries (one per output), got {}", mask.len())));
+    }
+    let data = if masked { obj.call_method1("filled", (0.0,))? } else { obj.clone() };
+    let a = array(&data, "y")?;
+    let values: Vec<f64> = a.as_array().iter().copied().collect();
+    if values.len() != len || a.shape().len() > 2 {
+        return Err(value_error(format!(
+            "y must have {len} entries (shape ({len},)), got shape {}",
+            shape_text(a.shape())
+        )));
+    }
+    let y: Vec<f64> = values.iter().zip(&mask).map(|(&v, &m)| if m { v } else { 0.0 }).collect();
+    if let Some(i) = y.iter().position(|v| !v.is_finite()) {
+        return Err(value_error(format!("y has a non-finite measured entry (NaN or infinity) at index {i}")));
+    }
+    Ok((DVector::from_vec(y), Some(mask)))
+}
+
 /// A bound vector of length `len` (as [`vector`]; entries may be ±∞, not NaN).
 pub fn bound_vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<DVector<f64>> {
     vector_with(obj, what, len, true)

@@ -12,7 +12,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{mat_out, square, table, vec_out, vector};
+use crate::convert::{mat_out, measurement, square, table, vec_out, vector};
 use crate::errors::{Guarded, broken, estimator_error, guard, no_panic, panicked, value_error};
 use crate::estimate::Estimate;
 use crate::model::{Model, SharedModel};
@@ -103,6 +103,8 @@ enum Call {
     Predict(DVector<f64>),
     Update(DVector<f64>),
     Step(DVector<f64>, DVector<f64>),
+    /// A step with the outputs of the mask only.
+    Partial(DVector<f64>, DVector<f64>, Vec<bool>),
 }
 
 /// The estimator's initial data from keywords (filterpy's defaults for what is not given).
@@ -219,6 +221,7 @@ impl Estimator {
                     Call::Predict(u) => est.predict(model.as_ref(), u),
                     Call::Update(y) => est.update(model.as_ref(), y),
                     Call::Step(u, y) => est.step(model.as_ref(), u, y),
+                    Call::Partial(u, y, measured) => est.step_partial(model.as_ref(), u, y, measured),
                 };
                 Some(r.map(Estimate::of))
             })
@@ -303,18 +306,27 @@ impl Estimator {
 
     /// One step: predict with ``u`` (None: zeros), update with ``y``. Either both happen or, on an
     /// exception, neither.
-    #[pyo3(signature = (u, y, *, model = None))]
+    ///
+    /// A partial measurement (sensors at their own rates, a dropout): ``y`` as a ``numpy.ma``
+    /// masked array (masked entries were not measured) or ``measured=`` a boolean array, True where
+    /// measured. The update uses the measured rows of ``h`` and the sub-block of ``R``; nothing
+    /// measured is a prediction. The Kalman filter, EKF, UKF and the constrained-zonotope filters
+    /// take any subset; the others only all or nothing. NaN stays an error in a measured entry.
+    #[pyo3(signature = (u, y, *, measured = None, model = None))]
     fn step(
         &self,
         py: Python<'_>,
         u: Option<&Bound<'_, PyAny>>,
         y: &Bound<'_, PyAny>,
+        measured: Option<&Bound<'_, PyAny>>,
         model: Option<&Bound<'_, Model>>,
     ) -> PyResult<Estimate> {
         no_panic(|| {
             let u = self.input(u)?;
-            let y = vector(y, "y", self.measurement_len())?;
-            self.call(py, model, Call::Step(u, y))
+            match measurement(y, measured, self.measurement_len())? {
+                (y, None) => self.call(py, model, Call::Step(u, y)),
+                (y, Some(mask)) => self.call(py, model, Call::Partial(u, y, mask)),
+            }
         })
     }
 

@@ -45,6 +45,20 @@ pub(crate) struct MeanValue {
     pub(crate) p: Vec<f64>,
 }
 
+impl MeanValue {
+    /// The extension of the outputs `rows` only (a partial measurement).
+    pub(crate) fn select(&self, rows: &[usize]) -> Self {
+        let n = self.p.len();
+        Self {
+            m: DMatrix::from_fn(rows.len(), n, |a, j| self.m[(rows[a], j)]),
+            e: rows.iter().map(|&i| self.e[i]).collect(),
+            jacobian: rows.iter().flat_map(|&i| self.jacobian[i * n..(i + 1) * n].iter().copied()).collect(),
+            value: rows.iter().map(|&i| self.value[i]).collect(),
+            p: self.p.clone(),
+        }
+    }
+}
+
 /// Why an extension could not be formed (the caller turns it into `GuaranteeLost`).
 pub(crate) type Unbounded = String;
 

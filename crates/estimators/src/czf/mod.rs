@@ -28,6 +28,7 @@ use models::{Dims, SecondOrderModel, TaylorEnclosure};
 use crate::angle_branch::{self, Branch};
 use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
+use crate::partial::{self, check_measured, measured_rows};
 use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
 use extension::{Function, boxed, contract_box, mean_value, predict_box};
 
@@ -449,13 +450,37 @@ impl ConstrainedZonotopeFilter {
         observer: Vec<Interval>,
         y: &DVector<f64>,
         step: u64,
+        rows: Option<&[usize]>,
     ) -> Result<Updated, EstimatorError> {
-        let m = self.dims.outputs;
-        crate::validate::check_vec("y", y, m)?;
-        crate::validate::check_finite("y", y.as_slice())?;
+        match rows {
+            None => {
+                crate::validate::check_vec("y", y, self.dims.outputs)?;
+                crate::validate::check_finite("y", y.as_slice())?;
+            }
+            Some(rows) => check_measured(y, self.dims.outputs, rows)?,
+        }
         let u = self.last_u.clone();
         let mv = mean_value(model, Function::Measurement, &x, &u, &mut self.h_enclosure)?
             .map_err(|reason| guarantee_lost(step, reason))?;
+        // A partial measurement: the measured rows of h's extension, of y and of V's generators
+        // (the projection of the zonotope V onto the measured outputs).
+        let (mv, y, v_generators, v_radius_full, angle_outputs) = match rows {
+            None => (mv, y.clone(), self.v_generators.clone(), self.v_radius.clone(), model.angles().outputs.to_vec()),
+            Some(rows) => {
+                let mut angles = Vec::new();
+                partial::angle_positions(rows, model.angles().outputs, &mut angles);
+                let mut g = DMatrix::zeros(rows.len(), self.v_generators.ncols());
+                partial::gather_rows(&self.v_generators, rows, &mut g);
+                (
+                    mv.select(rows),
+                    DVector::from_iterator(rows.len(), rows.iter().map(|&i| y[i])),
+                    g,
+                    rows.iter().map(|&i| self.v_radius[i]).collect(),
+                    angles,
+                )
+            }
+        };
+        let m = y.len();
         // Angle outputs on the branch of h's enclosure over the box (module `angle_branch`).
         let n = self.dims.states;
         let mut y_err = vec![0.0; m];
@@ -463,7 +488,7 @@ impl ConstrainedZonotopeFilter {
         let h_over_box =
             |i: usize| (0..n).fold(mv.value[i], |h, k| h + mv.jacobian[i * n + k] * (x[k] - Interval::point(mv.p[k])));
         let branch =
-            angle_branch::branch(model.angles().outputs, y, h_over_box, &self.v_radius, &mut y_used, &mut y_err, step)?;
+            angle_branch::branch(&angle_outputs, &y, h_over_box, &v_radius_full, &mut y_used, &mut y_err, step)?;
         let y = &y_used;
         // Y = (y − mid E_h) ⊕ □(rad E_h + rounding) ⊕ (−V).
         let mut yc = DVector::zeros(m);
@@ -479,8 +504,7 @@ impl ConstrainedZonotopeFilter {
         let v_radius: Vec<f64> =
             self.v_radius.iter().zip(&y_err).map(|(&v, &e)| if e > 0.0 { intervals::up(v + e) } else { v }).collect();
         let lost = |e: SetError| guarantee_lost(step, format!("the measurement update: {e}"));
-        let strip =
-            ConstrainedZonotope::zonotope(yc, -&self.v_generators).and_then(|s| s.add_box(&rad)).map_err(lost)?;
+        let strip = ConstrainedZonotope::zonotope(yc, -&v_generators).and_then(|s| s.add_box(&rad)).map_err(lost)?;
         let checked = self.checks.policy != InconsistencyPolicy::Off;
         let candidate = set.intersect(&mv.m, &strip).map_err(lost)?;
         let hull = candidate.interval_hull().map_err(lost)?;
@@ -565,7 +589,7 @@ impl ConstrainedZonotopeFilter {
         let step = self.step;
         let x = self.current_box();
         let observer = self.observer.clone();
-        let up = self.updated(model, self.estimate.set.clone(), x, observer, y, step)?;
+        let up = self.updated(model, self.estimate.set.clone(), x, observer, y, step, None)?;
         self.commit(up, step);
         Ok(&self.estimate)
     }
@@ -588,6 +612,46 @@ impl ConstrainedZonotopeFilter {
         crate::validate::check_finite("u", u.as_slice())?;
         crate::validate::check_vec("y", y, self.dims.outputs)?;
         crate::validate::check_finite("y", y.as_slice())?;
+        self.step_rows(model, u, y, None)
+    }
+
+    /// One step with the outputs `measured[i]` only (module `partial`): the predicted set met
+    /// with the strip of the measured rows of `h` and of `V`'s generators (`V` projected onto
+    /// them); none measured is [`ConstrainedZonotopeFilter::predict`], all is
+    /// [`ConstrainedZonotopeFilter::step`]. Unmeasured entries of `y` are ignored.
+    ///
+    /// # Errors
+    /// As [`ConstrainedZonotopeFilter::step`]; a mask of another length.
+    pub fn step_partial<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&ZonotopeEstimate, EstimatorError> {
+        self.check_model(model)?;
+        let mut rows = Vec::with_capacity(self.dims.outputs);
+        let k = measured_rows(measured, self.dims.outputs, &mut rows)?;
+        if k == self.dims.outputs {
+            return self.step(model, u, y);
+        }
+        check_measured(y, self.dims.outputs, &rows)?;
+        if k == 0 {
+            return self.predict(model, u);
+        }
+        crate::validate::check_vec("u", u, self.dims.inputs)?;
+        crate::validate::check_finite("u", u.as_slice())?;
+        self.step_rows(model, u, y, Some(&rows))
+    }
+
+    /// The step with the measured `rows` (`None`: all), its data checked.
+    fn step_rows<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        rows: Option<&[usize]>,
+    ) -> Result<&ZonotopeEstimate, EstimatorError> {
         let step = self.step + 1;
         let (set, observer) = self.predicted(model, u, step)?;
         // The predicted box: the hull of the predicted set with the observer and the bounds. It
@@ -599,7 +663,7 @@ impl ConstrainedZonotopeFilter {
         let status = StepStatus::unchecked(SolveOutcome::Predicted);
         let (_, x) = self.publish(&hull, observer, status, step)?;
         let saved_u = std::mem::replace(&mut self.last_u, u.clone());
-        let result = self.updated(model, set, x.clone(), x, y, step);
+        let result = self.updated(model, set, x.clone(), x, y, step, rows);
         match result {
             Ok(up) => {
                 self.commit(up, step);
@@ -631,4 +695,4 @@ fn h_is_affine<M: SecondOrderModel + ?Sized>(
     }))
 }
 
-crate::traits::forward_estimator!(impl<> for ConstrainedZonotopeFilter, SecondOrderModel, ZonotopeEstimate);
+crate::traits::forward_estimator!(impl<> for ConstrainedZonotopeFilter, SecondOrderModel, ZonotopeEstimate, partial);

@@ -1,0 +1,186 @@
+"""Partial measurements: a GNSS at 1 Hz beside a 10 Hz yaw-rate gyro (or speed sensor), with two
+GNSS dropouts of 30 s. Each step updates with the measured outputs only; the references are filterpy
+runs that set ``H`` (``hx``) and ``R`` to the measured subset at each step and skip the update when
+nothing was measured: the Kalman filter to 1e-10, the EKF to 1e-9, the UKF to 1e-6.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import assert_close
+from filterpy.kalman import ExtendedKalmanFilter as FilterpyEKF
+from filterpy.kalman import KalmanFilter as FilterpyKF
+from filterpy.kalman import MerweScaledSigmaPoints
+from filterpy.kalman import UnscentedKalmanFilter as FilterpyUKF
+
+import port_estimation as pe
+
+BICYCLE = """
+[model]
+states = ["x", "y", "psi", "v"]
+inputs = ["a", "delta"]
+outputs = ["gnss_x", "gnss_y", "gyro"]
+angles = ["psi"]
+ts = 0.1
+discretization = "rk4"
+
+[parameters]
+lf = 1.5
+lr = 2.0
+
+[definitions]
+beta = "atan(lr / (lf + lr) * tan(delta))"
+
+[dxdt]
+x = "v * cos(psi + beta)"
+y = "v * sin(psi + beta)"
+psi = "v / lr * sin(beta)"
+v = "a"
+
+[h]
+gnss_x = "x"
+gnss_y = "y"
+gyro = "v / lr * sin(beta)"
+"""
+
+STEPS = 1200
+DROPOUTS = [(300, 600), (800, 1100)]  # rows without GNSS: 30 s each at 10 Hz
+
+
+def _mask(k, m_gnss=2, m_fast=1):
+    gnss = k % 10 == 0 and not any(a <= k < b for a, b in DROPOUTS)
+    return np.array([gnss] * m_gnss + [True] * m_fast)
+
+
+def _bicycle_log(seed=4):
+    model = pe.Model.from_equations(BICYCLE, "bicycle.toml")
+    rng = np.random.default_rng(seed)
+    x = np.array([0.0, 0.0, 0.2, 5.0])
+    us, ys, masks = np.zeros((STEPS, 2)), np.zeros((STEPS, 3)), np.zeros((STEPS, 3), dtype=bool)
+    for k in range(STEPS):
+        us[k] = [0.3 * np.sin(k / 50), 0.15 * np.sin(k / 80)]
+        x = model.f(x, us[k]) + rng.normal(scale=[0.01, 0.01, 0.002, 0.02])
+        ys[k] = model.h(x, us[k]) + rng.normal(scale=[0.5, 0.5, 0.01])
+        masks[k] = _mask(k)
+        ys[k][~masks[k]] = np.nan
+    return model, us, ys, masks
+
+
+Q_BIKE = np.diag([1e-4, 1e-4, 4e-6, 4e-4])
+R_BIKE = np.diag([0.25, 0.25, 1e-4])
+X0_BIKE, P0_BIKE = np.array([0.5, -0.5, 0.15, 4.5]), np.diag([1.0, 1.0, 0.04, 1.0])
+
+
+def test_the_log_is_multi_rate_with_dropouts():
+    _, _, _, masks = _bicycle_log()
+    assert masks[:, 2].all() and 0 < masks[:, 0].sum() < STEPS // 10
+    assert not masks[300:600, 0].any() and not masks[800:1100, 0].any()
+
+
+def test_kalman_filter_equals_filterpy_with_the_measured_rows():
+    # Constant velocity in the plane: GNSS position at 1 Hz, wheel-speed velocity at 10 Hz.
+    dt = 0.1
+    a = np.block([[np.eye(2), dt * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
+    b, c = np.zeros((4, 0)), np.eye(4)
+    q, r = np.diag([1e-4, 1e-4, 1e-2, 1e-2]), np.diag([0.25, 0.25, 0.01, 0.01])
+    rng = np.random.default_rng(5)
+    x, x0, p0 = np.array([0.0, 0.0, 3.0, 1.0]), np.array([0.3, -0.2, 2.8, 1.1]), np.eye(4)
+    ours = pe.KalmanFilter(pe.Model(a, b, c), x0=x0, P0=p0, Q=q, R=r)
+    ref = FilterpyKF(dim_x=4, dim_z=4)
+    ref.x, ref.P, ref.F, ref.Q = x0.copy(), p0.copy(), a, q
+    for k in range(STEPS):
+        x = a @ x + rng.multivariate_normal(np.zeros(4), q)
+        y = c @ x + rng.multivariate_normal(np.zeros(4), r)
+        mask = _mask(k, m_gnss=2, m_fast=2)
+        e = ours.step(None, np.ma.masked_array(y, mask=~mask))
+        ref.predict()
+        ref.update(y[mask], R=r[np.ix_(mask, mask)], H=c[mask])
+        assert_close(e.center, ref.x, rtol=1e-10, what=f"x at step {k}")
+        assert_close(e.shape, ref.P, rtol=1e-10, what=f"P at step {k}")
+
+
+def test_ekf_equals_filterpy_with_the_measured_rows():
+    model, us, ys, masks = _bicycle_log()
+    ours = pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE)
+    ref = FilterpyEKF(dim_x=4, dim_z=3, dim_u=2)
+    ref.x, ref.P, ref.Q = X0_BIKE.copy(), P0_BIKE.copy(), Q_BIKE
+    for k, (u, y, mask) in enumerate(zip(us, ys, masks)):
+        e = ours.step(u, y, measured=mask)
+        ref.F = model.F(ref.x, u)
+        ref.P = ref.F @ ref.P @ ref.F.T + ref.Q
+        ref.x = model.f(ref.x, u)
+        if mask.any():
+            ref.update(
+                y[mask],
+                HJacobian=lambda x, u=u, mask=mask: model.H(x, u)[mask],
+                Hx=lambda x, u=u, mask=mask: model.h(x, u)[mask],
+                R=R_BIKE[np.ix_(mask, mask)],
+            )
+            assert e.status == "converged"
+        else:
+            assert e.status == "predicted"
+        assert_close(e.center, ref.x, rtol=1e-9, what=f"x at step {k}")
+        assert_close(e.shape, ref.P, rtol=1e-9, what=f"P at step {k}")
+
+
+def test_ukf_equals_filterpy_with_the_measured_rows():
+    model, us, ys, masks = _bicycle_log()
+    ours = pe.UnscentedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE, alpha=0.5, beta=2.0, kappa=0.0)
+    points = MerweScaledSigmaPoints(4, alpha=0.5, beta=2.0, kappa=0.0)
+    ref = FilterpyUKF(dim_x=4, dim_z=3, dt=None, fx=lambda x, dt, u: model.f(x, u), hx=None, points=points)
+    ref.x, ref.P, ref.Q = X0_BIKE.copy(), P0_BIKE.copy(), Q_BIKE
+    for k, (u, y, mask) in enumerate(zip(us, ys, masks)):
+        e = ours.step(u, np.ma.masked_invalid(y))
+        ref.predict(u=u)
+        if mask.any():
+            ref.update(y[mask], R=R_BIKE[np.ix_(mask, mask)], hx=lambda x, u=u, mask=mask: model.h(x, u)[mask])
+        assert_close(e.center, ref.x, rtol=1e-6, what=f"x at step {k}")
+        assert_close(e.shape, ref.P, rtol=1e-6, what=f"P at step {k}")
+
+
+def test_the_certified_filter_contains_the_truth_through_the_dropouts():
+    model = pe.Model.from_equations(BICYCLE, "bicycle.toml")
+    rng = np.random.default_rng(6)
+    w, v = np.array([0.01, 0.01, 0.002, 0.02]), np.array([0.5, 0.5, 0.01])
+    x = np.array([0.0, 0.0, 0.2, 5.0])
+    czf = pe.Estimator("czf-nl", model, x0=x + [0.5, -0.5, 0.05, 0.3], P0=np.diag([1.0, 1.0, 0.1, 0.5]), Q=w, R=v)
+    widths = []
+    for k in range(STEPS):
+        u = np.array([0.3 * np.sin(k / 50), 0.15 * np.sin(k / 80)])
+        x = model.f(x, u) + w * rng.choice([-1.0, 1.0], size=4)
+        y = model.h(x, u) + v * rng.choice([-1.0, 1.0], size=3)
+        e = czf.step(u, y, measured=_mask(k))
+        assert np.all(e.lower <= x) and np.all(x <= e.upper), f"step {k}: {x} outside [{e.lower}, {e.upper}]"
+        widths.append(e.upper[0] - e.lower[0])
+    # The position's width grows through a dropout and shrinks when the GNSS returns.
+    assert widths[599] > 2 * widths[299] and widths[700] < widths[599] / 2
+
+
+@pytest.mark.parametrize("name", ["smf", "mhe"])
+def test_estimators_that_need_every_output_refuse_a_partial_step_unchanged(name):
+    a, b, c = np.eye(2), np.zeros((2, 0)), np.eye(2)
+    box = {"w_lower": [-0.1] * 2, "w_upper": [0.1] * 2, "v_lower": [-0.5] * 2, "v_upper": [0.5] * 2}
+    settings = {"horizon": 5, **box} if name == "mhe" else {}
+    est = pe.Estimator(name, pe.Model(a, b, c), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2, **settings)
+    with pytest.raises(Exception, match=f"{name}.*partial"):
+        est.step(None, np.array([0.1, np.nan]), measured=np.array([True, False]))
+    assert_close(est.x, np.zeros(2))
+    # Nothing measured is a prediction, everything measured a step.
+    assert est.step(None, np.zeros(2), measured=np.array([False, False])).status.startswith("predicted")
+    est.step(None, np.zeros(2), measured=np.array([True, True]))
+
+
+def test_bad_masks_are_refused():
+    kf = pe.KalmanFilter(pe.Model(np.eye(2), np.zeros((2, 0)), np.eye(2)), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2)
+    with pytest.raises(ValueError, match="2 entries"):
+        kf.step(None, np.zeros(2), measured=np.array([True]))
+    with pytest.raises(ValueError, match="booleans"):
+        kf.step(None, np.zeros(2), measured=np.array([1, 0]))
+    with pytest.raises(ValueError, match="not both"):
+        kf.step(None, np.ma.masked_array(np.zeros(2), mask=[False, True]), measured=np.array([True, False]))
+    with pytest.raises(ValueError, match="non-finite measured entry"):
+        kf.step(None, np.array([np.nan, 0.0]), measured=np.array([True, False]))
+    with pytest.raises(ValueError, match="non-finite"):
+        kf.step(None, np.array([np.nan, 0.0]))
+    assert_close(kf.x, np.zeros(2))
