@@ -542,6 +542,23 @@ mod tests {
         result.unwrap_err().to_string()
     }
 
+    #[test]
+    fn empty_output_cells_are_unmeasured_only_where_allowed() {
+        let text = "k,u1,y1,y2\n0,1, ,2\n1,1,3,\n";
+        let p = Path::new("d.csv");
+        let mut r = DataReader::from_text(p, text, 1, 2).unwrap();
+        let mut row = DataRow::zeros(1, 2);
+        let e = r.read_row(&mut row).unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:2:") && e.contains("y1 is empty: this command needs every output"), "{e}");
+        let mut r = DataReader::from_text(p, text, 1, 2).unwrap();
+        r.set_allow_empty_outputs(true);
+        assert!(r.read_row(&mut row).unwrap());
+        assert_eq!((row.measured.clone(), row.y[1]), (vec![false, true], 2.0));
+        assert!(r.read_row(&mut row).unwrap());
+        assert_eq!((row.measured.clone(), row.y[0]), (vec![true, false], 3.0));
+        assert!(!row.complete());
+    }
+
     fn rows(text: &str) -> Vec<(u64, f64, f64)> {
         let mut r = DataReader::from_text(Path::new("d.csv"), text, 1, 1).unwrap();
         let mut row = DataRow::zeros(1, 1);

@@ -128,7 +128,6 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (p, m) = (model.inputs(), entry.measurement_len(model.outputs()));
     let mut data = DataReader::open_named(&options.input, p, m, model.column_names())?;
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
-    data.set_allow_empty_outputs(true);
     data.set_max_gap(options.limits.max_gap);
     let mut tally = StatusTally::default();
     let policy = (options.status, options.checks);
@@ -273,6 +272,8 @@ fn run_filter_into<R: Read, W: Write>(
     writeln!(out, "k{}", columns.header()).map_err(wio)?;
 
     let sm = model.any();
+    // An empty output cell: that output was not measured at that row (a partial step).
+    data.set_allow_empty_outputs(true);
     let mut row = DataRow::zeros(model.inputs(), entry.measurement_len(model.outputs()));
     let mut last: Option<(u64, DVector<f64>)> = None;
     let mut largest = LargestCell::default();
@@ -311,7 +312,7 @@ fn run_filter_into<R: Read, W: Write>(
         enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
         write!(out, "{label}").map_err(wio)?;
         columns.write(out, e).map_err(wio)?;
-        if !complete {
+        if !complete && row.measured.iter().any(|&b| b) {
             // A partial measurement: the status says which outputs the step used.
             let names = data.columns();
             let used: Vec<&str> = row

@@ -265,3 +265,53 @@ fn the_nonlinear_set_membership_filter_bounds_a_pendulum_written_as_equations() 
     let e = run(&with_range(5.0, 6.0), &data, "smf-nl").unwrap_err().to_string();
     assert!(e.starts_with("d.csv:2:") && e.contains("state 1 lies outside its declared bounds"), "{e}");
 }
+
+/// The pendulum with a second, slower sensor of the rate.
+fn two_sensor_pendulum() -> String {
+    PENDULUM
+        .replace(r#"outputs = ["angle"]"#, r#"outputs = ["angle", "gyro"]"#)
+        .replace("r = [[1e-4]]", "r = [[1e-4, 0.0], [0.0, 1e-3]]")
+        .replace(r#"angle = "theta""#, "angle = \"theta\"\ngyro = \"omega\"")
+}
+
+#[test]
+fn empty_output_cells_are_partial_steps_and_the_status_names_the_outputs_used() {
+    let text = two_sensor_pendulum();
+    let model = EquationModel::from_toml_str_with_foreign_keys(&text, "m.toml", &port_est::model::NOISE_KEYS).unwrap();
+    // The gyro every row, the angle every fifth, nothing at all at k = 7.
+    let mut csv = String::from("k,torque,angle,gyro\n");
+    let mut x = DVector::from_vec(vec![0.5, 0.0]);
+    let mut cells = Vec::new();
+    for k in 0..40 {
+        let u = DVector::from_element(1, 0.3);
+        let mut next = DVector::zeros(2);
+        model.f(&x, &u, &mut next).unwrap();
+        x = next;
+        let angle = (k % 5 == 0).then(|| format!("{:e}", x[0] + 0.01));
+        let gyro = (k != 7).then(|| format!("{:e}", x[1] - 0.02));
+        csv.push_str(&format!("{k},0.3,{},{}\n", angle.clone().unwrap_or_default(), gyro.clone().unwrap_or_default()));
+        cells.push((u, DVector::from_vec(vec![x[0] + 0.01, x[1] - 0.02]), [angle.is_some(), gyro.is_some()]));
+    }
+    for est in ["ekf", "ukf", "czf-nl"] {
+        let out = run(&text, &csv, est).unwrap_or_else(|e| panic!("{est}: {e}"));
+        let lines: Vec<&str> = out.lines().skip(1).collect();
+        assert_eq!(lines.len(), 40);
+        assert!(lines[0].ends_with("converged"), "{est}: {}", lines[0]);
+        assert!(lines[1].ends_with("+measured:gyro"), "{est}: {}", lines[1]);
+        assert!(lines[7].contains("predicted") && !lines[7].contains("measured:"), "{est}: {}", lines[7]);
+        // The same numbers as the library's partial steps.
+        let file = parse_model(Path::new("m.toml"), &text).unwrap();
+        let entry = estimators::registry::lookup(est).unwrap();
+        let mut lib = entry.build(file.setup(entry.kind), None).unwrap();
+        for (k, (u, y, measured)) in cells.iter().enumerate() {
+            let e = lib.step_partial(&model, u, y, measured).unwrap();
+            let cell: f64 = lines[k].split(',').nth(1).unwrap().parse().unwrap();
+            assert_eq!(cell, e.center()[0], "{est}: step {k}");
+        }
+    }
+    // An input cell may not be empty; the linear-only estimators refuse a partial row by name.
+    let e = run(&text, "k,torque,angle,gyro\n0,,0.1,0.2\n", "ekf").unwrap_err().to_string();
+    assert!(e.starts_with("d.csv:2:3: torque is empty"), "{e}");
+    let e = run(&text, "k,torque,angle,gyro\n0,0.1,,0.2\n", "mhe-ukf").unwrap_err().to_string();
+    assert!(e.contains("mhe-ukf") && e.contains("partial"), "{e}");
+}
