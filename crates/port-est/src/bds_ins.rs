@@ -771,7 +771,7 @@ mod tests {
         assert!(e.starts_with("d.csv:3:18: y5 = 3 is not an NMEA GGA quality"), "{e}");
         // A wrong header names the expected column.
         let e = DataReader::from_text(Path::new("d.csv"), "k,x,y\n", 3, 5).unwrap_err().to_string();
-        assert!(e.starts_with("d.csv:1:3: header column 2"), "{e}");
+        assert!(e.starts_with("d.csv:1:3: the header has no column \"u1\""), "{e}");
     }
 
     #[test]

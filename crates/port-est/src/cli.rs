@@ -297,6 +297,10 @@ pub struct FilterArgs {
     /// a row for each missing step
     #[arg(long, value_name = "POLICY", default_value = "error", value_parser = ["error", "bridge"])]
     pub gaps: String,
+    /// Refuse a data column the model does not read (by default such columns are ignored, with a
+    /// note on stderr; columns are matched by name, in any order)
+    #[arg(long)]
+    pub exact_columns: bool,
     /// Refuse any step that does not end cleanly (a solver that did not converge, a fallback, a
     /// relaxed problem, inconsistent data, a set no longer guaranteed) instead of writing it with
     /// its status and warning
@@ -350,6 +354,7 @@ impl From<FilterArgs> for crate::FilterOptions {
             estimator: a.estimator,
             solver: a.solver,
             gaps,
+            exact_columns: a.exact_columns,
             status: status_policy(a.strict),
             checks: a.checks.checks(),
             on_error: a.on_error.into(),

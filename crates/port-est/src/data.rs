@@ -123,6 +123,11 @@ pub struct DataReader<R: Read> {
     max_gap: u64,
     /// Whether an output cell may be empty (a partial measurement).
     allow_empty_outputs: bool,
+    /// The file's column of each name (`k`, inputs, outputs), and the number of columns.
+    column_of: Vec<usize>,
+    width: usize,
+    /// Header cells that name nothing the model reads (ignored), with their file columns.
+    ignored: Vec<(usize, String)>,
 }
 
 impl DataReader<File> {
@@ -242,6 +247,9 @@ impl<R: Read> DataReader<R> {
             allow_gaps: false,
             max_gap: crate::limits::DEFAULT_MAX_GAP,
             allow_empty_outputs: false,
+            column_of: Vec::new(),
+            width: 0,
+            ignored: Vec::new(),
         };
         r.read_header()?;
         Ok(r)
@@ -308,8 +316,9 @@ impl<R: Read> DataReader<R> {
             let field = err.field();
             self.start = pos.clone().unwrap_or_else(|| self.csv.position().clone());
             self.end = self.csv.position().byte();
-            let name = self.names.get(field).map_or("the cell", |s| s.as_str()).to_owned();
-            return Error::at(self.locate(Some(field)), format!("{name} is not valid UTF-8"));
+            let slot = self.column_of.iter().position(|&c| c == field);
+            let name = slot.and_then(|s| self.names.get(s)).map_or("the cell", |s| s.as_str()).to_owned();
+            return Error::at(self.locate_file(Some(field)), format!("{name} is not valid UTF-8"));
         }
         let message = e.to_string();
         match e.into_kind() {
@@ -331,32 +340,78 @@ impl<R: Read> DataReader<R> {
             let at = Location::new(&self.path, 1, 1);
             return Err(Error::at(at, format!("empty file, expected the header `{expected}`")));
         }
-        self.header_line = self.locate(None).line;
+        self.header_line = self.locate_file(None).line;
         let (p, m) = (self.p, self.names.len() - 1 - self.p);
-        for j in 0..self.names.len() {
-            let want = &self.names[j];
-            match self.record.get(j) {
-                Some(got) if got == want => {}
-                Some(got) if self.aliases[j].as_deref() == Some(got) => self.names[j] = got.to_owned(),
-                got => {
-                    let got = got.map_or_else(|| "missing".to_owned(), |g| format!("is {}", echo(g)));
-                    let want = match &self.aliases[j] {
-                        Some(alias) => format!("{want:?} or {alias:?}"),
-                        None => format!("{want:?}"),
-                    };
-                    let message = format!(
-                        "header column {} {got}, expected {want} (model has p = {p} inputs, m = {m} outputs)",
-                        j + 1
-                    );
-                    return Err(Error::at(self.locate(Some(j)), message));
+        // Columns are matched by name, in any order; other columns are ignored (and listed).
+        let mut column_of: Vec<Option<usize>> = vec![None; self.names.len()];
+        for (j, got) in self.record.iter().enumerate() {
+            let slot = (0..self.names.len()).find(|&s| self.names[s] == got || self.aliases[s].as_deref() == Some(got));
+            match slot {
+                Some(s) => {
+                    if let Some(first) = column_of[s] {
+                        let message =
+                            format!("column {} appears twice (columns {} and {})", echo(got), first + 1, j + 1);
+                        return Err(Error::at(self.locate_file(Some(j)), message));
+                    }
+                    column_of[s] = Some(j);
+                }
+                None => self.ignored.push((j, got.to_owned())),
+            }
+        }
+        if let Some(s) = column_of.iter().position(Option::is_none) {
+            let want = match &self.aliases[s] {
+                Some(alias) => format!("{:?} or {alias:?}", self.names[s]),
+                None => format!("{:?}", self.names[s]),
+            };
+            let mut message = format!(
+                "the header has no column {want} (model has p = {p} inputs, m = {m} outputs; expected `{expected}`, in \
+                 any order)"
+            );
+            let unread: Vec<String> =
+                self.ignored.iter().map(|(j, g)| format!("{} (column {})", echo(g), j + 1)).collect();
+            if !unread.is_empty() {
+                message.push_str(&format!("; columns the model does not read: {}", unread.join(", ")));
+            }
+            // At the first column the model does not read (a misspelt name, most likely).
+            let at = self.locate_file(self.ignored.first().map(|(j, _)| *j));
+            return Err(Error::at(at, message));
+        }
+        self.column_of = column_of.into_iter().flatten().collect();
+        for (s, &j) in self.column_of.iter().enumerate() {
+            if let Some(alias) = &self.aliases[s] {
+                if &self.record[j] == alias.as_str() {
+                    self.names[s] = alias.clone();
                 }
             }
         }
-        if let Some(extra) = self.record.get(self.names.len()) {
-            let message = format!("unexpected extra header column {} (expected `{expected}`)", echo(extra));
-            return Err(Error::at(self.locate(Some(self.names.len())), message));
-        }
+        self.width = self.record.len();
         Ok(())
+    }
+
+    /// The header's columns that name nothing the model reads: they are ignored, each with its
+    /// column number (1-based) and name.
+    #[must_use]
+    pub fn ignored_columns(&self) -> Vec<(usize, &str)> {
+        self.ignored.iter().map(|(j, name)| (j + 1, name.as_str())).collect()
+    }
+
+    /// Refuses a header with a column the model does not read (`--exact-columns`); call before
+    /// the first row.
+    ///
+    /// # Errors
+    /// [`Error::At`] at the first such column.
+    pub fn require_exact_columns(&self) -> Result<(), Error> {
+        match self.ignored.first() {
+            Some((j, name)) => {
+                let message = format!(
+                    "unexpected column {} (expected `{}`; without --exact-columns it would be ignored)",
+                    echo(name),
+                    self.names.join(",")
+                );
+                Err(Error::at(self.locate_file(Some(*j)), message))
+            }
+            None => Ok(()),
+        }
     }
 
     /// Reads the next data row into `row`; `Ok(false)` at the end of the file.
@@ -375,11 +430,11 @@ impl<R: Read> DataReader<R> {
             return Ok(false);
         }
         let n = self.names.len();
-        if self.record.len() != n {
-            let message = format!("{} fields, expected {n} (`{}`)", self.record.len(), self.names.join(","));
+        if self.record.len() != self.width {
+            let message = format!("{} fields, expected {} (as the header)", self.record.len(), self.width);
             return Err(Error::at(self.locate(None), message));
         }
-        let ks = &self.record[0];
+        let ks = &self.record[self.column_of[0]];
         let Ok(k) = ks.parse::<u64>() else {
             let message = format!("k = {} is not a nonnegative integer", echo(ks));
             return Err(Error::at(self.locate(Some(0)), message));
@@ -419,7 +474,7 @@ impl<R: Read> DataReader<R> {
         }
         row.k = k;
         for j in 1..n {
-            let s = &self.record[j];
+            let s = &self.record[self.column_of[j]];
             if s.trim().is_empty() {
                 if j <= self.p {
                     let message = format!("{} is empty: an input must be given at every row", self.names[j]);
@@ -464,6 +519,11 @@ impl<R: Read> DataReader<R> {
     /// character. A missing cell is placed where it would start after one more comma.
     #[must_use]
     pub fn locate(&self, column: Option<usize>) -> Location {
+        self.locate_file(column.map(|c| self.column_of.get(c).copied().unwrap_or(c)))
+    }
+
+    /// As [`DataReader::locate`], with `column` the file's column.
+    fn locate_file(&self, column: Option<usize>) -> Location {
         let raw = self.csv.get_ref().raw(self.start.byte()..self.end);
         let (line, col) = locate_in(&String::from_utf8_lossy(raw), self.start.line(), column);
         Location::new(&self.path, line, col)
@@ -573,7 +633,8 @@ mod tests {
     fn data_errors_name_line_and_column() {
         assert_eq!(rows("k,u1,y1\n0,1.0,0.5\n1,1.0,0.6\n"), vec![(0, 1.0, 0.5), (1, 1.0, 0.6)]);
         let e = err("k,u1,z1\n");
-        assert!(e.starts_with("d.csv:1:6: header column 3 is \"z1\", expected \"y1\""), "{e}");
+        assert!(e.starts_with("d.csv:1:6: the header has no column \"y1\""), "{e}");
+        assert!(e.contains("does not read: \"z1\" (column 3)"), "{e}");
         let e = err("k,u1,y1\n0,1.0,abc\n");
         assert!(e.starts_with("d.csv:2:7: y1 = \"abc\" is not a number"), "{e}");
         let e = err("k,u1,y1\n0,1.0\n");
@@ -587,15 +648,30 @@ mod tests {
         let e = err("k,u1,y1\n");
         assert!(e.starts_with("d.csv:2:1: no data rows"), "{e}");
         let e = err("k,u1\n");
-        assert!(e.starts_with("d.csv:1:6: header column 3 missing"), "{e}");
-        let e = err("k,u1,y1,z\n");
-        assert!(e.starts_with("d.csv:1:9: unexpected extra header column \"z\""), "{e}");
+        assert!(e.starts_with("d.csv:1:1: the header has no column \"y1\""), "{e}");
+        let e = err("k,y1,u1,y1\n");
+        assert!(e.starts_with("d.csv:1:9: column \"y1\" appears twice (columns 2 and 4)"), "{e}");
+    }
+
+    #[test]
+    fn columns_are_matched_by_name_in_any_order_and_extras_are_ignored_or_refused() {
+        assert_eq!(rows("y1,k,u1\n0.5,0,1.0\n0.6,1,2.0\n"), vec![(0, 1.0, 0.5), (1, 2.0, 0.6)]);
+        assert_eq!(rows("k,speed,u1,y1,note\n0,9,1.0,0.5,x\n"), vec![(0, 1.0, 0.5)]);
+        let r = DataReader::from_text(Path::new("d.csv"), "k,u1,y1,z\n0,1,2,3\n", 1, 1).unwrap();
+        assert_eq!(r.ignored_columns(), vec![(4, "z")]);
+        let e = r.require_exact_columns().unwrap_err().to_string();
+        assert!(e.starts_with("d.csv:1:9: unexpected column \"z\""), "{e}");
+        // A value error names the file's column, wherever the name is.
+        let e = err("y1,k,u1\n0.5,0,x\n");
+        assert!(e.starts_with("d.csv:2:7: u1 = \"x\" is not a number"), "{e}");
+        let e = err("y1,k,u1\n0.5,0\n");
+        assert!(e.starts_with("d.csv:2:1: 2 fields, expected 3"), "{e}");
     }
 
     #[test]
     fn padding_blank_lines_crlf_quotes_and_bom_do_not_shift_positions() {
         let e = err(" k , u1 , z1 \n");
-        assert!(e.starts_with("d.csv:1:11: header column 3 is \"z1\""), "{e}");
+        assert!(e.starts_with("d.csv:1:11: the header has no column \"y1\""), "{e}");
         assert_eq!(rows("\u{feff}k,u1,y1\n0,1,2\n"), vec![(0, 1.0, 2.0)]);
         let e = err("\u{feff}k,u1,z1\n");
         assert!(e.starts_with("d.csv:1:6: "), "{e}");
@@ -607,7 +683,7 @@ mod tests {
         let e = err("k,u1,y1\n0,\"multi\nline\", z\n");
         assert!(e.starts_with("d.csv:2:3: "), "{e}");
         let e = err("k,u1,y1\n0,\"1\",\n  \n");
-        assert!(e.starts_with("d.csv:2:7: y1 = \"\" is not a number"), "{e}");
+        assert!(e.starts_with("d.csv:2:7: y1 is empty"), "{e}");
     }
 
     #[test]

@@ -39,6 +39,9 @@ pub struct FilterOptions {
     pub solver: Option<String>,
     /// What a gap in `k` does: an error naming the row (default), or prediction-only steps.
     pub gaps: GapPolicy,
+    /// Refuse a data column the model does not read (`--exact-columns`); by default such columns
+    /// are ignored and listed in [`FilterSummary::ignored_columns`].
+    pub exact_columns: bool,
     /// What a step that does not end cleanly does: a warning (default) or an error (`--strict`).
     pub status: StatusPolicy,
     /// How the estimator checks its data (`None`: its defaults, an error at the first step whose
@@ -76,6 +79,8 @@ pub struct FilterSummary {
     pub estimator: &'static str,
     /// How the steps ended (rows written, not converged, fallbacks…).
     pub tally: StatusTally,
+    /// The data's columns the model does not read, ignored: `name (column j)`.
+    pub ignored_columns: Vec<String>,
 }
 
 /// The registry entry of `estimator` and the solver to use, checked against each other.
@@ -127,6 +132,11 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let model = read_model_with(&options.model, &options.limits)?;
     let (p, m) = (model.inputs(), entry.measurement_len(model.outputs()));
     let mut data = DataReader::open_named(&options.input, p, m, model.column_names())?;
+    if options.exact_columns {
+        data.require_exact_columns()?;
+    }
+    let ignored_columns: Vec<String> =
+        data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
     data.set_max_gap(options.limits.max_gap);
     let mut tally = StatusTally::default();
@@ -134,7 +144,7 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     match run_filter_into(&model, &mut data, entry, solver, policy, &mut out, &options.output, &mut tally) {
         Ok(()) => {
             out.commit()?;
-            Ok(FilterSummary { estimator: entry.name, tally })
+            Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
         }
         Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
     }
@@ -249,7 +259,8 @@ pub fn run_filter<R: Read, W: Write>(
 ) -> Result<FilterSummary, Error> {
     let mut tally = StatusTally::default();
     run_filter_into(model, data, entry, solver, (status, checks), out, out_path, &mut tally)?;
-    Ok(FilterSummary { estimator: entry.name, tally })
+    let ignored_columns = data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
+    Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
 }
 
 /// [`run_filter`], counting the steps written in `tally` (also when it fails).

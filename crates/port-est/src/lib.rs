@@ -68,6 +68,13 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
             options.limits.file_bytes = file_bytes;
             warn_stale(&options.output, stderr);
             let s = filter(&options)?;
+            if !s.ignored_columns.is_empty() {
+                let _ = writeln!(
+                    stderr,
+                    "note: ignored the data columns the model does not read: {} (--exact-columns refuses them)",
+                    s.ignored_columns.join(", ")
+                );
+            }
             let what = format!("{} steps of {} written to {}", s.tally.steps, s.estimator, options.output.display());
             report(stderr, what, &s.tally);
             remove_stale_partial(&options.output, options.on_error, stderr);

@@ -72,9 +72,9 @@ struct ModelFile {
     a: Option<Spanned<Vec<Vec<f64>>>>,
     b: Option<Spanned<Vec<Vec<f64>>>>,
     c: Option<Spanned<Vec<Vec<f64>>>>,
-    q: Spanned<Vec<Vec<f64>>>,
-    r: Spanned<Vec<Vec<f64>>>,
-    p0: Spanned<Vec<Vec<f64>>>,
+    q: Spanned<SquareSpec>,
+    r: Spanned<SquareSpec>,
+    p0: Spanned<SquareSpec>,
     x0: Spanned<Vec<f64>>,
     u_lower: Option<Spanned<Vec<f64>>>,
     u_upper: Option<Spanned<Vec<f64>>>,
@@ -95,6 +95,16 @@ struct ModelFile {
     f: Option<IgnoredAny>,
     dxdt: Option<IgnoredAny>,
     h: Option<IgnoredAny>,
+}
+
+/// A covariance or shape as written: the full matrix (a list of rows), its diagonal (a list of
+/// numbers) or one number (a multiple of the identity).
+#[derive(Debug, Deserialize)]
+#[serde(untagged, expecting = "a matrix (a list of rows), a diagonal (a list of numbers) or a number")]
+enum SquareSpec {
+    Number(f64),
+    Diagonal(Vec<f64>),
+    Full(Vec<Vec<f64>>),
 }
 
 /// The `[ukf]` table: the unscented filter's sigma-point parameters.
@@ -389,6 +399,28 @@ impl Ctx<'_> {
         Ok(DMatrix::from_fn(m.len(), width, |i, j| m[i][j]))
     }
 
+    /// A square `n × n` matrix given as a matrix, a diagonal or a number (a multiple of `I`).
+    fn square(&self, name: &str, v: &Spanned<SquareSpec>, n: usize) -> Result<DMatrix<f64>, Error> {
+        let at = |msg: String| Error::at(self.at(v.span()), format!("`{name}`: {msg}"));
+        match v.get_ref() {
+            SquareSpec::Number(x) if x.is_finite() => Ok(DMatrix::identity(n, n) * *x),
+            SquareSpec::Number(_) => Err(at("is not finite".into())),
+            SquareSpec::Diagonal(d) => {
+                if d.len() != n {
+                    return Err(at(format!("a diagonal of {} entries, expected {n} (or an {n}×{n} matrix)", d.len())));
+                }
+                if let Some(j) = d.iter().position(|x| !x.is_finite()) {
+                    return Err(at(format!("diagonal entry {} is not finite", j + 1)));
+                }
+                Ok(DMatrix::from_diagonal(&DVector::from_column_slice(d)))
+            }
+            SquareSpec::Full(rows) => {
+                let full = Spanned::new(v.span(), rows.clone());
+                self.matrix(name, &full, Some(n), Some(n))
+            }
+        }
+    }
+
     fn vector(&self, name: &str, v: &Spanned<Vec<f64>>, len: usize) -> Result<DVector<f64>, Error> {
         self.vector_with(name, v, len, false)
     }
@@ -500,9 +532,9 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         Dynamics::Builtin { model, .. } => model.discrete().dims(),
     };
     let (n, p, m) = (dims.states, dims.inputs, dims.outputs);
-    let q = cx.matrix("q", &f.q, Some(n), Some(n))?;
-    let r = cx.matrix("r", &f.r, Some(m), Some(m))?;
-    let p0 = cx.matrix("p0", &f.p0, Some(n), Some(n))?;
+    let q = cx.square("q", &f.q, n)?;
+    let r = cx.square("r", &f.r, m)?;
+    let p0 = cx.square("p0", &f.p0, n)?;
     let x0 = cx.vector("x0", &f.x0, n)?;
     let input_range = cx.range(("u_lower", &f.u_lower), ("u_upper", &f.u_upper), p, "the input range", false)?;
     let state_bounds = cx.range(("x_lower", &f.x_lower), ("x_upper", &f.x_upper), n, "the state's range", true)?;
@@ -731,7 +763,15 @@ mod tests {
         let e = err(&MODEL.replace("r = [[1e-2]]", "r = [[nan]]"));
         assert!(e.starts_with("m.toml:5:5: `r`: entry (1, 1) is not finite"), "{e}");
         let e = err(&MODEL.replace("r = [[1e-2]]", "r = [[\"x\"]]"));
-        assert!(e.starts_with("m.toml:5:7: "), "{e}");
+        assert!(e.starts_with("m.toml:5:5: ") && e.contains("a diagonal (a list of numbers) or a number"), "{e}");
+        // A diagonal or a multiple of the identity where a covariance or shape is given.
+        let diag =
+            parse_model(Path::new("m.toml"), &MODEL.replace("q = [[1e-4, 0.0], [0.0, 1e-4]]", "q = [1e-4, 2e-4]"));
+        assert_eq!(diag.unwrap().q, DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4, 2e-4])));
+        let scalar = parse_model(Path::new("m.toml"), &MODEL.replace("p0 = [[1.0, 0.0], [0.0, 1.0]]", "p0 = 2.0"));
+        assert_eq!(scalar.unwrap().p0, DMatrix::identity(2, 2) * 2.0);
+        let e = err(&MODEL.replace("q = [[1e-4, 0.0], [0.0, 1e-4]]", "q = [1e-4]"));
+        assert!(e.starts_with("m.toml:4:5: `q`: a diagonal of 1 entries, expected 2"), "{e}");
     }
 
     #[test]

@@ -69,7 +69,7 @@ fn usage_errors_exit_2_and_run_errors_exit_1() {
     let out = port_est(&["filter", "-m", model, "-i", model, "-o", out_file.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     let err = text(&out.stderr);
-    assert!(err.starts_with(&format!("error: {model}:1:1: header column 1 is")), "{err}");
+    assert!(err.starts_with(&format!("error: {model}:1:1: the header has no column \"k\"")), "{err}");
     assert!(!out_file.exists());
 }
 

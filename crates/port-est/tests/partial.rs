@@ -45,6 +45,7 @@ fn filter_options(d: &Path, on_error: OnError, status: StatusPolicy) -> FilterOp
         estimator: "smf".into(),
         solver: None,
         gaps: GapPolicy::Error,
+        exact_columns: false,
         status,
         checks: None,
         on_error,

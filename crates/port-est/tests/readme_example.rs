@@ -46,6 +46,7 @@ fn readme_filter_example_runs_for_every_estimator() {
             estimator: info.name.to_owned(),
             solver: solver.map(str::to_owned),
             gaps: port_est::GapPolicy::Error,
+            exact_columns: false,
             status: port_est::StatusPolicy::Warn,
             checks: None,
             on_error: port_est::OnError::Discard,

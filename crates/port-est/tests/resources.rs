@@ -103,6 +103,7 @@ fn filter_options(d: &Path, model: &Path, input: &Path, gaps: GapPolicy, limits:
         estimator: "smf".into(),
         solver: None,
         gaps,
+        exact_columns: false,
         status: StatusPolicy::Warn,
         checks: None,
         on_error: OnError::Discard,

@@ -33,6 +33,7 @@ fn options(d: &Path, model: &str, data: &str) -> FilterOptions {
         estimator: "czf".into(),
         solver: None,
         gaps: port_est::GapPolicy::Error,
+        exact_columns: false,
         status: port_est::StatusPolicy::Warn,
         checks: None,
         on_error: port_est::OnError::Discard,
