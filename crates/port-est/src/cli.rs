@@ -280,10 +280,12 @@ pub struct FilterArgs {
     /// the noise of its file in examples/models/)
     #[arg(short, long, value_name = "MODEL.toml")]
     pub model: PathBuf,
-    /// The logged data: header `k,u1,…,up,y1,…,ym` or the model's names (CSV)
+    /// The logged data: header `k,u1,…,up,y1,…,ym` or the model's names, in any order (CSV); an
+    /// empty output cell is a sensor that did not report; `-` reads standard input
     #[arg(short, long, value_name = "DATA.csv")]
     pub input: PathBuf,
-    /// Where to write the estimates (CSV; replaced only if the run succeeds)
+    /// Where to write the estimates (CSV; replaced only if the run succeeds); `-` writes standard
+    /// output, row by row as they are computed
     #[arg(short, long, value_name = "OUT.csv")]
     pub output: PathBuf,
     /// The estimator

@@ -127,27 +127,63 @@ pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static Estimat
 /// [`StatusPolicy::Error`] a step that does not end cleanly.
 pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (entry, solver) = select(&options.estimator, options.solver.as_deref())?;
+    let stdin = options.input.as_os_str() == "-";
+    let stdout = options.output.as_os_str() == "-";
     let inputs: [(&'static str, &Path); 2] = [("input", &options.input), ("model", &options.model)];
-    let mut out = OutputFile::create(&options.output, &inputs)?;
+    // A file output is written beside its target and published only if the run succeeds; standard
+    // output is a stream (rows go out as they are computed; an error ends it).
+    let mut file = if stdout { None } else { Some(OutputFile::create(&options.output, &inputs)?) };
     let model = read_model_with(&options.model, &options.limits)?;
     let (p, m) = (model.inputs(), entry.measurement_len(model.outputs()));
-    let mut data = DataReader::open_named(&options.input, p, m, model.column_names())?;
+    let names = model.column_names();
+    let go = |out: &mut dyn Write, tally: &mut StatusTally| -> Result<Vec<String>, Error> {
+        if stdin {
+            let lock = std::io::stdin().lock();
+            let mut data = DataReader::from_reader_named(Path::new("<stdin>"), lock, p, m, names)?;
+            run_on(options, &model, &mut data, entry, solver, out, tally)
+        } else {
+            let mut data = DataReader::open_named(&options.input, p, m, names)?;
+            run_on(options, &model, &mut data, entry, solver, out, tally)
+        }
+    };
+    let mut tally = StatusTally::default();
+    match file.take() {
+        Some(mut out) => match go(&mut out, &mut tally) {
+            Ok(ignored_columns) => {
+                out.commit()?;
+                Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
+            }
+            Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
+        },
+        None => {
+            let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+            let ignored_columns = go(&mut out, &mut tally)?;
+            out.flush().map_err(|e| Error::io(Path::new("<stdout>"), e))?;
+            Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
+        }
+    }
+}
+
+/// The filter over one opened data stream: the column and gap options applied, then the run;
+/// the data's ignored columns.
+fn run_on<R: Read>(
+    options: &FilterOptions,
+    model: &Model,
+    data: &mut DataReader<R>,
+    entry: &'static EstimatorEntry,
+    solver: Option<SmfSolver>,
+    mut out: &mut dyn Write,
+    tally: &mut StatusTally,
+) -> Result<Vec<String>, Error> {
     if options.exact_columns {
         data.require_exact_columns()?;
     }
-    let ignored_columns: Vec<String> =
-        data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
+    let ignored = data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
     data.set_max_gap(options.limits.max_gap);
-    let mut tally = StatusTally::default();
     let policy = (options.status, options.checks);
-    match run_filter_into(&model, &mut data, entry, solver, policy, &mut out, &options.output, &mut tally) {
-        Ok(()) => {
-            out.commit()?;
-            Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
-        }
-        Err(e) => Err(out.fail(e, tally.steps, options.on_error, &inputs)),
-    }
+    run_filter_into(model, data, entry, solver, policy, &mut out, &options.output, tally)?;
+    Ok(ignored)
 }
 
 /// Why `entry` cannot run on `model` (`None` when it can): a capability the model lacks, or

@@ -75,7 +75,12 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
                     s.ignored_columns.join(", ")
                 );
             }
-            let what = format!("{} steps of {} written to {}", s.tally.steps, s.estimator, options.output.display());
+            let target = if options.output.as_os_str() == "-" {
+                "standard output".to_owned()
+            } else {
+                options.output.display().to_string()
+            };
+            let what = format!("{} steps of {} written to {target}", s.tally.steps, s.estimator);
             report(stderr, what, &s.tally);
             remove_stale_partial(&options.output, options.on_error, stderr);
             Ok(())

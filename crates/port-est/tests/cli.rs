@@ -192,3 +192,43 @@ fn the_limits_are_options_of_the_command_line() {
     let (code, err) = run(&["--on-error", "keep-partial", "--max-gap", "3"]);
     assert_eq!((code, err.contains("40 steps")), (Some(0), true), "{err}");
 }
+
+#[test]
+fn dash_reads_standard_input_and_writes_standard_output() {
+    use std::io::Write;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let model = root.join("examples/filter/model.toml");
+    let data = std::fs::read_to_string(root.join("examples/filter/data.csv")).unwrap();
+    let file_out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-pipe.csv");
+    let by_file =
+        port_est(&["filter", "-m", model.to_str().unwrap(), "-i", "-", "-o", file_out.to_str().unwrap(), "-e", "kf"]);
+    // Without stdin attached the run sees an empty file.
+    assert_eq!(by_file.status.code(), Some(1));
+    assert!(text(&by_file.stderr).contains("<stdin>:1:1: empty file"), "{}", text(&by_file.stderr));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_port-est"))
+        .args(["filter", "-m", model.to_str().unwrap(), "-i", "-", "-o", "-", "-e", "kf"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(data.as_bytes()).unwrap();
+    let piped = child.wait_with_output().unwrap();
+    assert!(piped.status.success(), "{}", text(&piped.stderr));
+    assert!(text(&piped.stderr).contains("written to standard output"), "{}", text(&piped.stderr));
+    // The same rows as a run between files.
+    let input = root.join("examples/filter/data.csv");
+    let ok = port_est(&[
+        "filter",
+        "-m",
+        model.to_str().unwrap(),
+        "-i",
+        input.to_str().unwrap(),
+        "-o",
+        file_out.to_str().unwrap(),
+        "-e",
+        "kf",
+    ]);
+    assert!(ok.status.success());
+    assert_eq!(text(&piped.stdout), std::fs::read_to_string(&file_out).unwrap());
+}
