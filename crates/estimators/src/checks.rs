@@ -22,7 +22,9 @@
 
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-use crate::error::EstimatorError;
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{EstimatorError, WorstOutput};
 
 /// What an estimator does when a step's data fail its check.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -156,8 +158,39 @@ impl InnovationGate {
                 nis,
                 threshold: self.threshold,
                 probability: self.checks.gate_probability,
+                worst: None,
             }),
         }
+    }
+}
+
+/// An outlier error with the output of the largest normalised innovation `|ν_i| / √S_ii` added,
+/// from `ν` and the lower Cholesky factor of `S` (`S_ii` the squared norm of the factor's row
+/// `i`). Other errors pass through.
+pub(crate) fn name_worst_output(e: EstimatorError, innov: &DVector<f64>, s_chol: &DMatrix<f64>) -> EstimatorError {
+    let EstimatorError::Outlier { step, nis, threshold, probability, worst: None } = e else { return e };
+    let mut worst: Option<WorstOutput> = None;
+    for (i, &r) in innov.iter().enumerate() {
+        let var: f64 = (0..=i).map(|j| s_chol[(i, j)] * s_chol[(i, j)]).sum();
+        let sigmas = r.abs() / var.sqrt();
+        if worst.is_none_or(|w| sigmas > w.sigmas) {
+            worst = Some(WorstOutput { index: i, residual: r, sigmas });
+        }
+    }
+    EstimatorError::Outlier { step, nis, threshold, probability, worst }
+}
+
+/// The index of a partial measurement's worst output in the whole measurement.
+pub(crate) fn map_worst_output(e: EstimatorError, rows: &[usize]) -> EstimatorError {
+    match e {
+        EstimatorError::Outlier { step, nis, threshold, probability, worst: Some(w) } => EstimatorError::Outlier {
+            step,
+            nis,
+            threshold,
+            probability,
+            worst: Some(WorstOutput { index: rows.get(w.index).copied().unwrap_or(w.index), ..w }),
+        },
+        e => e,
     }
 }
 

@@ -18,6 +18,7 @@ use nalgebra::{DMatrix, DVector};
 
 use models::{DifferentiableModel, Dims};
 
+use crate::checks::map_worst_output;
 use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
@@ -178,7 +179,14 @@ impl ExtendedKalmanFilter {
         self.innov -= &self.y_pred;
         model.angles().wrap_outputs(self.innov.as_mut_slice());
         let nis = self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov, self.gate.is_on())?;
-        self.upd.commit_gated(&self.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        self.upd.commit_gated(
+            &self.gate,
+            (nis, &self.innov),
+            step,
+            &mut self.est,
+            &mut self.x_pred,
+            &mut self.p_pred,
+        )?;
         Ok(&self.est)
     }
 
@@ -256,7 +264,9 @@ impl ExtendedKalmanFilter {
         let (sub, rows) = self.subsets.get(k, || GaussianSubset::new(n, k, checks))?;
         sub.gather(rows, &self.h, &self.r, &self.innov);
         let nis = sub.upd.compute(&self.x_pred, &self.p_pred, &sub.h, &sub.r, &sub.innov, sub.gate.is_on())?;
-        sub.upd.commit_gated(&sub.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        sub.upd
+            .commit_gated(&sub.gate, (nis, &sub.innov), step, &mut self.est, &mut self.x_pred, &mut self.p_pred)
+            .map_err(|e| map_worst_output(e, rows))?;
         self.u_last.copy_from(u);
         self.steps += 1;
         Ok(&self.est)

@@ -139,7 +139,8 @@ pub enum EstimatorError {
     /// filter's own noise model, not a proof). The filter is unchanged.
     #[error(
         "measurement at step {step} is an outlier: normalised innovation squared {nis:.4e} above the gate {threshold:.4} \
-         (passed with probability {probability} under the filter's noise model)"
+         (passed with probability {probability} under the filter's noise model){worst}",
+        worst = describe_worst(.worst.as_ref())
     )]
     Outlier {
         /// The step (1 for the first step of the filter).
@@ -150,6 +151,8 @@ pub enum EstimatorError {
         threshold: f64,
         /// The gate's probability.
         probability: f64,
+        /// The output with the largest innovation in its own standard deviations.
+        worst: Option<WorstOutput>,
     },
     /// The nonlinear set-membership filter cannot bound its linearisation remainder at this step
     /// (a function undefined somewhere on the set, an overflow, a remainder beyond its limit): it
@@ -256,4 +259,25 @@ pub enum EstimatorError {
     /// Setting up an SDP backend failed.
     #[error("SDP backend: {0}")]
     Lmi(#[from] LmiError),
+}
+
+/// The output of an outlying measurement whose innovation is the largest in its own standard
+/// deviations, `|ν_i| / √S_ii`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorstOutput {
+    /// The output's index in `y` (0-based).
+    pub index: usize,
+    /// Its innovation `ν_i = y_i − ŷ_i` (wrapped for an angle).
+    pub residual: f64,
+    /// `|ν_i| / √S_ii`.
+    pub sigmas: f64,
+}
+
+fn describe_worst(worst: Option<&WorstOutput>) -> String {
+    worst.map_or_else(String::new, |w| {
+        format!(
+            "; the largest innovation is y[{}]: residual {:.4e}, {:.1} standard deviations",
+            w.index, w.residual, w.sigmas
+        )
+    })
 }

@@ -13,7 +13,7 @@ use dense_kernels as dense;
 use dense_kernels::PivotFailure;
 use dense_kernels::small;
 
-use crate::checks::{GateVerdict, InnovationGate};
+use crate::checks::{GateVerdict, InnovationGate, name_worst_output};
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, commit_prediction, data_check};
 use crate::traits::{SolveOutcome, StepStatus};
@@ -345,13 +345,13 @@ impl GaussianUpdate {
     pub(crate) fn commit_gated(
         &mut self,
         gate: &InnovationGate,
-        nis: f64,
+        (nis, innov): (f64, &DVector<f64>),
         step: u64,
         est: &mut GaussianEstimate,
         x_pred: &mut DVector<f64>,
         p_pred: &mut DMatrix<f64>,
     ) -> Result<(), EstimatorError> {
-        let verdict = gate.judge(nis, step)?;
+        let verdict = gate.judge(nis, step).map_err(|e| name_worst_output(e, innov, &self.buf.s))?;
         if verdict == GateVerdict::Drop {
             commit_prediction(est, x_pred, p_pred)?;
         } else {

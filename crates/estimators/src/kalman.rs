@@ -14,6 +14,7 @@ use nalgebra::{DMatrix, DVector};
 use dense_kernels as dense;
 use models::{Angles, Dims, LinearModel};
 
+use crate::checks::map_worst_output;
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
@@ -234,7 +235,14 @@ impl KalmanFilter {
     ) -> Result<&GaussianEstimate, EstimatorError> {
         let r = r.unwrap_or(&self.r);
         let nis = self.upd.compute(&self.x_pred, &self.p_pred, c, r, &self.innov, self.gate.is_on())?;
-        self.upd.commit_gated(&self.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        self.upd.commit_gated(
+            &self.gate,
+            (nis, &self.innov),
+            step,
+            &mut self.est,
+            &mut self.x_pred,
+            &mut self.p_pred,
+        )?;
         Ok(&self.est)
     }
 
@@ -369,7 +377,9 @@ impl KalmanFilter {
         let (sub, rows) = self.subsets.get(k, || GaussianSubset::new(n, k, checks))?;
         sub.gather(rows, model.c(), &self.r, &self.innov);
         let nis = sub.upd.compute(&self.x_pred, &self.p_pred, &sub.h, &sub.r, &sub.innov, sub.gate.is_on())?;
-        sub.upd.commit_gated(&sub.gate, nis, step, &mut self.est, &mut self.x_pred, &mut self.p_pred)?;
+        sub.upd
+            .commit_gated(&sub.gate, (nis, &sub.innov), step, &mut self.est, &mut self.x_pred, &mut self.p_pred)
+            .map_err(|e| map_worst_output(e, rows))?;
         self.steps += 1;
         Ok(&self.est)
     }

@@ -94,7 +94,7 @@ pub use adaptive::{
 pub use checks::{DataChecks, InnovationGate};
 pub use czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, ZonotopeEstimate, ZonotopeReport};
 pub use ekf::ExtendedKalmanFilter;
-pub use error::EstimatorError;
+pub use error::{EstimatorError, WorstOutput};
 pub use kalman::{GaussianEstimate, KalmanFilter};
 pub use mhe::{MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
 pub use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel, StepModel};

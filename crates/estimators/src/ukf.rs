@@ -49,7 +49,7 @@ use nalgebra::{DMatrix, DVector};
 use dense_kernels as dense;
 use models::{Angles, Dims, DiscreteModel, wrap_angle};
 
-use crate::checks::{DataChecks, GateVerdict, InnovationGate};
+use crate::checks::{DataChecks, GateVerdict, InnovationGate, map_worst_output, name_worst_output};
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, data_check, nis};
 use crate::partial::{self, Subsets, check_measured, measured_rows};
@@ -613,7 +613,7 @@ impl UnscentedKalmanFilter {
         self.subsets.put(k, sub);
         if let Err(e) = result {
             self.chol_current = saved_chol;
-            return Err(e);
+            return Err(map_worst_output(e, &self.subsets.rows));
         }
         self.u_last.copy_from(u);
         self.steps += 1;
@@ -769,7 +769,7 @@ impl UnscentedKalmanFilter {
         angles.wrap_outputs(self.innov.as_mut_slice());
         // The innovation gate on Pzz, before anything changes.
         let nis = if self.gate.is_on() { nis(&self.pzz_chol, &self.innov, &mut self.dz) } else { f64::NAN };
-        let verdict = self.gate.judge(nis, step)?;
+        let verdict = self.gate.judge(nis, step).map_err(|e| name_worst_output(e, &self.innov, &self.pzz_chol))?;
         if verdict == GateVerdict::Drop {
             // The measurement is dropped: publish the prediction.
             std::mem::swap(&mut self.est.center, &mut self.x_pred);

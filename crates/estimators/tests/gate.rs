@@ -173,3 +173,41 @@ impl<'m> Estimator<StepModel<'m>> for AdaptiveOnOutputs {
         self.0.set_data_checks(checks)
     }
 }
+
+#[test]
+fn an_outlier_names_the_output_with_the_largest_normalised_innovation() {
+    let (a, b, c) = system();
+    let model = StepModel::new(&a, &b, &c);
+    let s = setup();
+    let (u, y) = (dvector![0.3], dvector![0.1, 40.0]);
+    // Independently: ν = y − C x⁻ and S = C P⁻ Cᵀ + R; the worst output maximises |ν_i| / √S_ii.
+    let xp = &a * &s.x0 + &b * &u;
+    let pp = &a * &s.p0 * a.transpose() + &s.process_noise;
+    let sm = &c * &pp * c.transpose() + &s.measurement_noise;
+    let nu = &y - &c * &xp;
+    let z: Vec<f64> = (0..2).map(|i| nu[i].abs() / sm[(i, i)].sqrt()).collect();
+    let want = if z[0] > z[1] { 0 } else { 1 };
+    let mut kf = KalmanFilter::new(s.clone()).unwrap();
+    let e = kf.step(&model, &u, &y).unwrap_err();
+    let EstimatorError::Outlier { worst: Some(w), .. } = e else { panic!("{e}") };
+    assert_eq!(w.index, want);
+    assert!((w.residual - nu[want]).abs() < 1e-12 * nu[want].abs());
+    assert!((w.sigmas - z[want]).abs() < 1e-9 * z[want], "{} vs {}", w.sigmas, z[want]);
+    assert!(e.to_string().contains(&format!("the largest innovation is y[{want}]")), "{e}");
+    // The same from the EKF, the UKF (statistically linearised: the same here), and a partial
+    // step that measured only that output (its index in the whole measurement).
+    let mut ekf = ExtendedKalmanFilter::new(s.clone()).unwrap();
+    let Err(EstimatorError::Outlier { worst: Some(w), .. }) = ekf.step(&model, &u, &y) else { panic!() };
+    assert_eq!(w.index, want);
+    let mut ukf = UnscentedKalmanFilter::new(s.clone(), UkfParams::default()).unwrap();
+    let Err(EstimatorError::Outlier { worst: Some(w), .. }) = ukf.step(&model, &u, &y) else { panic!() };
+    assert_eq!(w.index, want);
+    let mask = [want == 0, want == 1];
+    for e in [
+        KalmanFilter::new(s.clone()).unwrap().step_partial(&model, &u, &y, &mask).unwrap_err(),
+        UnscentedKalmanFilter::new(s, UkfParams::default()).unwrap().step_partial(&model, &u, &y, &mask).unwrap_err(),
+    ] {
+        let EstimatorError::Outlier { worst: Some(w), .. } = e else { panic!("{e}") };
+        assert_eq!(w.index, want);
+    }
+}

@@ -274,6 +274,12 @@ impl<R: Read> DataReader<R> {
         self.max_gap = max_gap;
     }
 
+    /// The number of inputs `p` (the outputs' columns follow them).
+    #[must_use]
+    pub fn inputs(&self) -> usize {
+        self.p
+    }
+
     /// The file's name, as given.
     #[must_use]
     pub fn path(&self) -> &Path {

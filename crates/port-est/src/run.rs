@@ -114,6 +114,8 @@ pub fn enforce(policy: StatusPolicy, status: StepStatus, at: impl FnOnce() -> Lo
 pub fn step_error<R: Read>(source: EstimatorError, data: &DataReader<R>, k: u64) -> Error {
     let cell = match &source {
         EstimatorError::InputOutsideBounds { index, .. } => 1 + index,
+        // An outlier: at the cell of the output with the largest normalised innovation.
+        EstimatorError::Outlier { worst: Some(w), .. } => 1 + data.inputs() + w.index,
         _ => 0,
     };
     Error::Step { at: data.locate(Some(cell)), k, source }

@@ -95,13 +95,16 @@ pub fn estimator_error(py: Python<'_>, e: &EstimatorError, row: Option<usize>) -
             let _ = value.setattr("samples", *samples);
             err
         }
-        EstimatorError::Outlier { step, nis, threshold, probability } => {
+        EstimatorError::Outlier { step, nis, threshold, probability, worst } => {
             let err = InconsistentDataError::new_err(message);
             let value = err.value(py);
             let _ = value.setattr("step", *step);
             let _ = value.setattr("nis", *nis);
             let _ = value.setattr("threshold", *threshold);
             let _ = value.setattr("probability", *probability);
+            // The output with the largest innovation in its own standard deviations.
+            let _ = value.setattr("output", worst.map(|w| w.index));
+            let _ = value.setattr("residual", worst.map(|w| w.residual));
             err
         }
         EstimatorError::SetMissed { step, .. } => {

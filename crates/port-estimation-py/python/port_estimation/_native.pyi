@@ -36,6 +36,9 @@ class InconsistentDataError(EstimationError):
     nis: float
     threshold: float
     probability: float
+    # The output with the largest innovation in its own standard deviations, and that innovation.
+    output: int | None
+    residual: float | None
 
 class Model:
     def __init__(
