@@ -502,7 +502,7 @@ impl ConstrainedZonotopeFilter {
             }
         }
         let v_radius: Vec<f64> =
-            self.v_radius.iter().zip(&y_err).map(|(&v, &e)| if e > 0.0 { intervals::up(v + e) } else { v }).collect();
+            v_radius_full.iter().zip(&y_err).map(|(&v, &e)| if e > 0.0 { intervals::up(v + e) } else { v }).collect();
         let lost = |e: SetError| guarantee_lost(step, format!("the measurement update: {e}"));
         let strip = ConstrainedZonotope::zonotope(yc, -&v_generators).and_then(|s| s.add_box(&rad)).map_err(lost)?;
         let checked = self.checks.policy != InconsistencyPolicy::Off;
