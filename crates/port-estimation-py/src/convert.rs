@@ -92,6 +92,51 @@ pub fn measurement(
     Ok((DVector::from_vec(y), Some(mask)))
 }
 
+/// A log of measurements `(T, cols)` that may be partial, as [`measurement`] for one: a masked
+/// array, or `measured` a boolean `(T, cols)` array. Returns `T`, the values row by row (0 where
+/// not measured) and the mask row by row, `None` when neither was given.
+pub fn measurement_table(
+    obj: &Bound<'_, PyAny>,
+    measured: Option<&Bound<'_, PyAny>>,
+    cols: usize,
+) -> PyResult<(usize, Vec<f64>, Option<Vec<bool>>)> {
+    let py = obj.py();
+    let np = py.import("numpy")?;
+    let ma = py.import("numpy.ma")?;
+    let masked: bool = ma.call_method1("isMaskedArray", (obj,))?.extract()?;
+    let mask_array = match (masked, measured) {
+        (true, Some(_)) => return Err(value_error("ys: give a masked array or measured=, not both")),
+        (false, None) => {
+            let (rows, values) = table(Some(obj), "ys", None, cols)?;
+            return Ok((rows, values, None));
+        }
+        (true, None) => ma.call_method1("getmaskarray", (obj,))?.call_method0("__invert__")?,
+        (false, Some(m)) => {
+            let a = np.call_method1("asarray", (m,))?;
+            let kind: String = a.getattr("dtype")?.getattr("kind")?.extract()?;
+            if kind != "b" {
+                return Err(value_error(format!("measured must be an array of booleans, got dtype kind {kind:?}")));
+            }
+            a
+        }
+    };
+    let data = if masked { obj.call_method1("filled", (0.0,))? } else { obj.clone() };
+    let data_shape: Vec<usize> = data.getattr("shape")?.extract()?;
+    let mask_shape: Vec<usize> = mask_array.getattr("shape")?.extract()?;
+    if data_shape != mask_shape {
+        return Err(value_error(format!(
+            "measured must have the shape of ys, {}, got {}",
+            shape_text(&data_shape),
+            shape_text(&mask_shape)
+        )));
+    }
+    // Unmeasured entries are ignored: zeros, so that NaN may mark them.
+    let zeroed = np.call_method1("where", (&mask_array, &data, 0.0))?;
+    let (rows, values) = table(Some(&zeroed), "ys", None, cols)?;
+    let mask: Vec<bool> = mask_array.call_method0("ravel")?.call_method0("tolist")?.extract()?;
+    Ok((rows, values, Some(mask)))
+}
+
 /// A bound vector of length `len` (as [`vector`]; entries may be ±∞, not NaN).
 pub fn bound_vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<DVector<f64>> {
     vector_with(obj, what, len, true)

@@ -12,7 +12,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{mat_out, measurement, square, table, vec_out, vector};
+use crate::convert::{mat_out, measurement, measurement_table, square, table, vec_out, vector};
 use crate::errors::{Guarded, broken, estimator_error, guard, no_panic, panicked, value_error};
 use crate::estimate::Estimate;
 use crate::model::{Model, SharedModel};
@@ -238,9 +238,10 @@ impl Estimator {
         py: Python<'_>,
         us: Option<&Bound<'_, PyAny>>,
         ys: &Bound<'_, PyAny>,
+        measured: Option<&Bound<'_, PyAny>>,
         model: Option<&Bound<'_, Model>>,
     ) -> PyResult<RunResult> {
-        let (rows, ys) = table(Some(ys), "ys", None, self.measurement_len())?;
+        let (rows, ys, mask) = measurement_table(ys, measured, self.measurement_len())?;
         if rows.checked_mul(self.dims.states).is_none_or(|v| v > MAX_RUN_VALUES) {
             return Err(value_error(format!(
                 "a run of {rows} steps of {} states exceeds MAX_RUN_VALUES = {MAX_RUN_VALUES} values per result \
@@ -253,7 +254,7 @@ impl Estimator {
         let ran = py.detach(|| {
             guard(|| {
                 let mut est = self.inner.lock().ok()?;
-                Some(run_log(&mut est, model.as_ref(), &us, &ys, rows))
+                Some(run_log(&mut est, model.as_ref(), &us, &ys, mask.as_deref(), rows))
             })
         });
         match ran {
@@ -339,15 +340,19 @@ impl Estimator {
     /// estimator unchanged. A step that fails raises its exception with ``.row`` set to the row; the
     /// estimator then holds the estimate after the previous row. ``T * dim_x`` may be at most
     /// ``MAX_RUN_VALUES`` (split longer logs into consecutive runs).
-    #[pyo3(signature = (us, ys, *, model = None))]
+    ///
+    /// Partial rows (sensors at their own rates): ``ys`` as a ``numpy.ma`` masked array, or
+    /// ``measured=`` a boolean ``(T, dim_z)`` array; each row is then ``step(u, y, measured=row)``.
+    #[pyo3(signature = (us, ys, *, measured = None, model = None))]
     fn run(
         &self,
         py: Python<'_>,
         us: Option<&Bound<'_, PyAny>>,
         ys: &Bound<'_, PyAny>,
+        measured: Option<&Bound<'_, PyAny>>,
         model: Option<&Bound<'_, Model>>,
     ) -> PyResult<RunResult> {
-        no_panic(|| self.run_rows(py, us, ys, model))
+        no_panic(|| self.run_rows(py, us, ys, measured, model))
     }
 
     /// How the estimator checks its data against its noise description. ``policy``: ``"error"``

@@ -44,6 +44,7 @@ pub fn run_log(
     model: &dyn AnyModel,
     us: &[f64],
     ys: &[f64],
+    measured: Option<&[bool]>,
     rows: usize,
 ) -> Result<RunOutput, (usize, EstimatorError)> {
     let d = est.dims();
@@ -67,7 +68,12 @@ pub fn run_log(
     for k in 0..rows {
         u.copy_from_slice(&us[k * p..(k + 1) * p]);
         y.copy_from_slice(&ys[k * m..(k + 1) * m]);
-        let e = est.step(model, &u, &y).map_err(|e| (k, e))?;
+        let mask = measured.map(|all| &all[k * m..(k + 1) * m]).filter(|row| !row.iter().all(|&b| b));
+        let e = match mask {
+            None => est.step(model, &u, &y),
+            Some(row) => est.step_partial(model, &u, &y, row),
+        }
+        .map_err(|e| (k, e))?;
         out.center[k * n..(k + 1) * n].copy_from_slice(e.center().as_slice());
         if kind != EstimateKind::Point {
             for i in 0..n {

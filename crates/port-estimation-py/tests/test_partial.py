@@ -184,3 +184,39 @@ def test_bad_masks_are_refused():
     with pytest.raises(ValueError, match="non-finite"):
         kf.step(None, np.array([np.nan, 0.0]))
     assert_close(kf.x, np.zeros(2))
+
+
+def test_run_takes_masked_logs_and_equals_the_partial_steps():
+    model, us, ys, masks = _bicycle_log()
+    steps = pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE)
+    want = np.array([steps.step(u, y, measured=m).center for u, y, m in zip(us, ys, masks)])
+    for kwargs in ({"ys": np.ma.masked_invalid(ys)}, {"ys": ys, "measured": masks}):
+        est = pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE)
+        run = est.run(us, **kwargs)
+        np.testing.assert_array_equal(run.center, want)
+        assert run.status[1].startswith("predicted") or masks[1].any()
+    with pytest.raises(ValueError, match="shape of ys"):
+        pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE).run(us, ys, measured=masks[:, :2])
+    with pytest.raises(ValueError, match=r"ys\[1, 0\] is not finite"):
+        pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE).run(us, ys)
+
+
+def test_the_fleet_reads_null_measurements_as_partial_rows(tmp_path):
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    from port_estimation import fleet
+
+    model, us, ys, masks = _bicycle_log()
+    k = np.arange(STEPS)
+    names = fleet.log_columns(2, 3)
+    columns = [pa.array(k)] + [pa.array(c) for c in us.T]
+    columns += [pa.array(np.where(m, c, 0.0), mask=~m) for c, m in zip(ys.T, masks.T)]
+    path = tmp_path / "log.parquet"
+    pq.write_table(pa.Table.from_arrays(columns, names=names), path)
+    _, _, read = fleet.read_log(path, inputs=2, measurements=3)
+    assert isinstance(read, np.ma.MaskedArray)
+    np.testing.assert_array_equal(~np.ma.getmaskarray(read), masks)
+    est = pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE)
+    want = est.run(us, ys, measured=masks).center
+    est = pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE)
+    np.testing.assert_array_equal(est.run(us, read).center, want)

@@ -156,7 +156,9 @@ class Estimator:
     def step(
         self, u: ArrayLike | None, y: ArrayLike, *, measured: ArrayLike | None = None, model: Model | None = None
     ) -> Estimate: ...
-    def run(self, us: ArrayLike | None, ys: ArrayLike, *, model: Model | None = None) -> RunResult: ...
+    def run(
+        self, us: ArrayLike | None, ys: ArrayLike, *, measured: ArrayLike | None = None, model: Model | None = None
+    ) -> RunResult: ...
     def set_data_checks(
         self,
         policy: Literal["error", "flag", "restart", "off"] = "error",

@@ -72,8 +72,10 @@ def write_log(path: PathLike, k: np.ndarray, us: np.ndarray, ys: np.ndarray) -> 
 def read_log(path: PathLike, *, inputs: int, measurements: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Reads a log: returns ``k`` (int64, ``(T,)``), ``us`` ``(T, p)`` and ``ys`` ``(T, m)``.
 
-    Raises ValueError naming the file for a missing or unexpected column, a null cell, or ``k`` that
-    does not increase by one (the row is named).
+    A null measurement cell is a sensor that did not report at that row: ``ys`` is then a
+    ``numpy.ma`` masked array with those cells masked, which ``Estimator.run`` takes as partial
+    measurements. Raises ValueError naming the file for a missing or unexpected column, a null
+    ``k`` or input cell, or ``k`` that does not increase by one (the row is named).
     """
     import pyarrow.parquet as pq
 
@@ -88,9 +90,9 @@ def read_log(path: PathLike, *, inputs: int, measurements: int) -> tuple[np.ndar
             + (f"; unexpected {', '.join(extra)}" if extra else "")
         )
     table = pq.read_table(path, columns=want)
-    for name in want:
+    for name in want[: 1 + inputs]:
         if table.column(name).null_count:
-            raise ValueError(f"{path}: column {name} has empty cells")
+            raise ValueError(f"{path}: column {name} has empty cells (only measurements may be missing)")
     k = table.column("k").to_numpy().astype(np.int64, copy=False)
     jumps = np.flatnonzero(np.diff(k) != 1)
     if len(jumps):
@@ -102,7 +104,12 @@ def read_log(path: PathLike, *, inputs: int, measurements: int) -> tuple[np.ndar
             return np.zeros((len(k), 0))
         return np.column_stack([table.column(n).to_numpy().astype(float, copy=False) for n in names])
 
-    return k, block(want[1 : 1 + inputs]), block(want[1 + inputs :])
+    outputs = want[1 + inputs :]
+    ys = block(outputs)
+    if any(table.column(n).null_count for n in outputs):
+        missing = np.column_stack([table.column(n).is_null().to_numpy(zero_copy_only=False) for n in outputs])
+        ys = np.ma.masked_array(np.where(missing, 0.0, ys), mask=missing)
+    return k, block(want[1 : 1 + inputs]), ys
 
 
 def _write_atomically(path: Path, tables: Iterable[Any]) -> None:
