@@ -23,7 +23,7 @@ use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
 use crate::kalman::{GaussianEstimate, commit_prediction};
-use crate::partial::{GaussianSubset, Subsets, check_measured, measured_rows};
+use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
 use crate::validate::{InitialData, all_finite, check_initial, check_vec, replace_spd};
@@ -242,16 +242,11 @@ impl ExtendedKalmanFilter {
         measured: &[bool],
     ) -> Result<&GaussianEstimate, EstimatorError> {
         crate::validate::check_discrete(model, self.n, self.p, self.m)?;
-        let k = measured_rows(measured, self.m, &mut self.subsets.rows)?;
-        if k == self.m {
-            return self.step(model, u, y);
-        }
-        if k == 0 {
-            check_measured(y, self.m, &[])?;
-            return self.predict(model, u);
-        }
-        check_vec("u", u, self.p)?;
-        check_measured(y, self.m, &self.subsets.rows)?;
+        let k = match classify(measured, u, y, (self.m, self.p), &mut self.subsets.rows)? {
+            Measured::All => return self.step(model, u, y),
+            Measured::Nothing => return self.predict(model, u),
+            Measured::Some(k) => k,
+        };
         self.predict_into_buffers(model, u)?;
         model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
         if !all_finite(self.y_pred.as_slice()) || !all_finite(self.h.as_slice()) {

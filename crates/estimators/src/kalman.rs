@@ -18,7 +18,7 @@ use crate::checks::map_worst_output;
 use crate::checks::{DataChecks, GateVerdict, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
-use crate::partial::{GaussianSubset, Subsets, check_measured, measured_rows};
+use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::all_finite;
@@ -361,16 +361,11 @@ impl KalmanFilter {
         measured: &[bool],
     ) -> Result<&GaussianEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
-        let k = measured_rows(measured, self.m, &mut self.subsets.rows)?;
-        if k == self.m {
-            return self.step(model, u, y);
-        }
-        if k == 0 {
-            check_measured(y, self.m, &[])?;
-            return self.predict(model, u);
-        }
-        check_vec("u", u, self.p)?;
-        check_measured(y, self.m, &self.subsets.rows)?;
+        let k = match classify(measured, u, y, (self.m, self.p), &mut self.subsets.rows)? {
+            Measured::All => return self.step(model, u, y),
+            Measured::Nothing => return self.predict(model, u),
+            Measured::Some(k) => k,
+        };
         self.predict_into_buffers(model.a(), model.b(), u);
         self.innovate(model.c(), y, model.angles());
         let (n, checks, step) = (self.n, self.gate.checks(), self.steps + 1);

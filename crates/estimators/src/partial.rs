@@ -25,6 +25,42 @@ pub(crate) fn measured_rows(measured: &[bool], m: usize, rows: &mut Vec<usize>) 
     Ok(rows.len())
 }
 
+/// What a step with a mask measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Measured {
+    /// Every output: the ordinary step (which checks its data itself).
+    All,
+    /// None: a prediction (`y`'s length checked).
+    Nothing,
+    /// `k` of them, their indices in `rows`; `u` and the measured entries of `y` checked.
+    Some(usize),
+}
+
+/// Classifies `measured` (its measured indices into `rows`, capacity `m`) and checks the data a
+/// partial step uses: `u` (length `p`, finite) and `y`'s measured entries.
+///
+/// # Errors
+/// A mask or `y` of another length than `m`, `u` of another length than `p`, non-finite data.
+pub(crate) fn classify(
+    measured: &[bool],
+    u: &DVector<f64>,
+    y: &DVector<f64>,
+    (m, p): (usize, usize),
+    rows: &mut Vec<usize>,
+) -> Result<Measured, EstimatorError> {
+    let k = measured_rows(measured, m, rows)?;
+    if k == m {
+        return Ok(Measured::All);
+    }
+    if k == 0 {
+        check_measured(y, m, &[])?;
+        return Ok(Measured::Nothing);
+    }
+    crate::validate::check_vec("u", u, p)?;
+    check_measured(y, m, rows)?;
+    Ok(Measured::Some(k))
+}
+
 /// `y`'s length, and its measured entries finite.
 ///
 /// # Errors

@@ -52,7 +52,7 @@ use models::{Angles, Dims, DiscreteModel, wrap_angle};
 use crate::checks::{DataChecks, GateVerdict, InnovationGate, map_worst_output, name_worst_output};
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, data_check, nis};
-use crate::partial::{self, Subsets, check_measured, measured_rows};
+use crate::partial::{self, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec, replace_spd};
@@ -580,16 +580,11 @@ impl UnscentedKalmanFilter {
         measured: &[bool],
     ) -> Result<&GaussianEstimate, EstimatorError> {
         crate::validate::check_discrete(model, self.n, self.p, self.m)?;
-        let k = measured_rows(measured, self.m, &mut self.subsets.rows)?;
-        if k == self.m {
-            return self.step(model, u, y);
-        }
-        if k == 0 {
-            check_measured(y, self.m, &[])?;
-            return self.predict(model, u);
-        }
-        check_vec("u", u, self.p)?;
-        check_measured(y, self.m, &self.subsets.rows)?;
+        let k = match classify(measured, u, y, (self.m, self.p), &mut self.subsets.rows)? {
+            Measured::All => return self.step(model, u, y),
+            Measured::Nothing => return self.predict(model, u),
+            Measured::Some(k) => k,
+        };
         let (n, m, checks, step) = (self.n, self.m, self.gate.checks(), self.steps + 1);
         self.subsets.get(k, || MeasurementBuffers::new(n, k, m, checks))?;
         let (guarded_prediction, saved_chol) = (self.predict_into_buffers(model, u)?, self.chol_current);

@@ -28,7 +28,7 @@ use models::{Dims, SecondOrderModel, TaylorEnclosure};
 use crate::angle_branch::{self, Branch};
 use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
-use crate::partial::{self, check_measured, measured_rows};
+use crate::partial::{self, Measured, check_measured, classify};
 use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
 use extension::{Function, boxed, contract_box, mean_value, predict_box};
 
@@ -631,17 +631,11 @@ impl ConstrainedZonotopeFilter {
     ) -> Result<&ZonotopeEstimate, EstimatorError> {
         self.check_model(model)?;
         let mut rows = Vec::with_capacity(self.dims.outputs);
-        let k = measured_rows(measured, self.dims.outputs, &mut rows)?;
-        if k == self.dims.outputs {
-            return self.step(model, u, y);
+        match classify(measured, u, y, (self.dims.outputs, self.dims.inputs), &mut rows)? {
+            Measured::All => self.step(model, u, y),
+            Measured::Nothing => self.predict(model, u),
+            Measured::Some(_) => self.step_rows(model, u, y, Some(&rows)),
         }
-        check_measured(y, self.dims.outputs, &rows)?;
-        if k == 0 {
-            return self.predict(model, u);
-        }
-        crate::validate::check_vec("u", u, self.dims.inputs)?;
-        crate::validate::check_finite("u", u.as_slice())?;
-        self.step_rows(model, u, y, Some(&rows))
     }
 
     /// The step with the measured `rows` (`None`: all), its data checked.
