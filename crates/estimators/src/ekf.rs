@@ -170,14 +170,8 @@ impl ExtendedKalmanFilter {
         step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         let u = u.unwrap_or(&self.u_last);
-        model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
-        if !all_finite(self.y_pred.as_slice()) || !all_finite(self.h.as_slice()) {
-            return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
-        }
+        innovate(model, &self.x_pred, u, y, (&mut self.y_pred, &mut self.h, &mut self.innov))?;
         // Gain (9), update (10), covariance (11) in Joseph form.
-        self.innov.copy_from(y);
-        self.innov -= &self.y_pred;
-        model.angles().wrap_outputs(self.innov.as_mut_slice());
         let nis = self.upd.compute(&self.x_pred, &self.p_pred, &self.h, &self.r, &self.innov, self.gate.is_on())?;
         self.upd.commit_gated(
             &self.gate,
@@ -248,13 +242,7 @@ impl ExtendedKalmanFilter {
             Measured::Some(k) => k,
         };
         self.predict_into_buffers(model, u)?;
-        model.h_with_jacobian(&self.x_pred, u, &mut self.y_pred, &mut self.h)?;
-        if !all_finite(self.y_pred.as_slice()) || !all_finite(self.h.as_slice()) {
-            return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
-        }
-        self.innov.copy_from(y);
-        self.innov -= &self.y_pred;
-        model.angles().wrap_outputs(self.innov.as_mut_slice());
+        innovate(model, &self.x_pred, u, y, (&mut self.y_pred, &mut self.h, &mut self.innov))?;
         let (n, checks, step) = (self.n, self.gate.checks(), self.steps + 1);
         let (sub, rows) = self.subsets.get(k, || GaussianSubset::new(n, k, checks))?;
         sub.gather(rows, &self.h, &self.r, &self.innov);
@@ -266,6 +254,25 @@ impl ExtendedKalmanFilter {
         self.steps += 1;
         Ok(&self.est)
     }
+}
+
+/// `ŷ = h(x⁻, u)`, `H = ∂h/∂x` and the innovation `ν = y − ŷ` (angle outputs wrapped) into
+/// `(y_pred, h, innov)`.
+fn innovate<M: DifferentiableModel + ?Sized>(
+    model: &M,
+    x_pred: &DVector<f64>,
+    u: &DVector<f64>,
+    y: &DVector<f64>,
+    (y_pred, h, innov): (&mut DVector<f64>, &mut DMatrix<f64>, &mut DVector<f64>),
+) -> Result<(), EstimatorError> {
+    model.h_with_jacobian(x_pred, u, y_pred, h)?;
+    if !all_finite(y_pred.as_slice()) || !all_finite(h.as_slice()) {
+        return Err(EstimatorError::NumericalFailure("the model's output or its Jacobian is not finite"));
+    }
+    innov.copy_from(y);
+    *innov -= &*y_pred;
+    model.angles().wrap_outputs(innov.as_mut_slice());
+    Ok(())
 }
 
 forward_estimator!(impl<> for ExtendedKalmanFilter, DifferentiableModel, GaussianEstimate, partial);
