@@ -455,6 +455,34 @@ pub(super) mod tests {
     }
 
     #[test]
+    fn angle_outputs_enter_the_cost_and_the_gradient_wrapped() {
+        // Output 1 an angle: its measurements moved by whole turns leave the window's cost and
+        // gradient as they are (the residuals wrapped to (−π, π]); undeclared, they do not.
+        let cost_and_gradient = |cs: &mut Case| {
+            let (window, rings, wts, model) = cs.parts();
+            let cost = window.cost(model, rings, &wts, 5, 4, false).unwrap();
+            window.linearise(model, rings, &wts, 5, 4).unwrap();
+            (cost, window.g.clone())
+        };
+        let mut plain = Case::new(4);
+        let (cost, g) = cost_and_gradient(&mut plain);
+        let mut turned = Case::new(4);
+        turned.model = turned.model.clone().with_angles(models::Angles::new(&[], &[1])).unwrap();
+        for j in 0..4 {
+            let sl = turned.rings.slot(5 + j);
+            turned.rings.y[sl][1] += std::f64::consts::TAU * (j as f64 - 1.5).round();
+        }
+        let (cost_turned, g_turned) = cost_and_gradient(&mut turned);
+        assert!((cost_turned - cost).abs() < 1e-12 * cost, "{cost_turned} vs {cost}");
+        for (a, b) in g.iter().zip(&g_turned) {
+            assert!((a - b).amax() < 1e-12, "{a} vs {b}");
+        }
+        turned.model = plain.model.clone();
+        let (cost_raw, _) = cost_and_gradient(&mut turned);
+        assert!(cost_raw > cost + 1.0, "undeclared, the turns count: {cost_raw} vs {cost}");
+    }
+
+    #[test]
     fn gradient_and_blocks_are_those_of_the_dense_gauss_newton_system() {
         let mut cs = Case::new(4);
         let (h, g) = cs.dense_system();
