@@ -44,6 +44,9 @@ pub trait DifferentiableContinuousModel: ContinuousModel {
     fn output_jacobian(&self, x: &DVector<f64>, u: &DVector<f64>, out: &mut DMatrix<f64>) -> Result<(), ModelError>;
 }
 
+/// The most RK4 sub-steps per sampling period ([`Discretized::new`]).
+pub const MAX_RK4_SUBSTEPS: usize = 10_000;
+
 /// How a continuous model is integrated over one sampling period (input held constant).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -72,11 +75,17 @@ impl<M: ContinuousModel> Discretized<M> {
     /// Samples `model` at `ts` with `integrator`.
     ///
     /// # Errors
-    /// [`ModelError::InvalidSamplingPeriod`] unless `ts` is positive and finite, or RK4 has no
-    /// sub-step.
+    /// [`ModelError::InvalidSamplingPeriod`] unless `ts` is positive and finite;
+    /// [`ModelError::InvalidSubsteps`] unless RK4 has 1 to [`MAX_RK4_SUBSTEPS`] sub-steps (every
+    /// evaluation runs them all: a bound keeps one call's time bounded).
     pub fn new(model: M, ts: f64, integrator: Integrator) -> Result<Self, ModelError> {
-        if !(ts.is_finite() && ts > 0.0) || matches!(integrator, Integrator::Rk4 { substeps: 0 }) {
+        if !(ts.is_finite() && ts > 0.0) {
             return Err(ModelError::InvalidSamplingPeriod(ts));
+        }
+        if let Integrator::Rk4 { substeps } = integrator {
+            if !(1..=MAX_RK4_SUBSTEPS).contains(&substeps) {
+                return Err(ModelError::InvalidSubsteps { substeps, max: MAX_RK4_SUBSTEPS });
+            }
         }
         Ok(Self { model, ts, integrator })
     }

@@ -41,6 +41,14 @@ pub enum ModelError {
         /// Why it is refused.
         reason: &'static str,
     },
+    /// RK4 with no sub-step, or with more than [`crate::continuous::MAX_RK4_SUBSTEPS`].
+    #[error("RK4 sub-steps per sampling period must be in 1..={max}, got {substeps}")]
+    InvalidSubsteps {
+        /// The rejected count.
+        substeps: usize,
+        /// The largest accepted.
+        max: usize,
+    },
     /// The sampling period (or integration step) is not positive and finite.
     #[error("sampling period T_s must be positive and finite, got {0}")]
     InvalidSamplingPeriod(f64),

@@ -13,6 +13,25 @@ use crate::errors::value_error;
 /// unaligned (as unpickled from out-of-band buffers, say) are copied first: a view of them would
 /// not be sound.
 fn array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<PyArrayLikeDyn<'py, f64, AllowTypeChange>> {
+    // Real numbers only: complex values (their imaginary part would be dropped), booleans, strings
+    // and objects are refused, and a masked array's hidden values are never read silently.
+    let py = obj.py();
+    if py.import("numpy.ma")?.call_method1("isMaskedArray", (obj,))?.extract::<bool>()? {
+        return Err(value_error(format!(
+            "{what} is a masked array: only a measurement (y, ys) may be masked (its masked entries not measured)"
+        )));
+    }
+    let kind: String =
+        py.import("numpy")?.call_method1("asarray", (obj,))?.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        let what_kind = match kind.as_str() {
+            "c" => "complex numbers",
+            "b" => "booleans",
+            "U" | "S" => "strings",
+            _ => "objects that are not real numbers",
+        };
+        return Err(value_error(format!("{what} must be an array of real numbers, got {what_kind}")));
+    }
     let extract = |o: &Bound<'py, PyAny>| {
         o.extract::<PyArrayLikeDyn<'py, f64, AllowTypeChange>>()
             .map_err(|e| value_error(format!("{what} must be an array of real numbers: {e}")))

@@ -304,7 +304,11 @@ impl Model {
     /// Linear.
     #[staticmethod]
     #[pyo3(signature = (speed = 6.0, load = 1, ts = 1e-3))]
-    fn carrier(speed: f64, load: usize, ts: f64) -> PyResult<Self> {
+    fn carrier(speed: f64, load: i64, ts: f64) -> PyResult<Self> {
+        let load = usize::try_from(load)
+            .ok()
+            .filter(|&l| l <= 2)
+            .ok_or_else(|| value_error(format!("load must be 0, 1 or 2 containers, got {load}")))?;
         Self::build(Recipe::Carrier { speed, load, ts })
     }
 

@@ -237,3 +237,29 @@ def test_the_innovation_gate_raises_flags_restarts_or_stays_silent_as_asked(syst
         kf.set_data_checks("sometimes")
     with pytest.raises(ValueError):
         kf.set_data_checks("error", gate_probability=1.5)
+
+
+def test_vehicle_parameters_are_refused_by_name():
+    with pytest.raises(ValueError, match="sub-steps per sampling period must be in 1..=10000, got 0"):
+        pe.Model.vessel(rk4_substeps=0)
+    # A count that would hold the interpreter for hours is refused before any evaluation.
+    with pytest.raises(ValueError, match="got 1000000000000"):
+        pe.Model.vessel(rk4_substeps=10**12)
+    with pytest.raises(ValueError, match="load must be 0, 1 or 2 containers, got -1"):
+        pe.Model.carrier(load=-1)
+
+
+@pytest.mark.parametrize(
+    ("value", "words"),
+    [
+        (np.array([0.29 + 5j]), "complex numbers"),
+        (np.array([True]), "booleans"),
+        (["0.3"], "strings"),
+        (np.ma.masked_array([0.3], mask=[True]), "masked array"),
+    ],
+)
+def test_only_real_numbers_are_taken(value, words):
+    kf = pe.KalmanFilter(pe.Model(np.eye(1), np.zeros((1, 0)), np.eye(1)), x0=np.zeros(1), P0=1.0, Q=1e-2, R=1e-2)
+    with pytest.raises(ValueError, match=words):
+        kf.update(value)
+    assert kf.x[0] == 0.0

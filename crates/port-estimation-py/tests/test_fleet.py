@@ -101,3 +101,25 @@ def test_the_dask_run_equals_the_serial_run_bit_for_bit(tmp_path, carrier):
     for s, d in zip(serial, parallel):
         assert Path(s["output"]).name == Path(d["output"]).name
         assert Path(s["output"]).read_bytes() == Path(d["output"]).read_bytes()
+
+
+def test_an_output_never_replaces_a_log(tmp_path, carrier):
+    model, q, r, p0 = carrier
+    (path,) = _logs(tmp_path, model, 1, 10, q, r)
+    before = path.read_bytes()
+    kwargs = {"model": model, "estimator": "smf", "P0": p0, "Q": q, "R": r}
+    with pytest.raises(ValueError, match="would overwrite the log"):
+        fleet.filter_logs([path], path.parent, **kwargs)
+    with pytest.raises(ValueError, match="would overwrite the log"):
+        fleet.filter_log(path, path, **kwargs)
+    # The same file under another name (a hard link) is the same log.
+    link = tmp_path / "elsewhere" / path.name
+    link.parent.mkdir()
+    link.hardlink_to(path)
+    with pytest.raises(ValueError, match="would overwrite the log"):
+        fleet.filter_logs([path], link.parent, **kwargs)
+    assert path.read_bytes() == before
+    for bad in (0, -1, 2.5, True):
+        with pytest.raises(ValueError, match="chunk_rows must be a positive integer"):
+            fleet.filter_log(path, tmp_path / "o.parquet", chunk_rows=bad, **kwargs)
+    assert not (tmp_path / "o.parquet").exists()

@@ -200,7 +200,21 @@ def filter_log(
     """Filters one log into ``out_path`` (see the module); returns its summary
     (``log``, ``output``, ``steps``, ``unclean``, ``seconds``)."""
     spec = _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows)
-    return _filter_one(os.fspath(path), os.fspath(out_path), spec)
+    path, out_path = os.path.abspath(os.fspath(path)), os.path.abspath(os.fspath(out_path))
+    _refuse_overwriting_inputs([path], [out_path])
+    return _filter_one(path, out_path, spec)
+
+
+def _refuse_overwriting_inputs(paths: Sequence[str], outs: Sequence[str]) -> None:
+    """Raises ValueError if an output would replace one of the logs: the same path, or the same file
+    under another name (a link; compared by file identity, not by name)."""
+    inputs = {os.path.normcase(os.path.realpath(p)): p for p in paths}
+    for out in outs:
+        same = inputs.get(os.path.normcase(os.path.realpath(out)))
+        if same is None and os.path.exists(out):
+            same = next((p for p in paths if os.path.exists(p) and os.path.samefile(p, out)), None)
+        if same is not None:
+            raise ValueError(f"the output {out} would overwrite the log {same}: choose another out_dir")
 
 
 def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows) -> dict[str, Any]:
@@ -210,6 +224,8 @@ def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows) -> dict[str, Any
         model = read_model(model)
     if not isinstance(model, (Model, ModelFile)):
         raise TypeError(f"model must be a Model, a ModelFile or a model file's path, not {type(model).__name__}")
+    if chunk_rows is not None and (isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1):
+        raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows!r}")
     initial = {key: value for key, value in (("x0", x0), ("P0", P0), ("Q", Q), ("R", R)) if value is not None}
     if isinstance(model, ModelFile) and initial:
         raise ValueError("a model file brings its own x0, p0, q, r: do not give x0, P0, Q or R with it")
@@ -272,11 +288,13 @@ def filter_logs(
         A malformed log (named), bad settings; the estimator's exceptions for a log it cannot filter.
     """
     spec = _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows)
-    paths = [os.fspath(p) for p in paths]
+    # Absolute paths, resolved here on the client (a worker may run in another directory).
+    paths = [os.path.abspath(os.fspath(p)) for p in paths]
     names = [Path(p).name for p in paths]
     if len(set(names)) != len(names):
         raise ValueError("the logs' file names must differ (each names its output in out_dir)")
-    outs = [os.fspath(Path(out_dir) / name) for name in names]
+    outs = [os.path.abspath(os.fspath(Path(out_dir) / name)) for name in names]
+    _refuse_overwriting_inputs(paths, outs)
     _build(spec)  # settings errors here, once, rather than in every task
     if client is None:
         return [_filter_one(p, o, spec) for p, o in zip(paths, outs)]
