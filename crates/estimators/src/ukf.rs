@@ -136,7 +136,6 @@ pub struct UnscentedKalmanFilter {
     wc0: f64,
     wi: f64,
     q: DMatrix<f64>,
-    r: DMatrix<f64>,
     est: GaussianEstimate,
     report: UkfReport,
     // Buffers (allocated once).
@@ -147,22 +146,14 @@ pub struct UnscentedKalmanFilter {
     chol_current: bool,
     sig: DMatrix<f64>,
     prop: DMatrix<f64>,
-    zsig: DMatrix<f64>,
     xcol: DVector<f64>,
     fcol: DVector<f64>,
     zcol: DVector<f64>,
     x_pred: DVector<f64>,
     p_pred: DMatrix<f64>,
     p_pred_chol: DMatrix<f64>,
-    z_pred: DVector<f64>,
-    pzz: DMatrix<f64>,
-    pzz_chol: DMatrix<f64>,
-    pxz: DMatrix<f64>,
-    k: DMatrix<f64>,
-    h_stat: DMatrix<f64>,
     ikh: DMatrix<f64>,
     tmp_nn: DMatrix<f64>,
-    kr: DMatrix<f64>,
     x_new: DVector<f64>,
     p_new: DMatrix<f64>,
     p_new_chol: DMatrix<f64>,
@@ -170,21 +161,19 @@ pub struct UnscentedKalmanFilter {
     /// same columns times their weights `Wc_i`: the covariances are `dev_w devᵀ`.
     dev_x: DMatrix<f64>,
     dev_xw: DMatrix<f64>,
-    dev_z: DMatrix<f64>,
-    dev_zw: DMatrix<f64>,
-    dz: DVector<f64>,
-    innov: DVector<f64>,
     /// The input of the last prediction, for `h` in a following update.
     u_last: DVector<f64>,
-    gate: InnovationGate,
-    /// The update's buffers for partial measurements, by measured count.
-    subsets: Subsets<MeasurementBuffers>,
+    /// The update's buffers sized by the outputs: all `m` of them (with `R` and the gate).
+    meas: MeasurementBuffers,
+    /// The same for partial measurements, by measured count (swapped with `meas`).
+    subsets: Subsets<PartialWork>,
     /// Steps (predictions, with or without their update) so far.
     steps: u64,
 }
 
-/// The buffers of the update sized by the measured outputs (`k` of `m`): swapped with the
-/// filter's own for a partial measurement ([`UnscentedKalmanFilter::step_partial`]).
+/// The buffers of the update sized by its outputs (`k` of `m`), with `R` and the gate of that
+/// size: the filter's own (`k = m`), or a partial measurement's, swapped in for its update
+/// ([`UnscentedKalmanFilter::step_partial`]).
 #[derive(Debug, Clone)]
 struct MeasurementBuffers {
     zsig: DMatrix<f64>,
@@ -201,13 +190,19 @@ struct MeasurementBuffers {
     innov: DVector<f64>,
     r: DMatrix<f64>,
     gate: InnovationGate,
-    /// The measured entries of `y`, and the positions of the angle outputs among them.
+}
+
+/// A partial measurement's workspace: its buffers, the measured entries of `y` and the positions
+/// of the angle outputs among them.
+#[derive(Debug, Clone)]
+struct PartialWork {
+    buffers: MeasurementBuffers,
     y: DVector<f64>,
     angle_outputs: Vec<usize>,
 }
 
 impl MeasurementBuffers {
-    fn new(n: usize, k: usize, m: usize, checks: DataChecks) -> Result<Self, EstimatorError> {
+    fn new(n: usize, k: usize, checks: DataChecks) -> Result<Self, EstimatorError> {
         let s = 2 * n + 1;
         Ok(Self {
             zsig: DMatrix::zeros(k, s),
@@ -224,8 +219,6 @@ impl MeasurementBuffers {
             innov: DVector::zeros(k),
             r: DMatrix::zeros(k, k),
             gate: InnovationGate::new(checks, k)?,
-            y: DVector::zeros(k),
-            angle_outputs: Vec::with_capacity(m),
         })
     }
 }
@@ -325,40 +318,30 @@ impl UnscentedKalmanFilter {
             wc0,
             wi,
             q,
-            r,
             est: GaussianEstimate::initial(x0, p0, StepDetails::Unscented(UkfReport::default())),
             report: UkfReport::default(),
             chol: nn(),
             chol_current: false,
             sig: DMatrix::zeros(n, s),
             prop: DMatrix::zeros(n, s),
-            zsig: DMatrix::zeros(m, s),
             xcol: DVector::zeros(n),
             fcol: DVector::zeros(n),
             zcol: DVector::zeros(m),
             x_pred: DVector::zeros(n),
             p_pred: nn(),
             p_pred_chol: nn(),
-            z_pred: DVector::zeros(m),
-            pzz: DMatrix::zeros(m, m),
-            pzz_chol: DMatrix::zeros(m, m),
-            pxz: DMatrix::zeros(n, m),
-            k: DMatrix::zeros(n, m),
-            h_stat: DMatrix::zeros(m, n),
             ikh: nn(),
             tmp_nn: nn(),
-            kr: DMatrix::zeros(n, m),
             x_new: DVector::zeros(n),
             p_new: nn(),
             p_new_chol: nn(),
             dev_x: DMatrix::zeros(n, s),
             dev_xw: DMatrix::zeros(n, s),
-            dev_z: DMatrix::zeros(m, s),
-            dev_zw: DMatrix::zeros(m, s),
-            dz: DVector::zeros(m),
-            innov: DVector::zeros(m),
             u_last: DVector::zeros(inputs),
-            gate: InnovationGate::new(DataChecks::default(), m)?,
+            meas: MeasurementBuffers::new(n, m, DataChecks::default()).map(|mut b| {
+                b.r = r;
+                b
+            })?,
             subsets: Subsets::new(m),
             steps: 0,
         })
@@ -370,7 +353,7 @@ impl UnscentedKalmanFilter {
     /// # Errors
     /// A gate probability outside `(0, 1)`; the filter is unchanged.
     pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
-        self.gate = InnovationGate::new(checks, self.m)?;
+        self.meas.gate = InnovationGate::new(checks, self.m)?;
         self.subsets.clear();
         Ok(())
     }
@@ -415,7 +398,7 @@ impl UnscentedKalmanFilter {
     /// # Errors
     /// As [`UnscentedKalmanFilter::new`] for `R`.
     pub fn set_measurement_noise(&mut self, r: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        replace_spd("R", &mut self.r, r, &mut self.pzz_chol)
+        replace_spd("R", &mut self.meas.r, r, &mut self.meas.pzz_chol)
     }
 
     /// Sigma points (24) of `mean` with the lower factor `l` into `sig`.
@@ -585,27 +568,28 @@ impl UnscentedKalmanFilter {
             Measured::Nothing => return self.predict(model, u),
             Measured::Some(k) => k,
         };
-        let (n, m, checks, step) = (self.n, self.m, self.gate.checks(), self.steps + 1);
-        self.subsets.get(k, || MeasurementBuffers::new(n, k, m, checks))?;
+        let (n, m, checks, step) = (self.n, self.m, self.meas.gate.checks(), self.steps + 1);
+        self.subsets.get(k, || {
+            let buffers = MeasurementBuffers::new(n, k, checks)?;
+            Ok(PartialWork { buffers, y: DVector::zeros(k), angle_outputs: Vec::with_capacity(m) })
+        })?;
         let (guarded_prediction, saved_chol) = (self.predict_into_buffers(model, u)?, self.chol_current);
         self.sigma_outputs(model, Some(u))?;
-        let Some(mut sub) = self.subsets.take(k) else {
+        let Some(mut work) = self.subsets.take(k) else {
             return Err(EstimatorError::NumericalFailure("the partial update's buffers are missing"));
         };
         let rows = &self.subsets.rows;
-        partial::gather_rows(&self.zsig, rows, &mut sub.zsig);
-        partial::gather_block(&self.r, rows, &mut sub.r);
+        partial::gather_rows(&self.meas.zsig, rows, &mut work.buffers.zsig);
+        partial::gather_block(&self.meas.r, rows, &mut work.buffers.r);
         for (a, &i) in rows.iter().enumerate() {
-            sub.y[a] = y[i];
+            work.y[a] = y[i];
         }
-        partial::angle_positions(rows, model.angles().outputs, &mut sub.angle_outputs);
-        self.swap_measurement(&mut sub);
-        let y_sub = std::mem::replace(&mut sub.y, DVector::zeros(0));
-        let angles = Angles::new(model.angles().states, &sub.angle_outputs);
-        let result = self.update_core(&y_sub, angles, guarded_prediction, step).map(|_| ());
-        self.swap_measurement(&mut sub);
-        sub.y = y_sub;
-        self.subsets.put(k, sub);
+        partial::angle_positions(rows, model.angles().outputs, &mut work.angle_outputs);
+        std::mem::swap(&mut self.meas, &mut work.buffers);
+        let angles = Angles::new(model.angles().states, &work.angle_outputs);
+        let result = self.update_core(&work.y, angles, guarded_prediction, step).map(|_| ());
+        std::mem::swap(&mut self.meas, &mut work.buffers);
+        self.subsets.put(k, work);
         if let Err(e) = result {
             self.chol_current = saved_chol;
             return Err(map_worst_output(e, &self.subsets.rows));
@@ -613,25 +597,6 @@ impl UnscentedKalmanFilter {
         self.u_last.copy_from(u);
         self.steps += 1;
         Ok(&self.est)
-    }
-
-    /// Exchanges the update's measurement-sized buffers with `b`'s.
-    fn swap_measurement(&mut self, b: &mut MeasurementBuffers) {
-        use std::mem::swap;
-        swap(&mut self.zsig, &mut b.zsig);
-        swap(&mut self.z_pred, &mut b.z_pred);
-        swap(&mut self.pzz, &mut b.pzz);
-        swap(&mut self.pzz_chol, &mut b.pzz_chol);
-        swap(&mut self.pxz, &mut b.pxz);
-        swap(&mut self.k, &mut b.k);
-        swap(&mut self.h_stat, &mut b.h_stat);
-        swap(&mut self.kr, &mut b.kr);
-        swap(&mut self.dev_z, &mut b.dev_z);
-        swap(&mut self.dev_zw, &mut b.dev_zw);
-        swap(&mut self.dz, &mut b.dz);
-        swap(&mut self.innov, &mut b.innov);
-        swap(&mut self.r, &mut b.r);
-        swap(&mut self.gate, &mut b.gate);
     }
 
     /// Replaces the state by `(mean, covariance)` (for an arrival-cost update that starts from
@@ -713,9 +678,9 @@ impl UnscentedKalmanFilter {
         for j in 0..s {
             self.xcol.as_mut_slice().copy_from_slice(&self.sig.as_slice()[j * n..(j + 1) * n]);
             model.h(&self.xcol, u, &mut self.zcol)?;
-            self.zsig.as_mut_slice()[j * m..(j + 1) * m].copy_from_slice(self.zcol.as_slice());
+            self.meas.zsig.as_mut_slice()[j * m..(j + 1) * m].copy_from_slice(self.zcol.as_slice());
         }
-        if self.zsig.as_slice().iter().any(|v| !v.is_finite()) {
+        if self.meas.zsig.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::NumericalFailure("the model's output at a sigma point is not finite"));
         }
         Ok(())
@@ -730,7 +695,7 @@ impl UnscentedKalmanFilter {
         guarded_prediction: bool,
         step: u64,
     ) -> Result<&GaussianEstimate, EstimatorError> {
-        weighted_mean(&self.zsig, (self.wm0, self.wi), &mut self.z_pred, angles.outputs);
+        weighted_mean(&self.meas.zsig, (self.wm0, self.wi), &mut self.meas.z_pred, angles.outputs);
         // Pzz, Pxz (30)–(31); guard: about the central point. X₀ = x⁻: the sigma points'
         // centre is the same in both forms, and the first column of `dev_x` is exactly 0.
         deviations(
@@ -744,13 +709,20 @@ impl UnscentedKalmanFilter {
         let mut guarded_innovation = false;
         let mut ok = false;
         for attempt in 0..2 {
-            let centre = (attempt == 0).then_some(&self.z_pred);
-            deviations(&self.zsig, centre, (self.wc0, self.wi), &mut self.dev_z, &mut self.dev_zw, angles.outputs);
-            self.pzz.copy_from(&self.r);
-            dense::mul_nt(1.0, &self.dev_zw, &self.dev_z, 1.0, &mut self.pzz);
-            dense::mul_nt(1.0, &self.dev_x, &self.dev_zw, 0.0, &mut self.pxz);
-            dense::symmetrize(&mut self.pzz);
-            if factor_pd(&self.pzz, &mut self.pzz_chol) {
+            let centre = (attempt == 0).then_some(&self.meas.z_pred);
+            deviations(
+                &self.meas.zsig,
+                centre,
+                (self.wc0, self.wi),
+                &mut self.meas.dev_z,
+                &mut self.meas.dev_zw,
+                angles.outputs,
+            );
+            self.meas.pzz.copy_from(&self.meas.r);
+            dense::mul_nt(1.0, &self.meas.dev_zw, &self.meas.dev_z, 1.0, &mut self.meas.pzz);
+            dense::mul_nt(1.0, &self.dev_x, &self.meas.dev_zw, 0.0, &mut self.meas.pxz);
+            dense::symmetrize(&mut self.meas.pzz);
+            if factor_pd(&self.meas.pzz, &mut self.meas.pzz_chol) {
                 ok = true;
                 break;
             }
@@ -759,12 +731,17 @@ impl UnscentedKalmanFilter {
         if !ok {
             return Err(EstimatorError::NumericalFailure("the innovation covariance is not positive definite"));
         }
-        self.innov.copy_from(y);
-        self.innov -= &self.z_pred;
-        angles.wrap_outputs(self.innov.as_mut_slice());
+        self.meas.innov.copy_from(y);
+        self.meas.innov -= &self.meas.z_pred;
+        angles.wrap_outputs(self.meas.innov.as_mut_slice());
         // The innovation gate on Pzz, before anything changes.
-        let nis = if self.gate.is_on() { nis(&self.pzz_chol, &self.innov, &mut self.dz) } else { f64::NAN };
-        let verdict = self.gate.judge(nis, step).map_err(|e| name_worst_output(e, &self.innov, &self.pzz_chol))?;
+        let nis = if self.meas.gate.is_on() {
+            nis(&self.meas.pzz_chol, &self.meas.innov, &mut self.meas.dz)
+        } else {
+            f64::NAN
+        };
+        let verdict =
+            self.meas.gate.judge(nis, step).map_err(|e| name_worst_output(e, &self.meas.innov, &self.meas.pzz_chol))?;
         if verdict == GateVerdict::Drop {
             // The measurement is dropped: publish the prediction.
             std::mem::swap(&mut self.est.center, &mut self.x_pred);
@@ -780,27 +757,27 @@ impl UnscentedKalmanFilter {
             return Ok(&self.est);
         }
         // K = Pxz Pzz⁻¹ (32), by two triangular solves with the factor of Pzz.
-        self.k.copy_from(&self.pxz);
-        dense::solve_right_lower_t(&mut self.k, &self.pzz_chol);
-        dense::solve_right_lower(&mut self.k, &self.pzz_chol);
+        self.meas.k.copy_from(&self.meas.pxz);
+        dense::solve_right_lower_t(&mut self.meas.k, &self.meas.pzz_chol);
+        dense::solve_right_lower(&mut self.meas.k, &self.meas.pzz_chol);
         self.x_new.copy_from(&self.x_pred);
-        dense::gemv(1.0, &self.k, &self.innov, 1.0, &mut self.x_new);
+        dense::gemv(1.0, &self.meas.k, &self.meas.innov, 1.0, &mut self.x_new);
         // P⁺ = P⁻ − K Pzz Kᵀ = P⁻ − K Pxzᵀ.
         self.p_new.copy_from(&self.p_pred);
-        dense::mul_nt(-1.0, &self.k, &self.pxz, 1.0, &mut self.p_new);
+        dense::mul_nt(-1.0, &self.meas.k, &self.meas.pxz, 1.0, &mut self.p_new);
         dense::symmetrize(&mut self.p_new);
         let mut guarded_update = false;
         if !factor_pd(&self.p_new, &mut self.p_new_chol) {
             // Joseph form with H = Pxzᵀ P⁻⁻¹ (statistical linearisation).
             guarded_update = true;
-            self.h_stat.tr_copy_from(&self.pxz);
-            dense::solve_right_lower_t(&mut self.h_stat, &self.p_pred_chol);
-            dense::solve_right_lower(&mut self.h_stat, &self.p_pred_chol);
-            dense::i_minus_lc(&self.k, &self.h_stat, &mut self.ikh);
+            self.meas.h_stat.tr_copy_from(&self.meas.pxz);
+            dense::solve_right_lower_t(&mut self.meas.h_stat, &self.p_pred_chol);
+            dense::solve_right_lower(&mut self.meas.h_stat, &self.p_pred_chol);
+            dense::i_minus_lc(&self.meas.k, &self.meas.h_stat, &mut self.ikh);
             dense::mul_nn(1.0, &self.ikh, &self.p_pred, 0.0, &mut self.tmp_nn);
             dense::mul_nt(1.0, &self.tmp_nn, &self.ikh, 0.0, &mut self.p_new);
-            dense::mul_nn(1.0, &self.k, &self.r, 0.0, &mut self.kr);
-            dense::mul_nt(1.0, &self.kr, &self.k, 1.0, &mut self.p_new);
+            dense::mul_nn(1.0, &self.meas.k, &self.meas.r, 0.0, &mut self.meas.kr);
+            dense::mul_nt(1.0, &self.meas.kr, &self.meas.k, 1.0, &mut self.p_new);
             dense::symmetrize(&mut self.p_new);
             if !factor_pd(&self.p_new, &mut self.p_new_chol) {
                 return Err(EstimatorError::NumericalFailure("the updated covariance is not positive definite"));

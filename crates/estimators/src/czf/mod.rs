@@ -19,6 +19,8 @@
 
 mod extension;
 
+use std::borrow::Cow;
+
 use intervals::Interval;
 use nalgebra::{DMatrix, DVector};
 
@@ -465,7 +467,13 @@ impl ConstrainedZonotopeFilter {
         // A partial measurement: the measured rows of h's extension, of y and of V's generators
         // (the projection of the zonotope V onto the measured outputs).
         let (mv, y, v_generators, v_radius_full, angle_outputs) = match rows {
-            None => (mv, y.clone(), self.v_generators.clone(), self.v_radius.clone(), model.angles().outputs.to_vec()),
+            None => (
+                mv,
+                Cow::Borrowed(y),
+                Cow::Borrowed(&self.v_generators),
+                Cow::Borrowed(self.v_radius.as_slice()),
+                Cow::Borrowed(model.angles().outputs),
+            ),
             Some(rows) => {
                 let mut angles = Vec::new();
                 partial::angle_positions(rows, model.angles().outputs, &mut angles);
@@ -473,10 +481,10 @@ impl ConstrainedZonotopeFilter {
                 partial::gather_rows(&self.v_generators, rows, &mut g);
                 (
                     mv.select(rows),
-                    DVector::from_iterator(rows.len(), rows.iter().map(|&i| y[i])),
-                    g,
-                    rows.iter().map(|&i| self.v_radius[i]).collect(),
-                    angles,
+                    Cow::Owned(DVector::from_iterator(rows.len(), rows.iter().map(|&i| y[i]))),
+                    Cow::Owned(g),
+                    Cow::Owned(rows.iter().map(|&i| self.v_radius[i]).collect()),
+                    Cow::Owned(angles),
                 )
             }
         };
@@ -504,7 +512,8 @@ impl ConstrainedZonotopeFilter {
         let v_radius: Vec<f64> =
             v_radius_full.iter().zip(&y_err).map(|(&v, &e)| if e > 0.0 { intervals::up(v + e) } else { v }).collect();
         let lost = |e: SetError| guarantee_lost(step, format!("the measurement update: {e}"));
-        let strip = ConstrainedZonotope::zonotope(yc, -&v_generators).and_then(|s| s.add_box(&rad)).map_err(lost)?;
+        let strip =
+            ConstrainedZonotope::zonotope(yc, -v_generators.as_ref()).and_then(|s| s.add_box(&rad)).map_err(lost)?;
         let checked = self.checks.policy != InconsistencyPolicy::Off;
         let candidate = set.intersect(&mv.m, &strip).map_err(lost)?;
         let hull = candidate.interval_hull().map_err(lost)?;
