@@ -27,6 +27,8 @@ thread_local! {
     static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
     /// The largest request (bytes) this thread made while counting, since its last [`measure`].
     static LARGEST: Cell<usize> = const { Cell::new(0) };
+    /// The bytes this thread requested while counting, since its last [`measure`].
+    static BYTES: Cell<usize> = const { Cell::new(0) };
 }
 
 fn note(size: usize) {
@@ -34,6 +36,7 @@ fn note(size: usize) {
     if COUNTING.try_with(|c| c.get()).unwrap_or(false) {
         let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
         let _ = LARGEST.try_with(|l| l.set(l.get().max(size)));
+        let _ = BYTES.try_with(|b| b.set(b.get().saturating_add(size)));
     }
 }
 
@@ -78,13 +81,17 @@ pub struct Usage {
     /// The largest single request in bytes: a bound on what one buffer took, so that a test can
     /// show an input was refused before anything was allocated for it.
     pub largest: usize,
+    /// The bytes of all requests together (a reallocation counts its new size): a bound on the
+    /// memory that `f` took at its peak.
+    pub bytes: usize,
 }
 
 /// Runs `f` and returns its result with the current thread's [`Usage`] meanwhile.
 pub fn measure<R>(f: impl FnOnce() -> R) -> (R, Usage) {
     LARGEST.with(|l| l.set(0));
+    BYTES.with(|b| b.set(0));
     let (r, allocations) = count(f);
-    (r, Usage { allocations, largest: LARGEST.with(Cell::get) })
+    (r, Usage { allocations, largest: LARGEST.with(Cell::get), bytes: BYTES.with(Cell::get) })
 }
 
 #[cfg(test)]
@@ -122,8 +129,8 @@ mod tests {
     #[test]
     fn measure_reports_the_largest_request() {
         let (_, usage) = measure(|| (vec![0u8; 10], vec![0u64; 1000]));
-        assert_eq!(usage, Usage { allocations: 2, largest: 8000 });
+        assert_eq!(usage, Usage { allocations: 2, largest: 8000, bytes: 8010 });
         let (_, usage) = measure(|| 1 + 1);
-        assert_eq!(usage, Usage { allocations: 0, largest: 0 });
+        assert_eq!(usage, Usage { allocations: 0, largest: 0, bytes: 0 });
     }
 }

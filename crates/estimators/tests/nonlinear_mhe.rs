@@ -251,6 +251,40 @@ fn updates_do_not_allocate() {
     }
 }
 
+/// The memory estimate bounds what the estimator requests: at construction, and over one
+/// update (with the boxes' QP, which allocates per update), for short and long horizons.
+#[test]
+fn the_memory_estimate_bounds_what_construction_and_an_update_request() {
+    let model = linear();
+    let (us, ys) = data(&model, 12, 6);
+    for horizon in [1, 10, 200] {
+        for boxed in [false, true] {
+            let mut case = settings(3, 2, horizon, NonlinearArrival::Ukf(UkfParams::paper()));
+            if boxed {
+                case.settings.w_box = Some((DVector::repeat(3, -1.0), DVector::repeat(3, 1.0)));
+                case.settings.v_box = Some((DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)));
+            }
+            let estimate = case.settings.memory_estimate(3, 2, 1).unwrap();
+            let (mhe, built) = counting_allocator::measure(|| new_mhe(case, 1));
+            let mut mhe = mhe.unwrap();
+            assert!(built.bytes as u128 <= estimate, "N = {horizon}: {} > {estimate}", built.bytes);
+            for k in 0..12 {
+                let (r, update) = counting_allocator::measure(|| mhe.step(&model, &us[k], &ys[k]).map(|_| ()));
+                r.unwrap();
+                assert!(update.bytes as u128 <= estimate, "N = {horizon} update: {} > {estimate}", update.bytes);
+            }
+            // Without boxes the estimate is not far above: within 16× at the long horizon.
+            if horizon == 200 && !boxed {
+                assert!(estimate <= 16 * built.bytes as u128, "{estimate} vs {}", built.bytes);
+            }
+        }
+    }
+    // A horizon no machine holds is reported, not overflowed.
+    let mut huge = NonlinearMheSettings::paper();
+    huge.horizon = usize::MAX;
+    assert!(huge.memory_estimate(1 << 40, 1 << 40, 1).is_none());
+}
+
 #[test]
 fn with_the_arrival_filters_own_mean_and_the_ekf_arrival_it_is_the_kalman_filter_on_a_linear_model() {
     let model = linear();

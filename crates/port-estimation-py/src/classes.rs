@@ -251,7 +251,9 @@ impl SetMembershipFilter {
 ///     the noise boxes (required); ``horizon`` (default 6), ``preset`` (``"rmhe"``, ``"rmhe-op"``,
 ///     ``"rmhe-of"``) or ``blocks``, ``lambda_v`` (default 10), ``block_weighting``, ``arrival``
 ///     (``"kalman"``, ``"h-infinity"`` with ``theta``), ``prior_mean``, ``window_solver``
-///     (``"coordinate-rotation"``, ``"exact-saddle"``), ``max_sweeps``, ``tolerance``.
+///     (``"coordinate-rotation"``, ``"exact-saddle"``), ``max_sweeps`` (at most 10 000), ``tolerance``,
+///     ``memory_limit`` (bytes the window may take, default 256 MiB; a larger horizon is refused
+///     before anything is allocated).
 #[pyclass(extends = Estimator, frozen, module = "port_estimation")]
 pub struct MovingHorizonEstimator;
 
@@ -289,7 +291,8 @@ impl MovingHorizonEstimator {
 /// **settings
 ///     ``horizon`` (default 10), ``max_iterations``, ``tolerance``, ``arrival`` (``"unscented"``,
 ///     ``"extended"``, ``"fixed"``) with ``alpha``, ``beta``, ``kappa``, ``prior`` (``"smoothed"``,
-///     ``"arrival-filter"``), optional boxes ``w_lower``/``w_upper``, ``v_lower``/``v_upper``.
+///     ``"arrival-filter"``), optional boxes ``w_lower``/``w_upper``, ``v_lower``/``v_upper``,
+///     ``memory_limit`` (bytes, default 256 MiB; checked before anything is allocated).
 #[pyclass(extends = Estimator, frozen, module = "port_estimation")]
 pub struct NonlinearMHE;
 

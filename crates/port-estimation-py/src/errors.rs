@@ -42,6 +42,24 @@ create_exception!(
      inconsistent instead, or ``\"restart\"`` to move the set to the data."
 );
 
+create_exception!(
+    port_estimation,
+    RunError,
+    EstimationError,
+    "A step of ``run`` after the first could not take its row (an input outside the estimator's box, \
+     a value the model refuses): what a single call would refuse with ``ValueError``, raised as this \
+     because the rows before were filtered.\n\n\
+     Attributes\n----------\nrow : int\n    The row that failed; the estimator holds the estimate after \
+     the row before it (a new ``run`` from this row continues the log)."
+);
+
+/// [`RunError`] for `e` at `row` of a run.
+pub fn run_error(py: Python<'_>, e: &EstimatorError, row: usize) -> PyErr {
+    let err = RunError::new_err(format!("row {row}: {e}"));
+    let _ = err.value(py).setattr("row", row);
+    err
+}
+
 /// Whether an estimator error is the caller's input (a `ValueError`).
 pub fn is_bad_input(e: &EstimatorError) -> bool {
     match e {

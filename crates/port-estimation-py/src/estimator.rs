@@ -3,6 +3,7 @@
 //! row's settings by their kind ([`crate::settings`]), and every call runs the Rust estimator with
 //! the GIL released and under `catch_unwind`.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use estimators::registry::{self, EstimatorEntry};
@@ -16,7 +17,7 @@ use crate::convert::{mat_out, measurement, measurement_table, square, table, vec
 use crate::errors::{Guarded, broken, estimator_error, guard, no_panic, panicked, value_error};
 use crate::estimate::Estimate;
 use crate::model::{Model, SharedModel};
-use crate::run::{MAX_RUN_VALUES, RunResult, run_log};
+use crate::run::{MAX_RUN_VALUES, RunOutput, RunResult, SLICE, run_log};
 use crate::settings::{FileSettings, settings};
 
 /// A state estimator from the registry, by name (``estimators()`` lists them).
@@ -92,6 +93,8 @@ use crate::settings::{FileSettings, settings};
 #[pyclass(subclass, frozen, module = "port_estimation")]
 pub struct Estimator {
     inner: Mutex<AnyEstimator>,
+    /// Calls waiting for `inner` (a long `run` lets them in between its stretches of rows).
+    waiting: AtomicUsize,
     entry: &'static EstimatorEntry,
     model: Py<Model>,
     setup: Setup,
@@ -186,7 +189,14 @@ impl Estimator {
             }
         };
         let dims = inner.dims();
-        Ok(Self { inner: Mutex::new(inner), entry, model: model.clone().unbind(), setup, dims })
+        Ok(Self {
+            inner: Mutex::new(inner),
+            waiting: AtomicUsize::new(0),
+            entry,
+            model: model.clone().unbind(),
+            setup,
+            dims,
+        })
     }
 
     fn lock(&self) -> PyResult<MutexGuard<'_, AnyEstimator>> {
@@ -196,6 +206,15 @@ impl Estimator {
                     .into(),
             )
         })
+    }
+
+    /// The estimator for one call (not `run`'s stretches): counted as waiting meanwhile. `None`
+    /// when an earlier call panicked.
+    fn lock_for_call(&self) -> Option<MutexGuard<'_, AnyEstimator>> {
+        self.waiting.fetch_add(1, Ordering::SeqCst);
+        let est = self.inner.lock().ok();
+        self.waiting.fetch_sub(1, Ordering::SeqCst);
+        est
     }
 
     fn model_of(&self, model: Option<&Bound<'_, Model>>) -> SharedModel {
@@ -216,7 +235,7 @@ impl Estimator {
         let model = self.model_of(model);
         let ran = py.detach(|| {
             guard(|| {
-                let mut est = self.inner.lock().ok()?;
+                let mut est = self.lock_for_call()?;
                 let r = match &call {
                     Call::Predict(u) => est.predict(model.as_ref(), u),
                     Call::Update(y) => est.update(model.as_ref(), y),
@@ -251,18 +270,60 @@ impl Estimator {
         }
         let (_, us) = table(us, "us", Some(rows), self.dims.inputs)?;
         let model = self.model_of(model);
-        let ran = py.detach(|| {
-            guard(|| {
-                let mut est = self.inner.lock().ok()?;
-                Some(run_log(&mut est, model.as_ref(), &us, &ys, mask.as_deref(), rows))
-            })
-        });
-        match ran {
-            Guarded::Ran(Some(Ok(out))) => RunResult::from_output(py, out),
-            Guarded::Ran(Some(Err((row, e)))) => Err(estimator_error(py, &e, Some(row))),
+        let mut out = self.with_estimator(py, |est| RunOutput::new(est, rows))?;
+        // Stretches of about `SLICE` with the GIL released, Python's signals looked at between
+        // them: Ctrl-C stops the run within a fraction of a second.
+        let mut next = 0;
+        while next < rows {
+            let ran = py.detach(|| {
+                guard(|| {
+                    // Calls from other threads go first (the lock is not fair: without this a
+                    // reader would wait for the whole run).
+                    while self.waiting.load(Ordering::SeqCst) > 0 {
+                        std::thread::yield_now();
+                    }
+                    let mut est = self.inner.lock().ok()?;
+                    Some(run_log(&mut est, model.as_ref(), (&us, &ys, mask.as_deref()), &mut out, next, SLICE))
+                })
+            });
+            next = match ran {
+                Guarded::Ran(Some(Ok(k))) => k,
+                Guarded::Ran(Some(Err((row, e)))) => return Err(run_error(py, &e, row)),
+                Guarded::Ran(None) => {
+                    return Err(self.lock().err().unwrap_or_else(|| broken("the estimator is unusable".into())));
+                }
+                Guarded::Broken(what) => return Err(panicked(&what)),
+            };
+            if next < rows
+                && let Err(interrupt) = py.check_signals()
+            {
+                // The rows before `next` were filtered; the estimator holds the estimate after them.
+                let _ = interrupt.value(py).setattr("row", next);
+                return Err(interrupt);
+            }
+        }
+        RunResult::from_output(py, out)
+    }
+
+    /// Runs `f` on the estimator with the GIL released (another thread's `run` may hold it: the
+    /// wait must not stop every Python thread).
+    fn with_estimator<T: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut AnyEstimator) -> T + Send) -> PyResult<T> {
+        match py.detach(|| guard(|| self.lock_for_call().map(|mut est| f(&mut est)))) {
+            Guarded::Ran(Some(v)) => Ok(v),
             Guarded::Ran(None) => Err(self.lock().err().unwrap_or_else(|| broken("the estimator is unusable".into()))),
             Guarded::Broken(what) => Err(panicked(&what)),
         }
+    }
+}
+
+/// The exception of a step of `run` that failed at `row`: as a single call's, except that a step
+/// after the first refusing its row's values raises `RunError` (not `ValueError`, which means
+/// nothing was done): the rows before `row` were filtered.
+fn run_error(py: Python<'_>, e: &EstimatorError, row: usize) -> PyErr {
+    if row > 0 && crate::errors::is_bad_input(e) {
+        crate::errors::run_error(py, e, row)
+    } else {
+        estimator_error(py, e, Some(row))
     }
 }
 
@@ -379,30 +440,29 @@ impl Estimator {
                 }
             };
             let gate_probability = gate_probability.unwrap_or(DataChecks::DEFAULT_GATE_PROBABILITY);
-            let mut est = self.lock()?;
-            est.set_data_checks(DataChecks { policy, gate_probability }).map_err(|e| estimator_error(py, &e, None))
+            self.with_estimator(py, |est| est.set_data_checks(DataChecks { policy, gate_probability }))?
+                .map_err(|e| estimator_error(py, &e, None))
         })
     }
 
     /// The current centre (mean), a read-only copy, shape (n,).
     #[getter]
     fn x<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let est = self.lock()?;
-        vec_out(py, est.estimate().center().as_slice())
+        let x = self.with_estimator(py, |est| est.estimate().center().as_slice().to_vec())?;
+        vec_out(py, &x)
     }
 
     /// The current covariance or shape matrix, a read-only copy, shape (n, n).
     #[getter(P)]
     fn p<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let est = self.lock()?;
-        mat_out(py, est.estimate().shape())
+        let p = self.with_estimator(py, |est| est.estimate().shape().clone())?;
+        mat_out(py, &p)
     }
 
     /// The current estimate (centre, shape, bounds, status, details).
     #[getter]
-    fn estimate(&self) -> PyResult<Estimate> {
-        let est = self.lock()?;
-        Ok(Estimate::of(est.estimate()))
+    fn estimate(&self, py: Python<'_>) -> PyResult<Estimate> {
+        self.with_estimator(py, |est| Estimate::of(est.estimate()))
     }
 
     /// The process noise the estimator was built with (a read-only copy).

@@ -10,7 +10,7 @@
 //! * [`classes`]: `KalmanFilter`, `SetMembershipFilter`, … — `Estimator` with the name from
 //!   `registry::names`.
 //! * [`errors`]: `ValueError` for bad input, `EstimationError`, `NumericalError`,
-//!   `InconsistentDataError`; no panic reaches Python.
+//!   `InconsistentDataError`, `RunError`; no panic reaches Python.
 //!
 //! The binding knows no estimator by name: everything it offers comes from the registry's table,
 //! so a new row of the table is a new estimator in Python. The Python side
@@ -80,6 +80,7 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("EstimationError", py.get_type::<errors::EstimationError>())?;
     m.add("NumericalError", py.get_type::<errors::NumericalError>())?;
     m.add("InconsistentDataError", py.get_type::<errors::InconsistentDataError>())?;
+    m.add("RunError", py.get_type::<errors::RunError>())?;
     m.add("MAX_RUN_VALUES", run::MAX_RUN_VALUES)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

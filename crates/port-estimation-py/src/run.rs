@@ -7,6 +7,8 @@
 //! anything is allocated (split it: `run` continues from the current state, so consecutive runs
 //! over the pieces give the same numbers as one run).
 
+use std::time::{Duration, Instant};
+
 use estimators::{AnyEstimator, AnyModel, EstimateKind, EstimatorError, StepStatus};
 use nalgebra::DVector;
 use numpy::{PyArray1, PyArray2};
@@ -33,8 +35,34 @@ pub struct RunOutput {
     details: Vec<(&'static str, Vec<f64>)>,
 }
 
-/// Runs `est` over `rows` rows of `us` (row-major, `p` per row) and `ys` (`m` per row, the
-/// estimator's measurement length).
+/// How long one stretch of [`run_log`] may run before it returns for the caller to look at
+/// Python's signals (Ctrl-C) with the GIL held: 50 ms.
+pub const SLICE: Duration = Duration::from_millis(50);
+
+impl RunOutput {
+    /// Empty tables of `rows` rows for the estimates of `est` (allocated here: the caller checks
+    /// `rows · n` against [`MAX_RUN_VALUES`] first).
+    pub fn new(est: &AnyEstimator, rows: usize) -> Self {
+        let n = est.dims().states;
+        let names = est.estimate().details().field_names();
+        Self {
+            rows,
+            states: n,
+            kind: est.estimate().kind(),
+            center: vec![0.0; rows * n],
+            lower: vec![f64::NAN; rows * n],
+            upper: vec![f64::NAN; rows * n],
+            trace: vec![f64::NAN; rows],
+            codes: vec![0; rows],
+            statuses: Vec::new(),
+            details: names.iter().map(|name| (*name, vec![f64::NAN; rows])).collect(),
+        }
+    }
+}
+
+/// Runs `est` over rows `start..` of `us` (row-major, `p` per row) and `ys` (`m` per row, the
+/// estimator's measurement length) into `out`, for at most about `slice` of time; returns the
+/// first row not yet run (`out.rows` when done).
 ///
 /// # Errors
 /// The row at which a step failed and the estimator's error; the estimator then holds the
@@ -42,30 +70,22 @@ pub struct RunOutput {
 pub fn run_log(
     est: &mut AnyEstimator,
     model: &dyn AnyModel,
-    us: &[f64],
-    ys: &[f64],
-    measured: Option<&[bool]>,
-    rows: usize,
-) -> Result<RunOutput, (usize, EstimatorError)> {
+    (us, ys, measured): (&[f64], &[f64], Option<&[bool]>),
+    out: &mut RunOutput,
+    start: usize,
+    slice: Duration,
+) -> Result<usize, (usize, EstimatorError)> {
     let d = est.dims();
     // (The estimator's measurement length: the fuzzy-adaptive filter's counts its receiver status.)
     let (n, p, m) = (d.states, d.inputs, d.outputs);
-    let kind = est.estimate().kind();
-    let names = est.estimate().details().field_names();
-    let mut out = RunOutput {
-        rows,
-        states: n,
-        kind,
-        center: vec![0.0; rows * n],
-        lower: vec![f64::NAN; rows * n],
-        upper: vec![f64::NAN; rows * n],
-        trace: vec![f64::NAN; rows],
-        codes: vec![0; rows],
-        statuses: Vec::new(),
-        details: names.iter().map(|name| (*name, vec![f64::NAN; rows])).collect(),
-    };
+    let kind = out.kind;
+    let began = Instant::now();
     let (mut u, mut y) = (DVector::zeros(p), DVector::zeros(m));
-    for k in 0..rows {
+    for k in start..out.rows {
+        // The clock is read every 64 rows (a step takes microseconds).
+        if k > start && (k - start) % 64 == 0 && began.elapsed() >= slice {
+            return Ok(k);
+        }
         u.copy_from_slice(&us[k * p..(k + 1) * p]);
         y.copy_from_slice(&ys[k * m..(k + 1) * m]);
         let mask = measured.map(|all| &all[k * m..(k + 1) * m]).filter(|row| !row.iter().all(|&b| b));
@@ -100,7 +120,7 @@ pub fn run_log(
             j += 1;
         });
     }
-    Ok(out)
+    Ok(out.rows)
 }
 
 /// The estimates of a whole log (``Estimator.run``), one row per step.

@@ -57,6 +57,7 @@ pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
             "window_solver",
             "max_sweeps",
             "tolerance",
+            "memory_limit",
         ],
         SettingsKind::Unscented => &["alpha", "beta", "kappa"],
         SettingsKind::NonlinearMovingHorizon => &[
@@ -72,6 +73,7 @@ pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
             "w_upper",
             "v_lower",
             "v_upper",
+            "memory_limit",
         ],
         SettingsKind::FuzzyAdaptive => &["fis", "fis_toml", "horizontal"],
         SettingsKind::ConstrainedZonotope => {
@@ -196,14 +198,29 @@ fn moving_horizon(kw: &Kwargs<'_>, dims: Dims, file: Option<&MheSettings>) -> Py
             ));
         }
     };
-    if let Some(h) = kw.count("horizon")? {
-        s.horizon = h;
-        s.blocks = vec![1; h];
-    }
+    let limit = memory_limit(kw)?;
+    let horizon = kw.count("horizon")?;
     let presets = [BlockingPreset::Rmhe, BlockingPreset::RmheOp, BlockingPreset::RmheOf];
     let preset_names: Vec<(String, BlockingPreset)> = presets.iter().map(|p| (p.name().to_lowercase(), *p)).collect();
     let preset_options: Vec<(&str, BlockingPreset)> = preset_names.iter().map(|(n, p)| (n.as_str(), *p)).collect();
-    match (kw.choice("preset", &preset_options)?, kw.extract::<Vec<usize>>("blocks", "a list of block lengths")?) {
+    let (preset, blocks) =
+        (kw.choice("preset", &preset_options)?, kw.extract::<Vec<usize>>("blocks", "a list of block lengths")?);
+    // The window's size is checked before any buffer of the horizon's length is made.
+    let h = horizon.unwrap_or(s.horizon);
+    let block_count = match (&blocks, horizon) {
+        (Some(b), _) => b.len(),
+        (None, Some(h)) => h,
+        (None, None) => s.blocks.len(),
+    };
+    let clarabel = s.output_constraint
+        || matches!(s.solver, WindowSolver::CoordinateRotation { inner: estimators::mhe::InnerSolver::Clarabel, .. });
+    let need = port_est::mhe_table::memory_estimate(dims.states, dims.outputs, dims.inputs, h, block_count, clarabel);
+    check_memory(need, limit, "horizon", h)?;
+    if let Some(h) = horizon {
+        s.horizon = h;
+        s.blocks = vec![1; h];
+    }
+    match (preset, blocks) {
         (Some(p), None) => s.blocks = p.lengths(s.horizon).map_err(|e| value_error(e.to_string()))?,
         (None, Some(b)) => s.blocks = b,
         (None, None) => {}
@@ -227,7 +244,7 @@ fn moving_horizon(kw: &Kwargs<'_>, dims: Dims, file: Option<&MheSettings>) -> Py
     if let Some(p) = kw.choice("prior_mean", &[("smoothed", PriorMean::Smoothed), ("filtered", PriorMean::Filtered)])? {
         s.prior_mean = p;
     }
-    let (sweeps, tolerance) = (kw.count("max_sweeps")?, kw.float("tolerance")?);
+    let (sweeps, tolerance) = (iteration_count(kw, "max_sweeps")?, kw.float("tolerance")?);
     let exact = kw.choice("window_solver", &[("coordinate-rotation", false), ("exact-saddle", true)])?;
     let exact = exact.unwrap_or(matches!(s.solver, WindowSolver::ExactSaddle { .. }));
     let base = match (exact, s.solver) {
@@ -255,10 +272,11 @@ fn nonlinear_moving_horizon(kw: &Kwargs<'_>, dims: Dims, entry: &EstimatorEntry)
     let Some(EstimatorSettings::NonlinearMovingHorizon(mut s)) = entry.settings.default_settings() else {
         return Err(value_error(format!("estimator {} has no default nonlinear MHE settings", entry.name)));
     };
+    let limit = memory_limit(kw)?;
     if let Some(h) = kw.count("horizon")? {
         s.horizon = h;
     }
-    if let Some(i) = kw.count("max_iterations")? {
+    if let Some(i) = iteration_count(kw, "max_iterations")? {
         s.max_iterations = i;
     }
     if let Some(t) = kw.float("tolerance")? {
@@ -290,7 +308,41 @@ fn nonlinear_moving_horizon(kw: &Kwargs<'_>, dims: Dims, entry: &EstimatorEntry)
     if let Some(v) = kw.bounds("v_lower", "v_upper", dims.outputs)? {
         s.v_box = Some(v);
     }
+    check_memory(s.memory_estimate(dims.states, dims.outputs, dims.inputs), limit, "horizon", s.horizon)?;
     Ok(EstimatorSettings::NonlinearMovingHorizon(s))
+}
+
+/// The `memory_limit` keyword of the moving-horizon estimators: the most bytes their buffers
+/// may take (default the command line's `--mhe-memory-limit`, 256 MiB).
+fn memory_limit(kw: &Kwargs<'_>) -> PyResult<u128> {
+    Ok(kw
+        .extract::<u64>("memory_limit", "a number of bytes (a non-negative integer)")?
+        .map_or(u128::from(port_est::limits::DEFAULT_MHE_MEMORY_BYTES), u128::from))
+}
+
+/// Refuses a window whose buffers (`need` bytes, `None`: beyond `u128`) would exceed `limit`,
+/// naming the keyword that sizes them, before anything is allocated.
+fn check_memory(need: Option<u128>, limit: u128, key: &str, value: usize) -> PyResult<()> {
+    if need.is_some_and(|n| n <= limit) {
+        return Ok(());
+    }
+    let show = port_est::limits::show_bytes;
+    let need = need.map_or_else(|| "more than 2^128 bytes".to_owned(), |n| format!("about {}", show(n)));
+    Err(value_error(format!(
+        "setting {key} = {value}: the estimator would need {need}, more than memory_limit = {} (raise it with \
+         memory_limit=...; a step's time grows with the window too)",
+        show(limit)
+    )))
+}
+
+/// An iteration count bounded as in the command line's `[mhe]` table (at most
+/// `port_est::limits::MAX_MHE_SWEEPS` per window), so a window's time is bounded.
+fn iteration_count(kw: &Kwargs<'_>, key: &str) -> PyResult<Option<usize>> {
+    let max = port_est::limits::MAX_MHE_SWEEPS;
+    match kw.count(key)? {
+        Some(v) if v > max => Err(value_error(format!("setting {key} = {v}: at most {max} per window"))),
+        other => Ok(other),
+    }
 }
 
 fn sigma_points(kw: &Kwargs<'_>, base: UkfParams) -> PyResult<UkfParams> {

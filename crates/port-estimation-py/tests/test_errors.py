@@ -263,3 +263,25 @@ def test_only_real_numbers_are_taken(value, words):
     with pytest.raises(ValueError, match=words):
         kf.update(value)
     assert kf.x[0] == 0.0
+
+
+def test_a_run_refusing_a_later_row_raises_run_error_and_keeps_the_rows_before(system):
+    model, q, r, p0, us, ys = system
+    box = {"u_lower": -np.ones(1), "u_upper": np.ones(1)}
+    bad = us.copy()
+    bad[9] = 5.0  # outside the input box
+    est = pe.Estimator("yang-li", model, P0=p0, Q=q, R=r, **box)
+    with pytest.raises(pe.RunError) as info:
+        est.run(bad, ys)
+    assert not isinstance(info.value, ValueError)
+    assert info.value.row == 9 and "row 9" in str(info.value)
+    before = pe.Estimator("yang-li", model, P0=p0, Q=q, R=r, **box)
+    before.run(us[:9], ys[:9])
+    np.testing.assert_array_equal(est.x, before.x)
+    # The same value in the first row: nothing was done, a ValueError.
+    fresh = pe.Estimator("yang-li", model, P0=p0, Q=q, R=r, **box)
+    snap = _snapshot(fresh)
+    with pytest.raises(ValueError) as info:
+        fresh.run(bad[9:], ys[9:])
+    assert info.value.row == 0
+    _assert_same(fresh, snap)

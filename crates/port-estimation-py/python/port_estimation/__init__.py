@@ -20,9 +20,11 @@ attributes (``x0``, ``P0``, ``Q``, ``R``), ``predict`` and ``update``::
 any of them. ``read_model(path)`` reads a ``port-est`` model file. ``port_estimation.fleet``
 filters many vehicles' Parquet logs on a Dask cluster.
 
-Errors: ``ValueError`` for bad input; ``EstimationError`` and its subclasses ``NumericalError``
-and ``InconsistentDataError`` (with ``.step`` and ``.excess``) for what the estimation runs into.
-After an exception the estimator's state is what it was before the call.
+Errors: ``ValueError`` for bad input, refused before anything is done; ``EstimationError`` and its
+subclasses ``NumericalError``, ``InconsistentDataError`` (with ``.step`` and ``.excess``) and
+``RunError`` for what the estimation runs into. After an exception from a single call the
+estimator's state is what it was before; after one from ``run`` (``.row``) it holds the estimate
+after the row before ``.row``.
 """
 
 from ._native import (
@@ -39,6 +41,7 @@ from ._native import (
     MovingHorizonEstimator,
     NonlinearMHE,
     NumericalError,
+    RunError,
     RunResult,
     SetMembershipFilter,
     UnscentedKalmanFilter,
@@ -63,6 +66,7 @@ __all__ = [
     "MovingHorizonEstimator",
     "NonlinearMHE",
     "NumericalError",
+    "RunError",
     "RunResult",
     "SetMembershipFilter",
     "UnscentedKalmanFilter",

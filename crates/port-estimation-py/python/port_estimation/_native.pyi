@@ -26,6 +26,9 @@ class EstimationError(Exception):
 
 class NumericalError(EstimationError): ...
 
+class RunError(EstimationError):
+    row: int
+
 class InconsistentDataError(EstimationError):
     step: int
     # The set-membership filter's proof: the separating distance; the moving-horizon window's:

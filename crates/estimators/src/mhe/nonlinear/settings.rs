@@ -79,6 +79,35 @@ impl NonlinearMheSettings {
         }
     }
 
+    /// The bytes the estimator takes for a model of `n` states, `m` outputs and `p` inputs, an
+    /// estimate from above for a caller to check before building it (the horizon sizes every
+    /// buffer): `N + 2` slots of the window's vectors and `n×n` matrices, the trajectory and the
+    /// rings, each block counted with room for its header, the fixed `n`- and `m`-sized buffers
+    /// of the arrival cost, and, with a box, the QP of a Gauss–Newton step. `None` when the count
+    /// overflows `u128`.
+    #[must_use]
+    pub fn memory_estimate(&self, n: usize, m: usize, p: usize) -> Option<u128> {
+        let [n, m, p, horizon] = [n, m, p, self.horizon].map(|v| v as u128);
+        let slots = horizon.checked_add(2)?;
+        // Per slot: x, x_trial, f(x), gradient, step, trajectory (6n), h(x) and y (2m), two
+        // inputs (2p), A, D, W (3n²), C (mn); 16 heap blocks of up to 64 bytes of header and
+        // rounding each.
+        let f64s = n.checked_mul(n)?.checked_mul(3)?.checked_add(m.checked_mul(n)?)?;
+        let f64s =
+            f64s.checked_add(n.checked_mul(6)?)?.checked_add(m.checked_mul(2)?)?.checked_add(p.checked_mul(2)?)?;
+        let mut slot = f64s.checked_mul(8)?.checked_add(16 * 64)?;
+        if self.w_box.is_some() || self.v_box.is_some() {
+            // The sparse QP of a Gauss–Newton step and Clarabel's factorisation of it: per slot
+            // (n + m + 1)² entries, counted as 1 KiB each (the sum of every request of an update,
+            // measured, is below this; its peak far below).
+            slot = slot.checked_add((n + m + 1).checked_mul(n + m + 1)?.checked_mul(1024)?)?;
+        }
+        // Fixed: the weights, their inverses and the arrival filter's sigma points and work.
+        let fixed = n.checked_mul(n)?.checked_mul(64)?.checked_add(m.checked_mul(m)?.checked_mul(64)?)?;
+        let fixed = fixed.checked_add(n.checked_mul(m)?.checked_mul(64)?)?.checked_add(n.checked_mul(256)?)?;
+        slots.checked_mul(slot)?.checked_add(fixed)?.checked_add(1 << 17)
+    }
+
     /// Checks the settings for a model of `n` states and `m` outputs: a horizon of at least 1,
     /// at least one iteration, a positive tolerance, boxes of the right lengths with `lo < hi`.
     pub(super) fn validate(&self, n: usize, m: usize) -> Result<(), EstimatorError> {

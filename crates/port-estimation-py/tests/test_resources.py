@@ -1,0 +1,109 @@
+"""Resources: every keyword that sizes an estimator's buffers or its time is checked before
+anything is allocated (a ValueError naming it, never an aborted interpreter), and long calls let
+other threads and Ctrl-C through."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import port_estimation as pe
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def _boxes(n: int, m: int) -> dict:
+    return {"w_lower": -np.ones(n), "w_upper": np.ones(n), "v_lower": -np.ones(m), "v_upper": np.ones(m)}
+
+
+def _linear():
+    a = np.array([[1.0, 0.1], [0.0, 0.9]])
+    return pe.Model(a, np.array([[0.0], [0.1]]), np.array([[1.0, 0.0]]))
+
+
+@pytest.mark.parametrize("horizon", [100_000, 10**9, 2**62])
+def test_a_linear_window_beyond_the_memory_limit_is_refused_by_name(horizon):
+    with pytest.raises(ValueError, match=rf"horizon = {horizon}: .* more than memory_limit = 256 MiB"):
+        pe.MovingHorizonEstimator(_linear(), R=np.eye(1), horizon=horizon, **_boxes(2, 1))
+    with pytest.raises(ValueError, match="horizon"):
+        pe.Estimator("rmhe", _linear(), R=np.eye(1), horizon=horizon, preset="rmhe-of", **_boxes(2, 1))
+
+
+def test_the_memory_limit_is_a_setting_and_a_window_inside_it_is_built():
+    model = _linear()
+    with pytest.raises(ValueError, match=r"horizon = 400: .* memory_limit = 1 MiB"):
+        pe.MovingHorizonEstimator(model, R=np.eye(1), horizon=400, memory_limit=1 << 20, **_boxes(2, 1))
+    mhe = pe.MovingHorizonEstimator(model, R=np.eye(1), horizon=400, memory_limit=1 << 30, **_boxes(2, 1))
+    assert mhe.step(np.zeros(1), np.zeros(1)).status == "converged"
+    with pytest.raises(ValueError, match="memory_limit must be a number of bytes"):
+        pe.MovingHorizonEstimator(model, R=np.eye(1), memory_limit=-1, **_boxes(2, 1))
+
+
+def test_a_model_files_window_grown_by_a_keyword_is_refused():
+    mf = pe.read_model(ROOT / "examples" / "models" / "car.toml")
+    with pytest.raises(ValueError, match=r"horizon = 100000: .* more than memory_limit"):
+        mf.estimator("rmhe", horizon=100_000)
+
+
+@pytest.mark.parametrize("horizon", [10**6, 10**9, 2**62])
+def test_a_nonlinear_window_beyond_the_memory_limit_is_refused_by_name(horizon):
+    with pytest.raises(ValueError, match=rf"horizon = {horizon}: .* more than memory_limit"):
+        pe.NonlinearMHE(pe.Model.vessel(), horizon=horizon)
+
+
+def test_iteration_counts_are_bounded():
+    with pytest.raises(ValueError, match="max_sweeps = 10001: at most 10000"):
+        pe.MovingHorizonEstimator(_linear(), R=np.eye(1), max_sweeps=10_001, **_boxes(2, 1))
+    with pytest.raises(ValueError, match="max_iterations = 1000000: at most 10000"):
+        pe.NonlinearMHE(pe.Model.vessel(), max_iterations=10**6)
+
+
+def _long_log(rows: int):
+    rng = np.random.default_rng(7)
+    us = rng.uniform(-1, 1, size=(rows, 1))
+    ys = rng.normal(scale=0.1, size=(rows, 1))
+    return us, ys
+
+
+def _ukf():
+    return pe.UnscentedKalmanFilter(_linear(), P0=np.eye(2), Q=1e-2 * np.eye(2), R=np.eye(1))
+
+
+def test_ctrl_c_stops_a_long_run_between_rows_and_keeps_the_rows_before():
+    import _thread
+    import threading
+
+    us, ys = _long_log(1_000_000)
+    ukf = _ukf()
+    # `interrupt_main` is what Ctrl-C does: the signal is noticed between stretches of rows.
+    timer = threading.Timer(0.05, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt) as info:
+        ukf.run(us, ys)
+    timer.join()
+    row = info.value.row
+    assert 0 < row < len(ys), row
+    before = _ukf()
+    before.run(us[:row], ys[:row])
+    np.testing.assert_array_equal(ukf.x, before.x)
+    np.testing.assert_array_equal(ukf.P, before.P)
+
+
+def test_other_threads_run_and_read_while_a_long_run_goes_on():
+    import threading
+
+    us, ys = _long_log(1_000_000)
+    ukf = _ukf()
+    result = {}
+    runner = threading.Thread(target=lambda: result.setdefault("run", ukf.run(us, ys)))
+    runner.start()
+    while ukf.estimate.status == "initial" and runner.is_alive():
+        pass
+    # Reading the estimate waits for the current stretch of rows, not for the whole run.
+    x = ukf.x
+    assert runner.is_alive(), "the read waited for the end of the run"
+    runner.join()
+    centres = result["run"].center
+    assert any(np.array_equal(x, c) for c in centres[: len(centres) // 2]), x
