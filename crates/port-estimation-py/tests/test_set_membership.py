@@ -157,3 +157,36 @@ def test_declared_speed_limits_keep_the_vessels_set_from_growing():
     with pytest.raises(pe.InconsistentDataError) as info:
         est.step([0.0], [0.0])
     assert info.value.step == 1 and info.value.state == 1
+
+
+UNDEFINED_AT_THE_CENTRE = """
+[model]
+states = ["x", "tq"]
+inputs = ["u"]
+outputs = ["y"]
+
+[f]
+x = "x + 0 * ln(tq + 1)"
+tq = "tq + u"
+
+[h]
+y = "x"
+"""
+
+
+@pytest.mark.parametrize("name", ["smf-nl", "czf-nl"])
+def test_a_function_undefined_at_the_centre_loses_the_guarantee_and_changes_nothing(name):
+    # The interval enclosure of 0 * ln(tq + 1) at tq = -2 is 0; its value is NaN: the EKF refuses
+    # the step, and the certified filters must not publish a converged set.
+    model = pe.Model.from_equations(UNDEFINED_AT_THE_CENTRE, "undefined.toml")
+    est = pe.Estimator(name, model, x0=[0.0, -2.0], P0=1e-4 * np.eye(2), Q=1e-6 * np.eye(2), R=1e-2 * np.eye(1))
+    before = (est.x.copy(), est.P.copy(), est.estimate.status)
+    with pytest.raises(pe.EstimationError, match=r"guarantee.*f.* undefined at the set's centre.*NaN") as info:
+        est.step([0.0], [0.0])
+    assert not isinstance(info.value, ValueError)
+    np.testing.assert_array_equal(est.x, before[0])
+    np.testing.assert_array_equal(est.P, before[1])
+    assert est.estimate.status == before[2]
+    # Defined there (tq = 0), the same filter steps.
+    ok = pe.Estimator(name, model, x0=[0.0, 0.0], P0=1e-4 * np.eye(2), Q=1e-6 * np.eye(2), R=1e-2 * np.eye(1))
+    assert ok.step([0.0], [0.0]).guaranteed

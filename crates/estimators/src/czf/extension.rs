@@ -78,6 +78,14 @@ pub(crate) fn mean_value<M: SecondOrderModel + ?Sized>(
         Function::Measurement => model.h_value_enclosure(&point, u, enclosure)?,
     }
     let rows = enclosure.dims().0;
+    let (centre, mut plain) = (DVector::from_column_slice(&p), DVector::zeros(rows));
+    let evaluated = match which {
+        Function::Dynamics => model.f(&centre, u, &mut plain),
+        Function::Measurement => model.h(&centre, u, &mut plain),
+    };
+    if let Err(reason) = crate::checks::defined_at(which.name(), "the set's centre", evaluated, &plain) {
+        return Ok(Err(reason));
+    }
     let value: Vec<Interval> = (0..rows).map(|i| enclosure.value(i)).collect();
     if let Some(i) = value.iter().position(|v| !v.is_bounded()) {
         return Ok(Err(format!("{}[{i}] is undefined or unbounded at the set's centre", which.name())));

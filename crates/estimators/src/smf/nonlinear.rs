@@ -35,7 +35,7 @@ use super::filter::{SetEstimate, SetMembershipFilter};
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::UpdateSolver;
 use crate::angle_branch::{Branch, branch, measured};
-use crate::checks::{DataChecks, InconsistencyPolicy};
+use crate::checks::{DataChecks, InconsistencyPolicy, defined_at};
 use crate::error::EstimatorError;
 use crate::traits::Setup;
 use crate::validate::check_vec;
@@ -92,6 +92,9 @@ struct Work {
     /// The measurement with its angle outputs on their branch, and the rounding bound of each.
     y_used: DVector<f64>,
     y_err: Vec<f64>,
+    /// The plain values of `f` at the centre and `h` at the predicted centre (defined there?).
+    f_plain: DVector<f64>,
+    h_plain: DVector<f64>,
 }
 
 /// The nonlinear set-membership filter over any [`SecondOrderModel`], generic over the solver of
@@ -317,6 +320,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             terms: vec![Interval::ZERO; n],
             y_used: DVector::zeros(m),
             y_err: vec![0.0; m],
+            f_plain: DVector::zeros(n),
+            h_plain: DVector::zeros(m),
         };
         let half = |m: &DMatrix<f64>| -> Vec<f64> {
             (0..m.nrows()).map(|i| Interval::point(m[(i, i)].max(0.0)).sqrt().hi()).collect()
@@ -443,6 +448,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         for j in 0..n {
             ws.radius[j] = Interval::point(est.shape[(j, j)].max(0.0)).sqrt().hi();
         }
+        let plain = model.f(&est.center, u, &mut ws.f_plain);
+        defined_at("f", "the set's centre", plain, &ws.f_plain).map_err(|reason| guarantee_lost(step, reason))?;
         let at_centre = enclose_about(
             step,
             "f",
@@ -511,6 +518,8 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         let step = self.inner.steps() + 1;
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
+        let plain = model.h(&ws.xbar, u, &mut ws.h_plain);
+        defined_at("h", "the predicted centre", plain, &ws.h_plain).map_err(|reason| guarantee_lost(step, reason))?;
         let at_centre = enclose_about(
             step,
             "h",
