@@ -26,7 +26,9 @@ use crate::kalman::{GaussianEstimate, commit_prediction};
 use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
-use crate::validate::{InitialData, all_finite, check_initial, check_vec, replace_spd};
+use crate::validate::{
+    Covariances, InitialData, all_finite, check_initial_gaussian, check_vec, replace_psd, replace_spd,
+};
 
 /// An extended Kalman filter; `Q`, `R` are covariances.
 #[derive(Debug, Clone)]
@@ -60,7 +62,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix.
     pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial(setup)?;
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_gaussian(setup, Covariances::Semidefinite)?;
         let nn = || DMatrix::zeros(n, n);
         Ok(Self {
             n,
@@ -112,7 +114,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// As [`ExtendedKalmanFilter::new`] for `Q`.
     pub fn set_process_noise(&mut self, q: &DMatrix<f64>) -> Result<(), EstimatorError> {
-        replace_spd("Q", &mut self.q, q, &mut self.upd.buf.tmp)
+        replace_psd("Q", &mut self.q, q, &mut self.upd.buf.tmp)
     }
 
     /// Replaces the measurement covariance in place (no allocation; unchanged on error).

@@ -38,6 +38,13 @@ pub enum EstimatorError {
         /// Which matrix.
         what: &'static str,
     },
+    /// A matrix that must be symmetric positive semidefinite (a Gaussian filter's `Q`, `P₀`) has
+    /// a negative eigenvalue beyond rounding.
+    #[error("{what} is not positive semidefinite")]
+    NotPositiveSemidefinite {
+        /// Which matrix.
+        what: &'static str,
+    },
     /// The input range of the Yang–Li filter is not a box (`lower ≤ upper`, finite).
     #[error("invalid input bounds at index {index}: lower {lower} > upper {upper} or not finite")]
     InvalidInputBounds {

@@ -129,6 +129,47 @@ pub(crate) fn check_spd_no_alloc(
     dense_kernels::cholesky_in_place(work).map_err(|_| EstimatorError::NotPositiveDefinite { what })
 }
 
+/// Validates a square symmetric positive *semi*definite matrix of order `n` (a covariance may be
+/// singular: `Q = 0`, a rank-one white-noise `Q`), without allocating: `M + δI` must factorise in
+/// `work` (`n × n`, overwritten), `δ = 64 n ε max(max_i |M_ii|, f64::MIN_POSITIVE)` — a negative
+/// eigenvalue beyond rounding is refused.
+pub(crate) fn check_psd_no_alloc(
+    what: &'static str,
+    m: &DMatrix<f64>,
+    n: usize,
+    work: &mut DMatrix<f64>,
+) -> Result<(), EstimatorError> {
+    check_shape((what, what), m, n, n)?;
+    check_finite(what, m.as_slice())?;
+    if dense_kernels::max_asymmetry(m, SYMMETRY_TOLERANCE).is_some() {
+        return Err(EstimatorError::NotSymmetric { what });
+    }
+    if n == 0 || work.shape() != (n, n) {
+        return Err(EstimatorError::NotPositiveSemidefinite { what });
+    }
+    work.copy_from(m);
+    dense_kernels::symmetrize(work);
+    let scale = (0..n).map(|i| work[(i, i)].abs()).fold(f64::MIN_POSITIVE, f64::max);
+    let delta = 64.0 * n as f64 * f64::EPSILON * scale;
+    for i in 0..n {
+        work[(i, i)] += delta;
+    }
+    dense_kernels::cholesky_in_place(work).map_err(|_| EstimatorError::NotPositiveSemidefinite { what })
+}
+
+/// As [`replace_spd`] for a positive semidefinite matrix ([`check_psd_no_alloc`]).
+pub(crate) fn replace_psd(
+    what: &'static str,
+    dst: &mut DMatrix<f64>,
+    src: &DMatrix<f64>,
+    work: &mut DMatrix<f64>,
+) -> Result<(), EstimatorError> {
+    check_psd_no_alloc(what, src, dst.nrows(), work)?;
+    dst.copy_from(src);
+    dense_kernels::symmetrize(dst);
+    Ok(())
+}
+
 /// Validates `src` as [`check_spd`] does and copies it, symmetrised, into `dst` (same order),
 /// using `work` (`n × n`) for the factorisation: the in-place noise setters, allocation-free;
 /// on error `dst` is unchanged.
@@ -158,6 +199,40 @@ pub(crate) struct InitialData {
     pub p0: DMatrix<f64>,
     pub q: DMatrix<f64>,
     pub r: DMatrix<f64>,
+}
+
+/// Which of `P₀`, `Q` may be singular.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Covariances {
+    /// `P₀` and `Q` positive semidefinite (the Kalman filter, the EKF).
+    Semidefinite,
+    /// `Q` positive semidefinite, `P₀` definite (the UKF takes its square root).
+    DefinitePrior,
+}
+
+/// [`check_initial`] for a Gaussian filter: `P₀`, `Q` positive semidefinite as `which` says (a
+/// covariance may be singular), `R` definite (the innovation covariance must be invertible).
+pub(crate) fn check_initial_gaussian(setup: Setup, which: Covariances) -> Result<InitialData, EstimatorError> {
+    let n = setup.x0.len();
+    let mut work = DMatrix::zeros(n, n);
+    let symmetrised = |what, m: &DMatrix<f64>, work: &mut DMatrix<f64>| -> Result<DMatrix<f64>, EstimatorError> {
+        check_psd_no_alloc(what, m, n, work)?;
+        let mut s = m.clone();
+        dense_kernels::symmetrize(&mut s);
+        Ok(s)
+    };
+    if n > 0 && setup.measurement_noise.nrows() > 0 {
+        check_finite("x0", setup.x0.as_slice())?;
+        let p0 = match which {
+            Covariances::Semidefinite => symmetrised("P0", &setup.p0, &mut work)?,
+            Covariances::DefinitePrior => check_spd("P0", &setup.p0, n)?,
+        };
+        let q = symmetrised("Q", &setup.process_noise, &mut work)?;
+        let m = setup.measurement_noise.nrows();
+        let r = check_spd("R", &setup.measurement_noise, m)?;
+        return Ok(InitialData { n, m, inputs: setup.inputs, x0: setup.x0, p0, q, r });
+    }
+    check_initial(setup)
 }
 
 /// Checks `x₀` (finite, at least one state), `P₀`, `Q` (`n × n`) and `R` (`m × m`, at least one

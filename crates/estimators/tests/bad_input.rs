@@ -314,7 +314,8 @@ fn yang_li_refuses_an_input_outside_its_box_and_stays_unchanged() {
 #[test]
 fn badly_scaled_positive_definite_noise_is_accepted() {
     // diag(1e-12, 1e4) is positive definite to working precision (a conditioning floor relative to
-    // the largest diagonal entry used to reject it); a singular one is still refused.
+    // the largest diagonal entry used to reject it); a singular one is still refused where a shape
+    // must be definite (the set-membership filter's ellipsoid), taken where it is a covariance.
     use estimators::{KalmanFilter, SetMembershipFilter};
     use nalgebra::{DMatrix, DVector};
     let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-12, 1e4]));
@@ -341,14 +342,21 @@ fn badly_scaled_positive_definite_noise_is_accepted() {
     assert!(f.set_process_noise(&q).is_ok());
     let singular = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
     assert!(f.set_process_noise(&singular).is_err());
-    assert!(
+    // A Gaussian filter's Q is a covariance: singular is allowed, indefinite is not.
+    let kf = |q: &DMatrix<f64>| {
         KalmanFilter::new(Setup {
             x0: DVector::zeros(2),
-            p0,
-            process_noise: singular,
-            measurement_noise: r,
-            inputs: 1
+            p0: p0.clone(),
+            process_noise: q.clone(),
+            measurement_noise: r.clone(),
+            inputs: 1,
         })
-        .is_err()
-    );
+    };
+    assert!(kf(&singular).is_ok());
+    assert!(kf(&DMatrix::zeros(2, 2)).is_ok());
+    let indefinite = DMatrix::from_row_slice(2, 2, &[1.0, 1.0 + 1e-6, 1.0 + 1e-6, 1.0]);
+    assert_eq!(kf(&indefinite).unwrap_err(), EstimatorError::NotPositiveSemidefinite { what: "Q" });
+    let mut k = kf(&q).unwrap();
+    assert!(k.set_process_noise(&singular).is_ok());
+    assert_eq!(k.set_process_noise(&indefinite).unwrap_err(), EstimatorError::NotPositiveSemidefinite { what: "Q" });
 }

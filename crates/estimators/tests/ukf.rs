@@ -335,7 +335,10 @@ fn bad_input_is_refused_and_leaves_the_filter_unchanged() {
         ),
         Err(EstimatorError::NotPositiveDefinite { what: "P0" })
     ));
-    assert!(ukf.set_process_noise(&DMatrix::zeros(6, 6)).is_err());
+    // Q is a covariance (singular allowed); an indefinite one is refused and changes nothing.
+    let mut indefinite = DMatrix::<f64>::zeros(6, 6);
+    indefinite[(0, 0)] = -1e-3;
+    assert_eq!(ukf.set_process_noise(&indefinite), Err(EstimatorError::NotPositiveSemidefinite { what: "Q" }));
     assert_eq!(ukf.estimate(), &before);
     // The registry builds it by name.
     let setup = Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 3 };

@@ -304,6 +304,7 @@ impl Model {
         let key = match &e {
             EstimatorError::NotSymmetric { what }
             | EstimatorError::NotPositiveDefinite { what }
+            | EstimatorError::NotPositiveSemidefinite { what }
             | EstimatorError::NonFinite { what, .. }
             | EstimatorError::DimensionMismatch { what, .. } => key_of(what),
             EstimatorError::InvalidInputBounds { .. } => Some("u_lower"),

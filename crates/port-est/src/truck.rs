@@ -165,6 +165,7 @@ pub(crate) fn settings_of(file: &ConfigFile, source: &SettingsFile) -> Result<Se
         let key = match &e {
             EstimatorError::NotSymmetric { what }
             | EstimatorError::NotPositiveDefinite { what }
+            | EstimatorError::NotPositiveSemidefinite { what }
             | EstimatorError::NonFinite { what, .. } => match *what {
                 "Q" => Some(("q", file.q.as_ref().map(Spanned::span))),
                 "R" => Some(("r", file.r.as_ref().map(Spanned::span))),

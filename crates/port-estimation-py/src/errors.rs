@@ -67,6 +67,7 @@ pub fn is_bad_input(e: &EstimatorError) -> bool {
         | EstimatorError::NonFinite { .. }
         | EstimatorError::NotSymmetric { .. }
         | EstimatorError::NotPositiveDefinite { .. }
+        | EstimatorError::NotPositiveSemidefinite { .. }
         | EstimatorError::InvalidInputBounds { .. }
         | EstimatorError::InputOutsideBounds { .. }
         | EstimatorError::EmptySystem(_)

@@ -132,3 +132,40 @@ def test_unscented_kalman_filter_equals_filterpy_at_every_step(log, alpha, beta,
         ref.update(y, hx=lambda x, u=u: model.h(x, u))
         assert_close(e.center, ref.x, what=f"{log}: x at step {k}")
         assert_close(e.shape, ref.P, what=f"{log}: P at step {k}")
+
+
+def test_singular_covariances_are_covariances_and_match_filterpy():
+    # A constant-velocity target with filterpy's rank-one white-noise Q and a singular P0 (the
+    # velocity known exactly): the Kalman filter and the EKF take them, the UKF takes the Q (its
+    # sigma points need a definite P0), and all follow filterpy.
+    from filterpy.common import Q_discrete_white_noise
+
+    dt = 0.1
+    a = np.array([[1.0, dt], [0.0, 1.0]])
+    b, c = np.array([[0.5 * dt * dt], [dt]]), np.array([[1.0, 0.0]])
+    q = Q_discrete_white_noise(dim=2, dt=dt, var=0.5)
+    assert np.linalg.matrix_rank(q) == 1
+    r, p0 = np.array([[0.04]]), np.diag([1.0, 0.0])
+    rng = np.random.default_rng(3)
+    us, ys, _ = simulate_gaussian(rng, a, b, c, q + 1e-12 * np.eye(2), r, [0.0, 1.0], 100)
+    model = pe.Model(a, b, c)
+    for name, prior in [("kf", p0), ("ekf", p0), ("ukf", np.eye(2)), ("kf", np.zeros((2, 2)))]:
+        for noise in [q, np.zeros((2, 2))]:
+            ours = pe.Estimator(name, model, x0=[0.0, 1.0], P0=prior, Q=noise, R=r)
+            # (With Q = 0 the filter is certain of a target that does move: its gate would stop it.)
+            ours.set_data_checks("off")
+            ref = FilterpyKF(dim_x=2, dim_z=1, dim_u=1)
+            ref.x, ref.P, ref.F, ref.B, ref.H, ref.Q, ref.R = np.array([0.0, 1.0]), prior.copy(), a, b, c, noise, r
+            for k in range(len(us)):
+                e = ours.step(us[k], ys[k])
+                ref.predict(u=us[k])
+                ref.update(ys[k])
+                assert_close(e.center, ref.x, rtol=1e-6, what=f"{name} x at step {k}")
+                assert_close(e.shape, ref.P, rtol=1e-6, what=f"{name} P at step {k}")
+    # Indefinite beyond rounding is refused by name; so is a singular R, and the UKF's singular P0.
+    with pytest.raises(ValueError, match="Q is not positive semidefinite"):
+        pe.KalmanFilter(model, Q=np.diag([1.0, -1e-6]), R=r)
+    with pytest.raises(ValueError, match="R is not positive definite"):
+        pe.KalmanFilter(model, Q=q, R=np.zeros((1, 1)))
+    with pytest.raises(ValueError, match="P0 is not positive definite"):
+        pe.UnscentedKalmanFilter(model, P0=p0, Q=q, R=r)
