@@ -194,6 +194,27 @@ pub(crate) fn map_worst_output(e: EstimatorError, rows: &[usize]) -> EstimatorEr
     }
 }
 
+/// Whether a model function is defined at a point: `value` is its plain evaluation there (into
+/// `out`). A NaN or an evaluation error is `Err(reason)`, for a certified filter's
+/// `GuaranteeLost`: an interval enclosure can look bounded where the function is not defined
+/// (`0 · ln t` at `t < 0` encloses as 0), so the filters ask the plain value too, as the
+/// Gaussian filters do.
+pub(crate) fn defined_at(
+    what: &str,
+    at: &str,
+    value: Result<(), models::ModelError>,
+    out: &DVector<f64>,
+) -> Result<(), String> {
+    match value {
+        Err(models::ModelError::Evaluation(message)) => Err(format!("{what} is undefined at {at}: {message}")),
+        Err(e) => Err(format!("{what} cannot be evaluated at {at}: {e}")),
+        Ok(()) => match out.iter().position(|v| v.is_nan()) {
+            Some(i) => Err(format!("{what}[{i}] is NaN (undefined) at {at}")),
+            None => Ok(()),
+        },
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -232,23 +253,3 @@ mod tests {
     }
 }
 
-/// Whether a model function is defined at a point: `value` is its plain evaluation there (into
-/// `out`). A NaN or an evaluation error is `Err(reason)`, for a certified filter's
-/// `GuaranteeLost`: an interval enclosure can look bounded where the function is not defined
-/// (`0 · ln t` at `t < 0` encloses as 0), so the filters ask the plain value too, as the
-/// Gaussian filters do.
-pub(crate) fn defined_at(
-    what: &str,
-    at: &str,
-    value: Result<(), models::ModelError>,
-    out: &DVector<f64>,
-) -> Result<(), String> {
-    match value {
-        Err(models::ModelError::Evaluation(message)) => Err(format!("{what} is undefined at {at}: {message}")),
-        Err(e) => Err(format!("{what} cannot be evaluated at {at}: {e}")),
-        Ok(()) => match out.iter().position(|v| v.is_nan()) {
-            Some(i) => Err(format!("{what}[{i}] is NaN (undefined) at {at}")),
-            None => Ok(()),
-        },
-    }
-}
