@@ -94,6 +94,11 @@ def main() -> None:
     if cluster is not None:
         cluster.close()
 
+    failed = [s for s in serial + parallel if s["status"] != "ok"]
+    for s in failed:
+        print(f"failed: {s['error']}")
+    if failed:
+        raise SystemExit(f"{len(failed)} of {len(serial) + len(parallel)} runs of a log failed")
     same = all(Path(s["output"]).read_bytes() == Path(d["output"]).read_bytes() for s, d in zip(serial, parallel))
     unclean = sum(s["unclean"] for s in serial)
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")

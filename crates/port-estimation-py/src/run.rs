@@ -11,9 +11,9 @@ use std::time::{Duration, Instant};
 
 use estimators::{AnyEstimator, AnyModel, EstimateKind, EstimatorError, StepStatus};
 use nalgebra::DVector;
-use numpy::{PyArray1, PyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString};
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
 use crate::convert::{column_out, table_out};
 
@@ -234,6 +234,80 @@ impl RunResult {
 
     fn __len__(&self) -> usize {
         self.rows
+    }
+
+    /// Rebuilds a result from its tables (pickling: a result may come back from a Dask task).
+    #[staticmethod]
+    #[pyo3(name = "_restore")]
+    #[allow(clippy::too_many_arguments)]
+    fn restore(
+        py: Python<'_>,
+        center: PyReadonlyArray2<'_, f64>,
+        lower: PyReadonlyArray2<'_, f64>,
+        upper: PyReadonlyArray2<'_, f64>,
+        trace: PyReadonlyArray1<'_, f64>,
+        status: Vec<String>,
+        clean: PyReadonlyArray1<'_, bool>,
+        details: &Bound<'_, PyDict>,
+        kind: &str,
+    ) -> PyResult<Self> {
+        let kinds = [
+            EstimateKind::Gaussian,
+            EstimateKind::GuaranteedEllipsoid,
+            EstimateKind::GuaranteedConstrainedZonotope,
+            EstimateKind::Point,
+        ];
+        let kind = kinds
+            .into_iter()
+            .find(|k| k.label() == kind)
+            .ok_or_else(|| crate::errors::value_error(format!("cannot restore a RunResult of kind {kind:?}")))?;
+        let (rows, states) = (center.shape()[0], center.shape()[1]);
+        let sizes_agree = [lower.shape(), upper.shape()].iter().all(|s| *s == [rows, states])
+            && trace.len() == rows
+            && clean.len() == rows
+            && status.len() == rows;
+        if !sizes_agree {
+            return Err(crate::errors::value_error("cannot restore a RunResult from tables of different lengths"));
+        }
+        let table = |a: &PyReadonlyArray2<'_, f64>| -> PyResult<Py<PyArray2<f64>>> {
+            Ok(table_out(py, a.as_array().iter().copied().collect(), rows, states)?.unbind())
+        };
+        let d = PyDict::new(py);
+        for (name, column) in details.iter() {
+            let column: PyReadonlyArray1<'_, f64> = column.extract()?;
+            if column.len() != rows {
+                return Err(crate::errors::value_error(format!("detail {name} has {} rows, not {rows}", column.len())));
+            }
+            d.set_item(name, column_out(py, column.as_array().to_vec())?)?;
+        }
+        Ok(Self {
+            center: table(&center)?,
+            lower: table(&lower)?,
+            upper: table(&upper)?,
+            trace: column_out(py, trace.as_array().to_vec())?.unbind(),
+            status: PyList::new(py, status)?.unbind(),
+            clean: column_out(py, clean.as_array().to_vec())?.unbind(),
+            details: d.unbind(),
+            kind,
+            rows,
+        })
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        // A module-level function of the package, so that pickle finds it by name.
+        let restore = py.import("port_estimation")?.getattr("_restore_run_result")?;
+        let args = (
+            self.center.clone_ref(py),
+            self.lower.clone_ref(py),
+            self.upper.clone_ref(py),
+            self.trace.clone_ref(py),
+            self.status.clone_ref(py),
+            self.clean.clone_ref(py),
+            self.details.clone_ref(py),
+            self.kind.label(),
+        )
+            .into_pyobject(py)?;
+        Ok((restore, args))
     }
 
     fn __repr__(&self) -> String {

@@ -84,6 +84,11 @@ def _restore_model(kind: str, args: tuple) -> Model:
     return Model._restore(kind, args)
 
 
+def _restore_run_result(*tables) -> RunResult:
+    """Rebuilds a pickled ``RunResult`` from its tables (the target of ``RunResult.__reduce__``)."""
+    return RunResult._restore(*tables)
+
+
 def __getattr__(name: str):
     # `fleet` needs pyarrow (and Dask for a cluster): imported on first use only.
     if name == "fleet":
