@@ -273,6 +273,10 @@ fn update_fixed<const N: usize, const M: usize>(
     Ok(nis)
 }
 
+/// The failure of a step whose normalised innovation squared `νᵀ S⁻¹ ν` overflows.
+pub(crate) const INNOVATION_OVERFLOW: &str =
+    "the measurement's normalised innovation overflows (a value beyond floating point's reach of its prediction)";
+
 /// The measurement update shared by the Kalman and the extended Kalman filter, with its buffers:
 ///
 /// ```text
@@ -323,12 +327,19 @@ impl GaussianUpdate {
         innov: &DVector<f64>,
         want_nis: bool,
     ) -> Result<f64, EstimatorError> {
-        let nis = (self.kernels.update)(&mut self.buf, x_pred, p_pred, h, r, innov, want_nis)
+        // The normalised innovation is computed whatever the gate: one that overflows is a
+        // measurement beyond floating point's reach of its prediction (a corrupt cell), refused at
+        // its own step even with the data check off — accepted, it would move the estimate
+        // out of range and fail a later step instead.
+        let nis = (self.kernels.update)(&mut self.buf, x_pred, p_pred, h, r, innov, true)
             .map_err(|_| EstimatorError::NumericalFailure("innovation covariance is not positive definite"))?;
+        if !nis.is_finite() {
+            return Err(EstimatorError::NumericalFailure(INNOVATION_OVERFLOW));
+        }
         if !all_finite(self.buf.x_new.as_slice()) || !all_finite(self.buf.p_new.as_slice()) {
             return Err(EstimatorError::NumericalFailure("the estimate is not finite"));
         }
-        Ok(nis)
+        Ok(if want_nis { nis } else { f64::NAN })
     }
 
     /// Publishes the computed `x⁺`, `P⁺` into `est` (swaps buffers), status converged.

@@ -734,12 +734,13 @@ impl UnscentedKalmanFilter {
         self.meas.innov.copy_from(y);
         self.meas.innov -= &self.meas.z_pred;
         angles.wrap_outputs(self.meas.innov.as_mut_slice());
-        // The innovation gate on Pzz, before anything changes.
-        let nis = if self.meas.gate.is_on() {
-            nis(&self.meas.pzz_chol, &self.meas.innov, &mut self.meas.dz)
-        } else {
-            f64::NAN
-        };
+        // The innovation gate on Pzz, before anything changes; an overflowing innovation is a
+        // failure of this step whatever the gate (as in the Kalman filters' update).
+        let nis = nis(&self.meas.pzz_chol, &self.meas.innov, &mut self.meas.dz);
+        if !nis.is_finite() {
+            return Err(EstimatorError::NumericalFailure(crate::gaussian_update::INNOVATION_OVERFLOW));
+        }
+        let nis = if self.meas.gate.is_on() { nis } else { f64::NAN };
         let verdict =
             self.meas.gate.judge(nis, step).map_err(|e| name_worst_output(e, &self.meas.innov, &self.meas.pzz_chol))?;
         if verdict == GateVerdict::Drop {

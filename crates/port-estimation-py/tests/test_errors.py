@@ -285,3 +285,30 @@ def test_a_run_refusing_a_later_row_raises_run_error_and_keeps_the_rows_before(s
         fresh.run(bad[9:], ys[9:])
     assert info.value.row == 0
     _assert_same(fresh, snap)
+
+
+@pytest.mark.parametrize(("name", "vehicle"), [("kf", pe.Model.car), ("ekf", pe.Model.vessel), ("ukf", pe.Model.vessel)])
+def test_a_cell_beyond_floating_point_fails_its_own_row_even_with_the_data_check_off(name, vehicle):
+    # Accepted, the 1e160 cell would move the estimate out of range and fail a later row (one
+    # later for the EKF, sixteen for the UKF) as if the model were to blame.
+    model = vehicle()
+    n, p, m = model.dims
+    rng = np.random.default_rng(1)
+    us, ys, x = np.zeros((30, p)), np.zeros((30, m)), np.zeros(n)
+    for k in range(30):
+        x = model.f(x, us[k])
+        ys[k] = model.h(x, us[k]) + 0.01 * rng.normal(size=m)
+    ys[10, 0] = 1e160
+
+    def build():
+        est = pe.Estimator(name, model, P0=np.eye(n), Q=1e-4 * np.eye(n), R=1e-2 * np.eye(m))
+        est.set_data_checks("off")
+        return est
+
+    est = build()
+    with pytest.raises(pe.NumericalError, match="normalised innovation overflows") as info:
+        est.run(us, ys)
+    assert info.value.row == 10
+    before = build()
+    before.run(us[:10], ys[:10])
+    np.testing.assert_array_equal(est.x, before.x)
