@@ -103,6 +103,9 @@ impl OutputFile {
             Some(meta) if meta.is_file() && meta.permissions().readonly() => {
                 return Err(refuse("is read-only".into()));
             }
+            // A device or a pipe may have no canonical name (`/dev/stdout` on a pipe resolves to
+            // `/proc/self/fd/1` → `pipe:[…]`): then the name given.
+            Some(meta) if !meta.is_file() => fs::canonicalize(output).unwrap_or_else(|_| output.to_owned()),
             Some(_) => fs::canonicalize(output).map_err(|e| refuse(e.to_string()))?,
             None => {
                 let Some(name) = output.file_name() else {
@@ -127,8 +130,10 @@ impl OutputFile {
         let sink = match existing {
             Some(meta) if !meta.is_file() => {
                 // A device or a pipe: nothing to replace, nothing half-written to clean up.
+                // Opened by the name given: `/dev/stdout` resolves to `/proc/self/fd/1`, whose
+                // canonical form (`pipe:[…]`) names no file.
                 let file =
-                    OpenOptions::new().write(true).truncate(true).open(&target).map_err(|e| refuse(e.to_string()))?;
+                    OpenOptions::new().write(true).truncate(true).open(output).map_err(|e| refuse(e.to_string()))?;
                 Sink::InPlace(BufWriter::new(file))
             }
             // The temporary file beside the target (keeping a replaced file's permissions).

@@ -231,4 +231,20 @@ fn dash_reads_standard_input_and_writes_standard_output() {
     ]);
     assert!(ok.status.success());
     assert_eq!(text(&piped.stdout), std::fs::read_to_string(&file_out).unwrap());
+    // `/dev/stdout` on a pipe (it resolves to `/proc/self/fd/1`, `pipe:[…]`, which names no file).
+    if Path::new("/dev/stdout").exists() {
+        let out = port_est(&[
+            "filter",
+            "-m",
+            model.to_str().unwrap(),
+            "-i",
+            input.to_str().unwrap(),
+            "-o",
+            "/dev/stdout",
+            "-e",
+            "kf",
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        assert_eq!(text(&out.stdout), text(&piped.stdout));
+    }
 }
