@@ -65,6 +65,8 @@ const LAYERS: &[(&str, &[&str])] = &[
             "equation-models",
         ],
     ),
+    // The README's examples as a user's crate: the facade only.
+    ("readme-examples", &["port-estimation"]),
 ];
 
 fn root() -> PathBuf {
