@@ -157,11 +157,11 @@ def test_the_certified_filter_contains_the_truth_through_the_dropouts():
     assert widths[599] > 2 * widths[299] and widths[700] < widths[599] / 2
 
 
-@pytest.mark.parametrize("name", ["smf", "mhe"])
+@pytest.mark.parametrize("name", ["rmhe", "mhe"])
 def test_estimators_that_need_every_output_refuse_a_partial_step_unchanged(name):
     a, b, c = np.eye(2), np.zeros((2, 0)), np.eye(2)
     box = {"w_lower": [-0.1] * 2, "w_upper": [0.1] * 2, "v_lower": [-0.5] * 2, "v_upper": [0.5] * 2}
-    settings = {"horizon": 5, **box} if name == "mhe" else {}
+    settings = {"horizon": 5, **box}
     est = pe.Estimator(name, pe.Model(a, b, c), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2, **settings)
     with pytest.raises(Exception, match=f"{name}.*partial"):
         est.step(None, np.array([0.1, np.nan]), measured=np.array([True, False]))
@@ -220,3 +220,27 @@ def test_the_fleet_reads_null_measurements_as_partial_rows(tmp_path):
     want = est.run(us, ys, measured=masks).center
     est = pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE)
     np.testing.assert_array_equal(est.run(us, read).center, want)
+
+
+@pytest.mark.parametrize("name", ["smf", "yang-li-with-input", "smf-nl"])
+def test_ellipsoid_filters_step_with_the_projection_of_their_noise_ellipsoid(name):
+    # The filter of the model whose outputs are the measured ones, with the sub-block of R: the
+    # same numbers (bit for bit for the linear filters), through Python's masks.
+    a = np.array([[1.0, 0.1, 0.0], [0.0, 1.0, 0.1], [0.0, 0.0, 0.95]])
+    b = np.array([[0.0], [0.05], [0.1]])
+    c = np.array([[1.0, 0.0, 0.0], [0.5, 1.0, 0.0], [0.0, 0.2, 1.0]])
+    r = np.array([[0.05, 0.01, 0.02], [0.01, 0.04, -0.01], [0.02, -0.01, 0.09]])
+    keep = [0, 2]
+    ours = pe.Estimator(name, pe.Model(a, b, c), x0=np.zeros(3), P0=1.0, Q=1e-3, R=r)
+    reduced = pe.Estimator(name, pe.Model(a, b, c[keep]), x0=np.zeros(3), P0=1.0, Q=1e-3, R=r[np.ix_(keep, keep)])
+    rng = np.random.default_rng(5)
+    for k in range(30):
+        u = np.array([np.sin(0.3 * k)])
+        y = rng.normal(scale=0.1, size=3)
+        e = ours.step(u, np.ma.masked_array(y, mask=[False, True, False]))
+        want = reduced.step(u, y[keep])
+        if name == "smf-nl":
+            assert_close(e.center, want.center, rtol=1e-9)
+        else:
+            np.testing.assert_array_equal(e.center, want.center)
+            np.testing.assert_array_equal(e.shape, want.shape)

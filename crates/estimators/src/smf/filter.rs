@@ -12,10 +12,12 @@ use super::consistency::{self, Consistency, ConsistencyWork, InconsistencyPolicy
 use super::fallback::{FallbackReason, GainCtx, clamp_tau, near_simplex};
 use super::gain::GainWork;
 use super::input::{InputModel, check_in_box, effective_noise};
+use super::partial::SubsetFilter;
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 use crate::checks::DataChecks;
 use crate::error::EstimatorError;
+use crate::partial::Subsets;
 use crate::traits::forward_estimator;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
@@ -169,9 +171,9 @@ struct Workspace {
 /// What [`SetMembershipFilter::predict`] keeps for a following [`SetMembershipFilter::update`]:
 /// the update (13)–(29) is joint with the prediction, from the set before it.
 #[derive(Debug, Clone, Default)]
-struct PendingPrediction {
+pub(super) struct PendingPrediction {
     /// Whether a prediction is waiting for its measurement.
-    armed: bool,
+    pub(super) armed: bool,
     /// `x̂_k`, `P_k` and the report of the set before the prediction.
     center: DVector<f64>,
     shape: DMatrix<f64>,
@@ -185,23 +187,25 @@ struct PendingPrediction {
 /// The improved set-membership filter, generic over the solver of (29).
 #[derive(Debug, Clone)]
 pub struct SetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
-    n: usize,
-    p: usize,
-    m: usize,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    input: InputModel,
-    solver: S,
-    time_budget: Option<Duration>,
-    policy: InconsistencyPolicy,
+    pub(super) n: usize,
+    pub(super) p: usize,
+    pub(super) m: usize,
+    pub(super) q: DMatrix<f64>,
+    pub(super) r: DMatrix<f64>,
+    pub(super) input: InputModel,
+    pub(super) solver: S,
+    pub(super) time_budget: Option<Duration>,
+    pub(super) policy: InconsistencyPolicy,
     /// Steps taken so far.
-    steps: u64,
+    pub(super) steps: u64,
     /// Whether an inconsistent step was published (policy `FlagAndContinue`).
-    guarantee_lost: bool,
-    est: SetEstimate,
+    pub(super) guarantee_lost: bool,
+    pub(super) est: SetEstimate,
     sol: UpdateSolution,
     ws: Workspace,
-    pending: PendingPrediction,
+    pub(super) pending: PendingPrediction,
+    /// The filters of partial steps, by measured count (module `partial`).
+    pub(super) partial: Subsets<SubsetFilter<S>>,
 }
 
 impl SetMembershipFilter<TwoMultiplierSolver> {
@@ -269,6 +273,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 b: DMatrix::zeros(n, inputs),
                 u: DVector::zeros(inputs),
             },
+            partial: Subsets::new(m),
         })
     }
 
@@ -295,6 +300,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             w_diag[i] = w;
         }
         self.input = InputModel::BoundedDisturbance { lower: lower.clone(), upper: upper.clone(), mid, w_diag };
+        self.partial.clear();
         Ok(self)
     }
 
@@ -327,7 +333,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     /// The data checks ([`DataChecks::policy`]; the set-membership filter's check is a proof, so
     /// the gate probability is not used).
     pub fn set_data_checks(&mut self, checks: DataChecks) -> Result<(), EstimatorError> {
-        self.policy = checks.policy;
+        self.set_inconsistency_policy(checks.policy);
         Ok(())
     }
 
@@ -716,7 +722,7 @@ impl Estimate for SetEstimate {
     }
 }
 
-forward_estimator!(impl<S: UpdateSolver> for SetMembershipFilter<S>, LinearModel, SetEstimate);
+forward_estimator!(impl<S: UpdateSolver> for SetMembershipFilter<S>, LinearModel, SetEstimate, partial);
 
 /// The linear filter takes `y = C x + v` as exact data: a measured angle's branch needs an
 /// enclosure of `h` that it does not carry, so models declaring angle outputs are refused here

@@ -100,6 +100,7 @@ pub(crate) mod gain;
 pub mod input;
 pub mod lmi28;
 pub mod nonlinear;
+mod partial;
 pub mod sdp_solver;
 pub mod two_multiplier;
 pub mod update;

@@ -37,6 +37,7 @@ use super::update::UpdateSolver;
 use crate::angle_branch::{Branch, branch, measured};
 use crate::checks::{DataChecks, InconsistencyPolicy, defined_at};
 use crate::error::EstimatorError;
+use crate::partial::{Measured, classify};
 use crate::traits::Setup;
 use crate::validate::check_vec;
 
@@ -95,6 +96,11 @@ struct Work {
     /// The plain values of `f` at the centre and `h` at the predicted centre (defined there?).
     f_plain: DVector<f64>,
     h_plain: DVector<f64>,
+    /// A partial step: the measured outputs, the measured angle outputs, and `y` with the
+    /// others' entries 0 (never read as data).
+    rows: Vec<usize>,
+    angle_rows: Vec<usize>,
+    y_partial: DVector<f64>,
 }
 
 /// The nonlinear set-membership filter over any [`SecondOrderModel`], generic over the solver of
@@ -322,6 +328,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             y_err: vec![0.0; m],
             f_plain: DVector::zeros(n),
             h_plain: DVector::zeros(m),
+            rows: Vec::with_capacity(m),
+            angle_rows: Vec::with_capacity(m),
+            y_partial: DVector::zeros(m),
         };
         let half = |m: &DMatrix<f64>| -> Vec<f64> {
             (0..m.nrows()).map(|i| Interval::point(m[(i, i)].max(0.0)).sqrt().hi()).collect()
@@ -514,7 +523,12 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
 
     /// (N4)–(N5): linearises `h` about `ws.xbar` over `ws.xbar ± ws.radius`: `ws.lin.c`,
     /// `ws.y_lin`, `ws.remainders.measurement`, `ws.r_eff`.
-    fn linearise_h<M: SecondOrderModel + ?Sized>(&mut self, model: &M, u: &DVector<f64>) -> Result<(), EstimatorError> {
+    fn linearise_h<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        partial: bool,
+    ) -> Result<(), EstimatorError> {
         let step = self.inner.steps() + 1;
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
@@ -545,7 +559,23 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             let sigma = remainder(&ws.point_h, &ws.box_h, i, ws.lin.c.row(i).iter().copied(), &ws.radius, h_hat);
             ws.remainders.measurement[i] = (sigma + (y_lin - y_mid).mag()).hi();
         }
-        let worst = largest(&ws.remainders.measurement);
+        if partial {
+            // The unmeasured rows are not used: no remainder of theirs inflates R (below).
+            for i in 0..m {
+                if ws.rows.binary_search(&i).is_err() {
+                    ws.remainders.measurement[i] = 0.0;
+                }
+            }
+        }
+        // Over the measured outputs only in a partial step (the others' rows are not used).
+        let worst = if partial {
+            ws.rows.iter().fold(0.0_f64, |a, &i| {
+                let v = ws.remainders.measurement[i];
+                if v.is_nan() || v > a { v } else { a }
+            })
+        } else {
+            largest(&ws.remainders.measurement)
+        };
         if worst.is_nan() || worst > self.settings.max_remainder {
             return Err(guarantee_lost(
                 step,
@@ -577,9 +607,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         check_vec("y", y, self.dims.outputs)?;
         self.linearise_f(model, u)?;
         self.observer_predict(model, u)?;
-        let off_branch = self.branch_angles(model, u, y)?;
-        self.linearise_h(model, u)?;
-        let contradicted = self.observer_update(model, u)? || off_branch;
+        let off_branch = self.branch_angles(model, u, y, false)?;
+        self.linearise_h(model, u, false)?;
+        let contradicted = self.observer_update(model, u, false)? || off_branch;
         self.apply_noise()?;
         let Self { inner, ws, .. } = self;
         if let Err(e) = inner.step(&ws.lin, &ws.one, &ws.y_lin) {
@@ -588,6 +618,65 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         }
         self.u_last.copy_from(u);
         Ok(self.published(contradicted))
+    }
+
+    /// One step with the outputs where `measured` is true (the others' entries of `y` are not
+    /// read and may be NaN): `h`'s measured rows linearised and their remainders bounded, the
+    /// measured angle outputs put on their branch, the observer contracted by the measured rows,
+    /// and the linear filter's partial step (the sub-block of `R'`: the projection of its
+    /// ellipsoid). Every output measured: [`Self::step`]; none: [`Self::predict`]. On error the
+    /// filter is unchanged.
+    ///
+    /// # Errors
+    /// As [`Self::step`]; a mask or `y` of another length than `m`.
+    pub fn step_partial<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&SetEstimate, EstimatorError> {
+        self.check(model)?;
+        let (m, p) = (self.dims.outputs, self.dims.inputs);
+        match classify(measured, u, y, (m, p), &mut self.ws.rows)? {
+            Measured::All => return self.step(model, u, y),
+            Measured::Nothing => return self.predict(model, u),
+            Measured::Some(_) => {}
+        }
+        let ws = &mut self.ws;
+        ws.y_partial.fill(0.0);
+        for &i in &ws.rows {
+            ws.y_partial[i] = y[i];
+        }
+        let y = std::mem::take(&mut self.ws.y_partial);
+        let result = self.step_measured(model, u, &y, measured);
+        self.ws.y_partial = y;
+        let contradicted = result?;
+        self.u_last.copy_from(u);
+        Ok(self.published(contradicted))
+    }
+
+    /// [`Self::step_partial`] after the mask is read (`ws.rows`; `y`'s unmeasured entries 0);
+    /// whether the observer or an angle's branch found the data contradicted.
+    fn step_measured<M: SecondOrderModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<bool, EstimatorError> {
+        self.linearise_f(model, u)?;
+        self.observer_predict(model, u)?;
+        let off_branch = self.branch_angles(model, u, y, true)?;
+        self.linearise_h(model, u, true)?;
+        let contradicted = self.observer_update(model, u, true)? || off_branch;
+        self.apply_noise()?;
+        let Self { inner, ws, .. } = self;
+        if let Err(e) = inner.step_partial(&ws.lin, &ws.one, &ws.y_lin, measured) {
+            self.restore_noise();
+            return Err(e);
+        }
+        Ok(contradicted)
     }
 
     /// The measurement into `ws.y_used`, its angle outputs moved to their branch in `h` over the
@@ -599,10 +688,17 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         model: &M,
         u: &DVector<f64>,
         y: &DVector<f64>,
+        partial: bool,
     ) -> Result<bool, EstimatorError> {
         let step = self.inner.steps() + 1;
         let ws = &mut self.ws;
-        let outputs = model.angles().outputs;
+        let mut outputs = model.angles().outputs;
+        if partial {
+            // The measured angle outputs only (`ws.rows` is sorted, as the angles are).
+            ws.angle_rows.clear();
+            ws.angle_rows.extend(outputs.iter().copied().filter(|i| ws.rows.binary_search(i).is_ok()));
+            outputs = &ws.angle_rows;
+        }
         if !outputs.is_empty() {
             model.h_value_enclosure(&ws.obs, u, &mut ws.box_h)?;
         }
@@ -648,6 +744,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         &mut self,
         model: &M,
         u: &DVector<f64>,
+        partial: bool,
     ) -> Result<bool, EstimatorError> {
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
@@ -663,6 +760,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         ws.boxed.copy_from_slice(&ws.obs);
         for _ in 0..2 {
             for i in 0..m {
+                if partial && ws.rows.binary_search(&i).is_err() {
+                    continue;
+                }
                 let target = measured(ws.y_used[i], ws.y_err[i])
                     - Interval::new(-self.v_half[i], self.v_half[i])
                     - ws.point_h.value(i);
@@ -763,9 +863,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
         }
         self.ws.obs.copy_from_slice(&self.observer);
         let u = std::mem::take(&mut self.u_last);
-        let contradicted = self.branch_angles(model, &u, y).and_then(|off_branch| {
-            self.linearise_h(model, &u)?;
-            Ok(self.observer_update(model, &u)? || off_branch)
+        let contradicted = self.branch_angles(model, &u, y, false).and_then(|off_branch| {
+            self.linearise_h(model, &u, false)?;
+            Ok(self.observer_update(model, &u, false)? || off_branch)
         });
         self.u_last = u;
         let contradicted = contradicted?;
@@ -791,5 +891,6 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
 crate::traits::forward_estimator!(
     impl<S: UpdateSolver> for NonlinearSetMembershipFilter<S>,
     SecondOrderModel,
-    SetEstimate
+    SetEstimate,
+    partial
 );

@@ -503,6 +503,11 @@ impl UpdateSolver for TwoMultiplierSolver {
         true
     }
 
+    /// The same settings, without the workspace (prepared for its own size).
+    fn for_fewer_outputs(&self) -> Option<Self> {
+        Some(Self { work: None, max_iterations: self.max_iterations, tolerance: self.tolerance })
+    }
+
     fn solve(
         &mut self,
         pr: &UpdateProblem<'_>,

@@ -127,4 +127,14 @@ pub trait UpdateSolver {
     fn gain_is_closed_form(&self) -> bool {
         false
     }
+
+    /// A new solver of the same kind, to be prepared for fewer outputs (a filter's partial
+    /// steps); `None` (the default) when this solver cannot make one, and the filter then refuses
+    /// partial steps.
+    fn for_fewer_outputs(&self) -> Option<Self>
+    where
+        Self: Sized,
+    {
+        None
+    }
 }
