@@ -109,8 +109,9 @@ pub trait Estimator<M: ?Sized> {
     /// be NaN. Every output measured is [`Estimator::step`], none is [`Estimator::predict`].
     ///
     /// The default does those two and refuses a proper subset
-    /// ([`EstimatorError::Unsupported`]); the Kalman filter, the EKF, the UKF and the
-    /// constrained-zonotope filters update with any subset.
+    /// ([`EstimatorError::Unsupported`]); the Kalman filter, the EKF, the UKF, the
+    /// set-membership filters (with the two-multiplier solver) and the constrained-zonotope
+    /// filters update with any subset.
     ///
     /// # Errors
     /// As [`Estimator::step`]; a mask of another length than `y`.
@@ -136,7 +137,9 @@ pub trait Estimator<M: ?Sized> {
             Err(EstimatorError::Unsupported {
                 estimator: "this estimator",
                 operation: "a partial measurement",
-                reason: "it updates with every output at once; use kf, ekf, ukf, czf or czf-nl, or give every output",
+                reason: "it updates with every output at once (a moving-horizon window's samples, the fuzzy-adaptive \
+                         filter's scaling from the whole fix); use kf, ekf, ukf, smf, smf-nl, czf or czf-nl, or give \
+                         every output",
             })
         }
     }

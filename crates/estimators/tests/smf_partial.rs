@@ -157,7 +157,7 @@ fn an_sdp_solver_refuses_partial_steps_by_name() {
     let solver = SdpUpdateSolver::by_name("faer-ipm", lmi::SolverSettings::default()).unwrap();
     let mut smf = SetMembershipFilter::with_solver(setup(r_full()), solver).unwrap();
     let e = smf.step_partial(&model, &dvector![0.0], &dvector![0.1, 0.1, 0.1], &[true, false, true]).unwrap_err();
-    assert!(matches!(e, EstimatorError::Unsupported { operation: "partial measurements", .. }), "{e}");
+    assert!(matches!(e, EstimatorError::Unsupported { operation: "a partial measurement", .. }), "{e}");
     assert_eq!(smf.steps(), 0);
 }
 

@@ -285,7 +285,12 @@ pub fn mat_out<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Bound<'py, Py
 }
 
 /// A read-only `rows × cols` array that takes over `data` (row-major) without copying.
-pub fn table_out(py: Python<'_>, data: Vec<f64>, rows: usize, cols: usize) -> PyResult<Bound<'_, PyArray2<f64>>> {
+pub fn table_out<T: numpy::Element>(
+    py: Python<'_>,
+    data: Vec<T>,
+    rows: usize,
+    cols: usize,
+) -> PyResult<Bound<'_, PyArray2<T>>> {
     let a = Array2::from_shape_vec((rows, cols), data)
         .map_err(|e| crate::errors::broken(format!("internal error: result table of the wrong size ({e})")))?;
     read_only(PyArray2::from_owned_array(py, a))

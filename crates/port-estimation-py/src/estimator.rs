@@ -271,6 +271,7 @@ impl Estimator {
         let (_, us) = table(us, "us", Some(rows), self.dims.inputs)?;
         let model = self.model_of(model);
         let mut out = self.with_estimator(py, |est| RunOutput::new(est, rows))?;
+        let m = self.measurement_len();
         // Stretches of about `SLICE` with the GIL released, Python's signals looked at between
         // them: Ctrl-C stops the run within a fraction of a second.
         let mut next = 0;
@@ -302,7 +303,7 @@ impl Estimator {
                 return Err(interrupt);
             }
         }
-        RunResult::from_output(py, out)
+        RunResult::from_output(py, out.with_mask(mask, m))
     }
 
     /// Runs `f` on the estimator with the GIL released (another thread's `run` may hold it: the

@@ -33,6 +33,8 @@ pub struct RunOutput {
     codes: Vec<u16>,
     statuses: Vec<StepStatus>,
     details: Vec<(&'static str, Vec<f64>)>,
+    /// The mask of the run's measurements (`rows × m`, row-major), if it had one.
+    measured: Option<(Vec<bool>, usize)>,
 }
 
 /// How long one stretch of [`run_log`] may run before it returns for the caller to look at
@@ -56,7 +58,14 @@ impl RunOutput {
             codes: vec![0; rows],
             statuses: Vec::new(),
             details: names.iter().map(|name| (*name, vec![f64::NAN; rows])).collect(),
+            measured: None,
         }
+    }
+
+    /// Keeps the run's mask (`rows × m`, row-major) for the result.
+    pub fn with_mask(mut self, mask: Option<Vec<bool>>, m: usize) -> Self {
+        self.measured = mask.map(|mask| (mask, m));
+        self
     }
 }
 
@@ -140,6 +149,8 @@ pub fn run_log(
 ///     Whether each step ended cleanly.
 /// details : dict[str, ndarray]
 ///     The estimator's own numbers per step (``tau1``...; NaN where a step has none).
+/// measured : ndarray of bool, shape (T, m), or None
+///     Which outputs each step used (the run's mask), or None when every output was measured.
 /// kind : str
 ///     The estimates' kind.
 ///
@@ -153,6 +164,7 @@ pub struct RunResult {
     status: Py<PyList>,
     clean: Py<PyArray1<bool>>,
     details: Py<PyDict>,
+    measured: Option<Py<PyArray2<bool>>>,
     kind: EstimateKind,
     rows: usize,
 }
@@ -160,7 +172,8 @@ pub struct RunResult {
 impl RunResult {
     /// Moves the Rust results into NumPy arrays (no copies of the float tables).
     pub fn from_output(py: Python<'_>, out: RunOutput) -> PyResult<Self> {
-        let RunOutput { rows, states, kind, center, lower, upper, trace, codes, statuses, details } = out;
+        let RunOutput { rows, states, kind, center, lower, upper, trace, codes, statuses, details, measured } = out;
+        let measured = measured.map(|(mask, m)| table_out(py, mask, rows, m).map(Bound::unbind)).transpose()?;
         let labels: Vec<Bound<'_, PyString>> = statuses.iter().map(|s| PyString::new(py, &s.label())).collect();
         let status = PyList::new(py, codes.iter().map(|c| &labels[usize::from(*c)]))?;
         let clean: Vec<bool> = codes.iter().map(|c| statuses[usize::from(*c)].is_clean()).collect();
@@ -176,6 +189,7 @@ impl RunResult {
             status: status.unbind(),
             clean: column_out(py, clean)?.unbind(),
             details: d.unbind(),
+            measured,
             kind,
             rows,
         })
@@ -226,6 +240,12 @@ impl RunResult {
         self.details.clone_ref(py)
     }
 
+    /// Which outputs each step used, shape (T, m), or None when every output was measured.
+    #[getter]
+    fn measured(&self, py: Python<'_>) -> Option<Py<PyArray2<bool>>> {
+        self.measured.as_ref().map(|m| m.clone_ref(py))
+    }
+
     /// The estimates' kind.
     #[getter]
     fn kind(&self) -> &'static str {
@@ -238,7 +258,7 @@ impl RunResult {
 
     /// Rebuilds a result from its tables (pickling: a result may come back from a Dask task).
     #[staticmethod]
-    #[pyo3(name = "_restore")]
+    #[pyo3(name = "_restore", signature = (center, lower, upper, trace, status, clean, details, kind, measured = None))]
     #[allow(clippy::too_many_arguments)]
     fn restore(
         py: Python<'_>,
@@ -250,6 +270,7 @@ impl RunResult {
         clean: PyReadonlyArray1<'_, bool>,
         details: &Bound<'_, PyDict>,
         kind: &str,
+        measured: Option<PyReadonlyArray2<'_, bool>>,
     ) -> PyResult<Self> {
         let kinds = [
             EstimateKind::Gaussian,
@@ -288,6 +309,16 @@ impl RunResult {
             status: PyList::new(py, status)?.unbind(),
             clean: column_out(py, clean.as_array().to_vec())?.unbind(),
             details: d.unbind(),
+            measured: match measured {
+                Some(mask) if mask.shape()[0] == rows => {
+                    let m = mask.shape()[1];
+                    Some(table_out(py, mask.as_array().iter().copied().collect(), rows, m)?.unbind())
+                }
+                Some(_) => {
+                    return Err(crate::errors::value_error("cannot restore a RunResult: the mask's rows differ"));
+                }
+                None => None,
+            },
             kind,
             rows,
         })
@@ -305,6 +336,7 @@ impl RunResult {
             self.clean.clone_ref(py),
             self.details.clone_ref(py),
             self.kind.label(),
+            self.measured.as_ref().map(|m| m.clone_ref(py)),
         )
             .into_pyobject(py)?;
         Ok((restore, args))

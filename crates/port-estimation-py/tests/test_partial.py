@@ -6,6 +6,8 @@ nothing was measured: the Kalman filter to 1e-10, the EKF to 1e-9, the UKF to 1e
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 from conftest import assert_close
@@ -195,6 +197,11 @@ def test_run_takes_masked_logs_and_equals_the_partial_steps():
         run = est.run(us, **kwargs)
         np.testing.assert_array_equal(run.center, want)
         assert run.status[1].startswith("predicted") or masks[1].any()
+        # The result says which outputs each step used, and keeps it through pickling.
+        np.testing.assert_array_equal(run.measured, masks)
+        np.testing.assert_array_equal(pickle.loads(pickle.dumps(run)).measured, masks)
+    plain = pe.KalmanFilter(pe.Model(np.eye(2), np.zeros((2, 0)), np.eye(2)), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2)
+    assert plain.run(None, np.zeros((3, 2))).measured is None
     with pytest.raises(ValueError, match="shape of ys"):
         pe.ExtendedKalmanFilter(model, x0=X0_BIKE, P0=P0_BIKE, Q=Q_BIKE, R=R_BIKE).run(us, ys, measured=masks[:, :2])
     with pytest.raises(ValueError, match=r"ys\[1, 0\] is not finite"):

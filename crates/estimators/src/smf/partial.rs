@@ -103,7 +103,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         let Some(solver) = self.solver.for_fewer_outputs() else {
             return Err(EstimatorError::Unsupported {
                 estimator: "the set-membership filter with this solver",
-                operation: "partial measurements",
+                operation: "a partial measurement",
                 reason: "its solver cannot be made again for fewer outputs: use the two-multiplier solver",
             });
         };
