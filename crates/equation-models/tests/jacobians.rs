@@ -7,7 +7,7 @@ use equation_models::{Discretization, EquationModel, TimeModel};
 use models::{AnyModel, DifferentiableModel, DiscreteModel, check_jacobians};
 use nalgebra::{DMatrix, DVector};
 
-const BICYCLE: &str = include_str!("../examples/models/kinematic_bicycle.toml");
+const BICYCLE: &str = include_str!("../../../examples/models/kinematic_bicycle.toml");
 
 fn pendulum(discretization: &str) -> EquationModel {
     let text = format!(
@@ -98,7 +98,7 @@ fn continuous_pendulum_jacobians_match_finite_differences() {
 
 #[test]
 fn example_bicycle_file_reads_and_differentiates() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/models/kinematic_bicycle.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/models/kinematic_bicycle.toml");
     let model = EquationModel::from_file(&path).unwrap();
     assert_eq!(model.state_names(), ["x", "y", "psi", "v"]);
     assert_eq!(model.input_names(), ["a", "delta"]);

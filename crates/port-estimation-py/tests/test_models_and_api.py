@@ -161,7 +161,9 @@ def test_the_type_stubs_cover_the_native_module():
 
 def test_the_readme_examples_run(tmp_path, monkeypatch):
     """The Python examples of the workspace's README and of this package's (not the cluster one)."""
+    # In a directory of their own (nothing written into the tree), with the examples they read.
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
     for readme in (ROOT / "README.md", PACKAGE.parents[1] / "README.md"):
         blocks = readme.read_text().split("```python\n")[1:]
         ran = 0
