@@ -115,18 +115,10 @@ pub(crate) fn check_spd_no_alloc(
     n: usize,
     work: &mut DMatrix<f64>,
 ) -> Result<(), EstimatorError> {
-    check_shape((what, what), m, n, n)?;
-    check_finite(what, m.as_slice())?;
-    if dense_kernels::max_asymmetry(m, SYMMETRY_TOLERANCE).is_some() {
-        return Err(EstimatorError::NotSymmetric { what });
-    }
-    if n == 0 || work.shape() != (n, n) {
-        return Err(EstimatorError::NotPositiveDefinite { what });
-    }
-    work.copy_from(m);
-    dense_kernels::symmetrize(work);
+    let not_definite = EstimatorError::NotPositiveDefinite { what };
+    symmetric_into(what, m, n, work, not_definite.clone())?;
     // Positive definite to working precision: the pivot rule of `dense_kernels`.
-    dense_kernels::cholesky_in_place(work).map_err(|_| EstimatorError::NotPositiveDefinite { what })
+    dense_kernels::cholesky_in_place(work).map_err(|_| not_definite)
 }
 
 /// Validates a square symmetric positive *semi*definite matrix of order `n` (a covariance may be
@@ -139,22 +131,36 @@ pub(crate) fn check_psd_no_alloc(
     n: usize,
     work: &mut DMatrix<f64>,
 ) -> Result<(), EstimatorError> {
+    let not_semidefinite = EstimatorError::NotPositiveSemidefinite { what };
+    symmetric_into(what, m, n, work, not_semidefinite.clone())?;
+    let scale = (0..n).map(|i| work[(i, i)].abs()).fold(f64::MIN_POSITIVE, f64::max);
+    let delta = 64.0 * n as f64 * f64::EPSILON * scale;
+    for i in 0..n {
+        work[(i, i)] += delta;
+    }
+    dense_kernels::cholesky_in_place(work).map_err(|_| not_semidefinite)
+}
+
+/// `m` (`n × n`, finite, symmetric to [`SYMMETRY_TOLERANCE`]) symmetrised into `work`; `empty`
+/// for an order 0 or a `work` of another size.
+fn symmetric_into(
+    what: &'static str,
+    m: &DMatrix<f64>,
+    n: usize,
+    work: &mut DMatrix<f64>,
+    empty: EstimatorError,
+) -> Result<(), EstimatorError> {
     check_shape((what, what), m, n, n)?;
     check_finite(what, m.as_slice())?;
     if dense_kernels::max_asymmetry(m, SYMMETRY_TOLERANCE).is_some() {
         return Err(EstimatorError::NotSymmetric { what });
     }
     if n == 0 || work.shape() != (n, n) {
-        return Err(EstimatorError::NotPositiveSemidefinite { what });
+        return Err(empty);
     }
     work.copy_from(m);
     dense_kernels::symmetrize(work);
-    let scale = (0..n).map(|i| work[(i, i)].abs()).fold(f64::MIN_POSITIVE, f64::max);
-    let delta = 64.0 * n as f64 * f64::EPSILON * scale;
-    for i in 0..n {
-        work[(i, i)] += delta;
-    }
-    dense_kernels::cholesky_in_place(work).map_err(|_| EstimatorError::NotPositiveSemidefinite { what })
+    Ok(())
 }
 
 /// As [`replace_spd`] for a positive semidefinite matrix ([`check_psd_no_alloc`]).
