@@ -110,8 +110,8 @@ pub trait Estimator<M: ?Sized> {
     ///
     /// The default does those two and refuses a proper subset
     /// ([`EstimatorError::Unsupported`]); the Kalman filter, the EKF, the UKF, the
-    /// set-membership filters (with the two-multiplier solver) and the constrained-zonotope
-    /// filters update with any subset.
+    /// set-membership filters (with the two-multiplier solver), the constrained-zonotope
+    /// filters and the nonlinear moving-horizon estimator update with any subset.
     ///
     /// # Errors
     /// As [`Estimator::step`]; a mask of another length than `y`.
@@ -137,9 +137,9 @@ pub trait Estimator<M: ?Sized> {
             Err(EstimatorError::Unsupported {
                 estimator: "this estimator",
                 operation: "a partial measurement",
-                reason: "it updates with every output at once (a moving-horizon window's samples, the fuzzy-adaptive \
-                         filter's scaling from the whole fix); use kf, ekf, ukf, smf, smf-nl, czf or czf-nl, or give \
-                         every output",
+                reason: "it updates with every output at once (a linear moving-horizon window's samples, the \
+                         fuzzy-adaptive filter's scaling from the whole fix); use kf, ekf, ukf, smf, smf-nl, czf, \
+                         czf-nl or mhe-ukf, or give every output",
             })
         }
     }

@@ -568,32 +568,10 @@ impl UnscentedKalmanFilter {
             Measured::Nothing => return self.predict(model, u),
             Measured::Some(k) => k,
         };
-        let (n, m, checks, step) = (self.n, self.m, self.meas.gate.checks(), self.steps + 1);
-        self.subsets.get(k, || {
-            let buffers = MeasurementBuffers::new(n, k, checks)?;
-            Ok(PartialWork { buffers, y: DVector::zeros(k), angle_outputs: Vec::with_capacity(m) })
-        })?;
         let (guarded_prediction, saved_chol) = (self.predict_into_buffers(model, u)?, self.chol_current);
         self.sigma_outputs(model, Some(u))?;
-        let Some(mut work) = self.subsets.take(k) else {
-            return Err(EstimatorError::NumericalFailure("the partial update's buffers are missing"));
-        };
-        let rows = &self.subsets.rows;
-        partial::gather_rows(&self.meas.zsig, rows, &mut work.buffers.zsig);
-        partial::gather_block(&self.meas.r, rows, &mut work.buffers.r);
-        for (a, &i) in rows.iter().enumerate() {
-            work.y[a] = y[i];
-        }
-        partial::angle_positions(rows, model.angles().outputs, &mut work.angle_outputs);
-        std::mem::swap(&mut self.meas, &mut work.buffers);
-        let angles = Angles::new(model.angles().states, &work.angle_outputs);
-        let result = self.update_core(&work.y, angles, guarded_prediction, step).map(|_| ());
-        std::mem::swap(&mut self.meas, &mut work.buffers);
-        self.subsets.put(k, work);
-        if let Err(e) = result {
-            self.chol_current = saved_chol;
-            return Err(map_worst_output(e, &self.subsets.rows));
-        }
+        let step = self.steps + 1;
+        self.update_rows(model, y, k, guarded_prediction, step).inspect_err(|_| self.chol_current = saved_chol)?;
         self.u_last.copy_from(u);
         self.steps += 1;
         Ok(&self.est)
@@ -648,6 +626,65 @@ impl UnscentedKalmanFilter {
         check_vec("y", y, self.m)?;
         self.load_prediction_from_estimate()?;
         self.update_from_prediction(model, Some(u), y, false, self.steps.max(1))
+    }
+
+    /// [`UnscentedKalmanFilter::correct`] with the outputs `measured[i]` only (the update of
+    /// [`UnscentedKalmanFilter::step_partial`]); with none measured the state is unchanged.
+    /// On error the state is unchanged.
+    ///
+    /// # Errors
+    /// As [`UnscentedKalmanFilter::step_partial`].
+    pub fn correct_partial<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
+        let k = match classify(measured, u, y, (self.m, self.p), &mut self.subsets.rows)? {
+            Measured::All => return self.correct(model, u, y),
+            Measured::Nothing => return Ok(&self.est),
+            Measured::Some(k) => k,
+        };
+        self.load_prediction_from_estimate()?;
+        let saved_chol = self.chol_current;
+        self.sigma_outputs(model, Some(u))?;
+        self.update_rows(model, y, k, false, self.steps.max(1)).inspect_err(|_| self.chol_current = saved_chol)?;
+        Ok(&self.est)
+    }
+
+    /// The update (30)–(32) with the measured rows `subsets.rows` (`k` of them) of the sigma
+    /// points' images in `zsig`, of `R` and of `y`, in the buffers for `k` outputs.
+    fn update_rows<M: DiscreteModel + ?Sized>(
+        &mut self,
+        model: &M,
+        y: &DVector<f64>,
+        k: usize,
+        guarded_prediction: bool,
+        step: u64,
+    ) -> Result<(), EstimatorError> {
+        let (n, m, checks) = (self.n, self.m, self.meas.gate.checks());
+        self.subsets.get(k, || {
+            let buffers = MeasurementBuffers::new(n, k, checks)?;
+            Ok(PartialWork { buffers, y: DVector::zeros(k), angle_outputs: Vec::with_capacity(m) })
+        })?;
+        let Some(mut work) = self.subsets.take(k) else {
+            return Err(EstimatorError::NumericalFailure("the partial update's buffers are missing"));
+        };
+        let rows = &self.subsets.rows;
+        partial::gather_rows(&self.meas.zsig, rows, &mut work.buffers.zsig);
+        partial::gather_block(&self.meas.r, rows, &mut work.buffers.r);
+        for (a, &i) in rows.iter().enumerate() {
+            work.y[a] = y[i];
+        }
+        partial::angle_positions(rows, model.angles().outputs, &mut work.angle_outputs);
+        std::mem::swap(&mut self.meas, &mut work.buffers);
+        let angles = Angles::new(model.angles().states, &work.angle_outputs);
+        let result = self.update_core(&work.y, angles, guarded_prediction, step).map(|_| ());
+        std::mem::swap(&mut self.meas, &mut work.buffers);
+        self.subsets.put(k, work);
+        result.map_err(|e| map_worst_output(e, &self.subsets.rows))
     }
 
     /// The measurement update (29)–(32) from `x_pred`, `p_pred` (factor in `p_pred_chol`).

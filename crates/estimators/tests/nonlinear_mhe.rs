@@ -404,3 +404,67 @@ fn the_initial_measurement_is_weighed_against_the_prior() {
     let want = &x0 + gain * (&y0 - &c * &x0);
     assert!((&e.center - &want).amax() < 1e-9, "{} vs {want}", e.center);
 }
+
+/// Masks of the linear model's two outputs: both, the first, none, the second.
+const MASKS: [[bool; 2]; 4] = [[true, true], [true, false], [false, false], [false, true]];
+
+#[test]
+fn partial_measurements_give_the_kalman_filters_partial_steps_on_a_linear_model() {
+    // Full information (a horizon longer than the run) and, with the arrival filter's own mean,
+    // a short window whose arrival updates are partial too: both are the Kalman filter with the
+    // same partial steps (docs/partial-measurements.md), whose own partial steps match filterpy.
+    let model = linear();
+    let (us, mut ys) = data(&model, 30, 8);
+    for (k, y) in ys.iter_mut().enumerate() {
+        for (i, &m) in MASKS[k % 4].iter().enumerate() {
+            if !m {
+                y[i] = f64::NAN; // never read
+            }
+        }
+    }
+    let mut cases = vec![("full information", settings(3, 2, 40, NonlinearArrival::Ekf))];
+    for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper())] {
+        let mut s = settings(3, 2, 4, arrival);
+        s.settings.prior = estimators::mhe::NonlinearPrior::ArrivalFilter;
+        cases.push(("short window, the arrival filter's mean", s));
+    }
+    for (what, case) in cases {
+        let mut kf = KalmanFilter::new(case.setup(1)).unwrap();
+        let mut mhe = new_mhe(case, 1).unwrap();
+        for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
+            let mask = MASKS[k % 4];
+            let want = kf.step_partial(&model, u, y, &mask).unwrap().center.clone();
+            let e = mhe.step_partial(&model, u, y, &mask).unwrap_or_else(|e| panic!("{what}, step {k}: {e}"));
+            assert!((&e.center - &want).amax() < 1e-7, "{what}, step {k}: {} vs {want}", e.center);
+        }
+    }
+}
+
+#[test]
+fn partial_steps_refuse_bad_data_unchanged_and_do_not_allocate() {
+    let model = linear();
+    let (us, ys) = data(&model, 30, 9);
+    let mut mhe = new_mhe(settings(3, 2, 6, NonlinearArrival::Ukf(UkfParams::paper())), 1).unwrap();
+    // (The first steps make the buffers of one measured output, in the window and, once it
+    // slides, in the arrival filter.)
+    for k in 0..16 {
+        mhe.step_partial(&model, &us[k], &ys[k], &MASKS[k % 4]).unwrap();
+    }
+    let before = mhe.estimate().center.clone();
+    let nan = DVector::from_vec(vec![f64::NAN, 0.0]);
+    assert!(matches!(
+        mhe.step_partial(&model, &us[16], &nan, &[true, false]),
+        Err(EstimatorError::NonFinite { what: "y", index: 0 })
+    ));
+    assert!(matches!(
+        mhe.step_partial(&model, &us[16], &ys[16], &[true]),
+        Err(EstimatorError::DimensionMismatch { what: "measured", .. })
+    ));
+    assert_eq!(mhe.estimate().center, before);
+    let (_, allocations) = count(|| {
+        for k in 16..30 {
+            mhe.step_partial(&model, &us[k], &ys[k], &MASKS[k % 4]).unwrap();
+        }
+    });
+    assert_eq!(allocations, 0);
+}

@@ -39,6 +39,8 @@ impl Prior {
 pub(super) struct StartSample<'a> {
     pub(super) u: &'a DVector<f64>,
     pub(super) measured: Option<(&'a DVector<f64>, &'a DVector<f64>)>,
+    /// A partial measurement's mask and weight `(R_SS)⁻¹` embedded in `m × m`.
+    pub(super) partial: Option<(&'a [bool], &'a DMatrix<f64>)>,
 }
 
 /// The arrival update and its buffers (allocated at construction).
@@ -132,8 +134,14 @@ impl Arrival {
                 // tidy: invariant — the UKF exists whenever the arrival is `Ukf` (built in `new`).
                 let ukf = self.ukf.as_mut().expect("built with the settings");
                 ukf.reset(&self.centre, &current.cov)?;
-                if let Some((uh, y)) = sample.measured {
-                    ukf.correct(model, uh, y)?;
+                match (sample.measured, sample.partial) {
+                    (Some((uh, y)), Some((mask, _))) => {
+                        ukf.correct_partial(model, uh, y, mask)?;
+                    }
+                    (Some((uh, y)), None) => {
+                        ukf.correct(model, uh, y)?;
+                    }
+                    (None, _) => {}
                 }
                 let e = ukf.predict(model, u)?;
                 next.cov.copy_from(&e.covariance);
@@ -147,7 +155,8 @@ impl Arrival {
                     // P⁺ = (P⁻¹ + Hᵀ R⁻¹ H)⁻¹ at the centre; m⁺ = m + P⁺ Hᵀ R⁻¹ (y − h(m)).
                     model.h_with_jacobian(&self.centre, uh, &mut self.hx, &mut self.h_jac)?;
                     self.tmp_nn.copy_from(&current.inv);
-                    self.tmp_nm.gemm_tr(1.0, &self.h_jac, &self.r_inv, 0.0);
+                    let weight = sample.partial.map_or(&self.r_inv, |(_, w)| w);
+                    self.tmp_nm.gemm_tr(1.0, &self.h_jac, weight, 0.0);
                     dense::mul_nn(1.0, &self.tmp_nm, &self.h_jac, 1.0, &mut self.tmp_nn);
                     if dense::spd_inverse(&self.tmp_nn, &mut self.work, &mut self.ekf_p).is_err() {
                         return Err(EstimatorError::NumericalFailure(
@@ -242,7 +251,7 @@ mod tests {
         let r_inv = DMatrix::from_element(1, 1, 25.0);
         let mut arrival = Arrival::new(kind, prior, &setup(), &r_inv).unwrap();
         let mut next = Prior::zeros(2);
-        let sample = StartSample { u: &u, measured: measured.then_some((&u, &y)) };
+        let sample = StartSample { u: &u, measured: measured.then_some((&u, &y)), partial: None };
         arrival.advance(&Pendulum, &current, &first, &second, sample, &mut next).unwrap();
         assert!((&next.cov * &next.inv - DMatrix::identity(2, 2)).amax() < 1e-12);
         next
@@ -316,7 +325,7 @@ mod tests {
         // A negative P_s makes F P_s Fᵀ + Q indefinite.
         current.cov *= -10.0;
         let mut next = Prior::zeros(2);
-        let sample = StartSample { u: &u, measured: None };
+        let sample = StartSample { u: &u, measured: None, partial: None };
         let e = arrival.advance(&Pendulum, &current, &first, &second, sample, &mut next).unwrap_err();
         assert_eq!(e, EstimatorError::NumericalFailure("the arrival-cost weight is not positive definite"));
     }

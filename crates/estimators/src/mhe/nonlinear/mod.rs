@@ -45,6 +45,7 @@ use crate::error::EstimatorError;
 use crate::kalman::GaussianEstimate;
 use crate::mhe::estimator::window_outcome;
 use crate::mhe::solve::WindowStatus;
+use crate::partial::{Measured, Subsets, classify};
 use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec};
 
@@ -115,6 +116,9 @@ pub struct NonlinearMhe {
     q_inv: DMatrix<f64>,
     r_inv: DMatrix<f64>,
     rings: Rings,
+    /// `R`, and the weight and mask of the partial step being taken.
+    r: DMatrix<f64>,
+    partial: PartialWeight,
     // The committed window solution (states j = 0..len of the window starting at `start`).
     traj: Vec<DVector<f64>>,
     start: usize,
@@ -153,6 +157,7 @@ impl NonlinearMhe {
         if dense::spd_inverse(&p0, &mut work, &mut prior_inv).is_err() {
             return Err(EstimatorError::NotPositiveDefinite { what: "P0" });
         }
+        let setup_r = r.clone();
         let setup = Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q, measurement_noise: r, inputs };
         let arrival = Arrival::new(settings.arrival, settings.prior, &setup, &r_inv)?;
         let mut traj = vec![DVector::zeros(n); len_max];
@@ -166,6 +171,8 @@ impl NonlinearMhe {
             q_inv,
             r_inv,
             rings: Rings::new(settings.horizon + 2, inputs, m),
+            r: setup_r,
+            partial: PartialWeight::new(m),
             traj,
             start: 0,
             len: 1,
@@ -249,6 +256,18 @@ impl NonlinearMhe {
         if let Some(y) = y {
             check_vec("y", y, self.m)?;
         }
+        self.advance_checked(model, u, y, false)
+    }
+
+    /// [`Self::advance`] after the data were checked; `partial`: `y` is a partial measurement
+    /// whose mask and weight are in `self.partial` (module `partial`).
+    fn advance_checked<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: Option<&DVector<f64>>,
+        partial: bool,
+    ) -> Result<&NonlinearMheEstimate, EstimatorError> {
         let started = Instant::now();
         let t = self.t;
         let new_t = t + 1;
@@ -256,7 +275,7 @@ impl NonlinearMhe {
         // Slot t gets the transition input; slot t+1 (outside the window) the new measurement.
         let (st, sn) = (self.rings.slot(t), self.rings.slot(new_t));
         self.rings.u[st].copy_from(u);
-        let old_has = self.rings.has_y[sn];
+        let (old_has, old_partial) = (self.rings.has_y[sn], self.rings.partial[sn]);
         match y {
             Some(y) => {
                 self.rings.y[sn].copy_from(y);
@@ -265,11 +284,49 @@ impl NonlinearMhe {
             }
             None => self.rings.has_y[sn] = false,
         }
+        self.rings.partial[sn] = partial;
+        if partial {
+            let m = self.m;
+            self.rings.mask[sn * m..(sn + 1) * m].copy_from_slice(&self.partial.mask);
+            self.rings.w[sn].copy_from(&self.partial.weight);
+            for i in 0..m {
+                if !self.partial.mask[i] {
+                    self.rings.y[sn][i] = 0.0;
+                }
+            }
+        }
         let result = self.prepare_and_solve(model, new_t, new_start, started);
         if result.is_err() {
             self.rings.has_y[sn] = old_has;
+            self.rings.partial[sn] = old_partial;
         }
         result.map(|()| &self.est)
+    }
+
+    /// One step with the outputs where `measured` is true (the others' entries of `y` are not
+    /// read and may be NaN): that sample's term of the window cost is `ν_Sᵀ (R_SS)⁻¹ ν_S`, with
+    /// the measured rows only (and its box, if any, on them), and the arrival cost's update with
+    /// it when the window leaves it behind is the EKF's or the UKF's partial update. Every
+    /// output measured: a step; none: a prediction. On error the estimator is unchanged.
+    /// Allocation-free after the first step with that many outputs measured.
+    ///
+    /// # Errors
+    /// As a step; a mask or `y` of another length than `m`.
+    pub fn step_partial<M: DifferentiableModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&NonlinearMheEstimate, EstimatorError> {
+        crate::validate::check_discrete(model, self.n, self.p, self.m)?;
+        let k = match classify(measured, u, y, (self.m, self.p), &mut self.partial.subsets.rows)? {
+            Measured::All => return self.advance(model, u, Some(y)),
+            Measured::Nothing => return self.advance(model, u, None),
+            Measured::Some(k) => k,
+        };
+        self.partial.weigh(&self.r, k, measured)?;
+        self.advance_checked(model, u, Some(y), true)
     }
 
     fn prepare_and_solve<M: DifferentiableModel + ?Sized>(
@@ -286,7 +343,11 @@ impl NonlinearMhe {
             debug_assert_eq!(new_start, self.start + 1);
             let slot = self.rings.slot(self.start);
             let r = &self.rings;
-            let sample = StartSample { u: &r.u[slot], measured: r.has_y[slot].then_some((&r.uh[slot], &r.y[slot])) };
+            let sample = StartSample {
+                u: &r.u[slot],
+                measured: r.has_y[slot].then_some((&r.uh[slot], &r.y[slot])),
+                partial: r.measured(slot).map(|mask| (mask, &r.w[slot])),
+            };
             self.arrival.advance(model, &self.prior, &self.traj[0], &self.traj[1], sample, &mut self.next)?;
         }
         // Warm start: the previous trajectory shifted, the new state predicted through f.
@@ -449,6 +510,39 @@ impl NonlinearMhe {
     }
 }
 
+/// The weight `(R_SS)⁻¹` of a partial measurement, embedded in `m × m`, and its mask; the `k × k`
+/// buffers of its inverse by measured count (made on first use).
+#[derive(Debug, Clone)]
+struct PartialWeight {
+    mask: Vec<bool>,
+    weight: DMatrix<f64>,
+    subsets: Subsets<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)>,
+}
+
+impl PartialWeight {
+    fn new(m: usize) -> Self {
+        Self { mask: vec![true; m], weight: DMatrix::zeros(m, m), subsets: Subsets::new(m) }
+    }
+
+    /// `weight` and `mask` for the `k` measured outputs `subsets.rows` of `measured`.
+    fn weigh(&mut self, r: &DMatrix<f64>, k: usize, measured: &[bool]) -> Result<(), EstimatorError> {
+        let ((r_ss, work, inv), rows) =
+            self.subsets.get(k, || Ok((DMatrix::zeros(k, k), DMatrix::zeros(k, k), DMatrix::zeros(k, k))))?;
+        crate::partial::gather_block(r, rows, r_ss);
+        if dense::spd_inverse(r_ss, work, inv).is_err() {
+            return Err(EstimatorError::NotPositiveDefinite { what: "R" });
+        }
+        self.weight.fill(0.0);
+        for (b, &j) in rows.iter().enumerate() {
+            for (a, &i) in rows.iter().enumerate() {
+                self.weight[(i, j)] = inv[(a, b)];
+            }
+        }
+        self.mask.copy_from_slice(measured);
+        Ok(())
+    }
+}
+
 impl<M: DifferentiableModel + ?Sized> Estimator<M> for NonlinearMhe {
     type Estimate = NonlinearMheEstimate;
 
@@ -458,6 +552,16 @@ impl<M: DifferentiableModel + ?Sized> Estimator<M> for NonlinearMhe {
 
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&NonlinearMheEstimate, EstimatorError> {
         self.advance(model, u, None)
+    }
+
+    fn step_partial(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&NonlinearMheEstimate, EstimatorError> {
+        NonlinearMhe::step_partial(self, model, u, y, measured)
     }
 
     fn update(&mut self, _model: &M, _y: &DVector<f64>) -> Result<&NonlinearMheEstimate, EstimatorError> {

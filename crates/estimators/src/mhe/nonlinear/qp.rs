@@ -115,7 +115,12 @@ fn constraint_rows(
             if !rings.has_y[sl] {
                 continue;
             }
+            let measured = rings.measured(sl);
             for i in 0..lo.len() {
+                // An unmeasured output of a partial sample has no residual to bound.
+                if measured.is_some_and(|mask| !mask[i]) {
+                    continue;
+                }
                 let e = rings.y[sl][i] - win.hx[j][i];
                 // ν = e − C Δ ≤ hi  ⇔  −C Δ ≤ hi − e;   ν ≥ lo  ⇔  C Δ ≤ e − lo.
                 let c = &win.c[j];

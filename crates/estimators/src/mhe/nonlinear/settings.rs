@@ -90,12 +90,13 @@ impl NonlinearMheSettings {
         let [n, m, p, horizon] = [n, m, p, self.horizon].map(|v| v as u128);
         let slots = horizon.checked_add(2)?;
         // Per slot: x, x_trial, f(x), gradient, step, trajectory (6n), h(x) and y (2m), two
-        // inputs (2p), A, D, W (3n²), C (mn); 16 heap blocks of up to 64 bytes of header and
-        // rounding each.
+        // inputs (2p), A, D, W (3n²), C (mn), a partial measurement's weight (m²) and mask; 17
+        // heap blocks of up to 64 bytes of header and rounding each.
         let f64s = n.checked_mul(n)?.checked_mul(3)?.checked_add(m.checked_mul(n)?)?;
+        let f64s = f64s.checked_add(m.checked_mul(m)?)?.checked_add(m)?;
         let f64s =
             f64s.checked_add(n.checked_mul(6)?)?.checked_add(m.checked_mul(2)?)?.checked_add(p.checked_mul(2)?)?;
-        let mut slot = f64s.checked_mul(8)?.checked_add(16 * 64)?;
+        let mut slot = f64s.checked_mul(8)?.checked_add(17 * 64)?;
         if self.w_box.is_some() || self.v_box.is_some() {
             // The sparse QP of a Gauss–Newton step and Clarabel's factorisation of it: per slot
             // (n + m + 1)² entries, counted as 1 KiB each (the sum of every request of an update,

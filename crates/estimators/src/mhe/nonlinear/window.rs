@@ -29,6 +29,12 @@ pub(super) struct Rings {
     pub(super) y: Vec<DVector<f64>>,
     pub(super) uh: Vec<DVector<f64>>,
     pub(super) has_y: Vec<bool>,
+    /// A partial measurement (some outputs only): its mask (`m` per slot, in `mask`) and its
+    /// weight `W = (R_SS)⁻¹` embedded in `m × m` (zero rows and columns for the others), which
+    /// replaces `R⁻¹` for that sample; the unmeasured entries of `y` are 0.
+    pub(super) partial: Vec<bool>,
+    pub(super) mask: Vec<bool>,
+    pub(super) w: Vec<DMatrix<f64>>,
 }
 
 impl Rings {
@@ -39,12 +45,26 @@ impl Rings {
             y: vec![DVector::zeros(m); cap],
             uh: vec![DVector::zeros(p); cap],
             has_y: vec![false; cap],
+            partial: vec![false; cap],
+            mask: vec![true; cap * m],
+            w: vec![DMatrix::zeros(m, m); cap],
         }
     }
 
     /// The slot of sample `k`.
     pub(super) fn slot(&self, k: usize) -> usize {
         k % self.has_y.len()
+    }
+
+    /// The measurement weight of the sample at slot `sl`: `r_inv`, or a partial one's `W`.
+    pub(super) fn weight<'a>(&'a self, sl: usize, r_inv: &'a DMatrix<f64>) -> &'a DMatrix<f64> {
+        if self.partial[sl] { &self.w[sl] } else { r_inv }
+    }
+
+    /// The mask of a partial measurement at slot `sl` (`None`: every output, or none).
+    pub(super) fn measured(&self, sl: usize) -> Option<&[bool]> {
+        let m = self.y[sl].len();
+        self.partial[sl].then(|| &self.mask[sl * m..(sl + 1) * m])
     }
 }
 
@@ -157,7 +177,7 @@ impl Window {
                 self.tmp_m.copy_from(&rings.y[sl]);
                 self.tmp_m -= &self.hx[j];
                 model.angles().wrap_outputs(self.tmp_m.as_mut_slice());
-                total += quad(wts.r_inv, &self.tmp_m);
+                total += quad(rings.weight(sl, wts.r_inv), &self.tmp_m);
             }
         }
         Ok(total)
@@ -203,7 +223,7 @@ impl Window {
                 self.tmp_m.copy_from(&rings.y[sl]);
                 self.tmp_m -= &self.hx[j];
                 model.angles().wrap_outputs(self.tmp_m.as_mut_slice());
-                self.tmp_m2.gemv(1.0, wts.r_inv, &self.tmp_m, 0.0);
+                self.tmp_m2.gemv(1.0, rings.weight(sl, wts.r_inv), &self.tmp_m, 0.0);
                 self.g[j].gemv_tr(-1.0, &self.c[j], &self.tmp_m2, 1.0);
             }
         }
@@ -229,7 +249,7 @@ impl Window {
                 dj.gemm_tr(1.0, &self.a[j], &self.tmp_nn, 1.0);
             }
             if rings.has_y[sl] {
-                self.tmp_nm.gemm_tr(1.0, &self.c[j], wts.r_inv, 0.0);
+                self.tmp_nm.gemm_tr(1.0, &self.c[j], rings.weight(sl, wts.r_inv), 0.0);
                 dense::mul_nn(1.0, &self.tmp_nm, &self.c[j], 1.0, dj);
             }
             for i in 0..n {
