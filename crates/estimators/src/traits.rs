@@ -109,9 +109,8 @@ pub trait Estimator<M: ?Sized> {
     /// be NaN. Every output measured is [`Estimator::step`], none is [`Estimator::predict`].
     ///
     /// The default does those two and refuses a proper subset
-    /// ([`EstimatorError::Unsupported`]); the Kalman filter, the EKF, the UKF, the
-    /// set-membership filters (with the two-multiplier solver), the constrained-zonotope
-    /// filters and the nonlinear moving-horizon estimator update with any subset.
+    /// ([`EstimatorError::Unsupported`]); every estimator but the fuzzy-adaptive filter
+    /// overrides it and updates with any subset (docs/partial-measurements.md).
     ///
     /// # Errors
     /// As [`Estimator::step`]; a mask of another length than `y`.
@@ -137,9 +136,8 @@ pub trait Estimator<M: ?Sized> {
             Err(EstimatorError::Unsupported {
                 estimator: "this estimator",
                 operation: "a partial measurement",
-                reason: "it updates with every output at once (a linear moving-horizon window's samples, the \
-                         fuzzy-adaptive filter's scaling from the whole fix); use kf, ekf, ukf, smf, smf-nl, czf, \
-                         czf-nl or mhe-ukf, or give every output",
+                reason: "it updates with every output at once (the fuzzy-adaptive filter scales its noise from \
+                         the whole fix); the other estimators take a subset, or give every output",
             })
         }
     }

@@ -159,18 +159,32 @@ def test_the_certified_filter_contains_the_truth_through_the_dropouts():
     assert widths[599] > 2 * widths[299] and widths[700] < widths[599] / 2
 
 
-@pytest.mark.parametrize("name", ["rmhe", "mhe"])
-def test_estimators_that_need_every_output_refuse_a_partial_step_unchanged(name):
+def test_the_fuzzy_adaptive_filter_refuses_a_partial_fix_unchanged():
+    # Its noise scale comes from the whole fix (both horizontal innovations and the receiver
+    # status): a partial one is refused by name; a whole one, or none, steps.
     a, b, c = np.eye(2), np.zeros((2, 0)), np.eye(2)
-    box = {"w_lower": [-0.1] * 2, "w_upper": [0.1] * 2, "v_lower": [-0.5] * 2, "v_upper": [0.5] * 2}
-    settings = {"horizon": 5, **box}
-    est = pe.Estimator(name, pe.Model(a, b, c), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2, **settings)
-    with pytest.raises(Exception, match=f"{name}.*partial"):
-        est.step(None, np.array([0.1, np.nan]), measured=np.array([True, False]))
+    est = pe.Estimator("fkf", pe.Model(a, b, c), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2)
+    with pytest.raises(pe.EstimationError, match="fkf.*partial"):
+        est.step(None, np.array([0.1, np.nan, 8.0, 3.0]), measured=np.array([True, False, True, True]))
     assert_close(est.x, np.zeros(2))
-    # Nothing measured is a prediction, everything measured a step.
-    assert est.step(None, np.zeros(2), measured=np.array([False, False])).status.startswith("predicted")
-    est.step(None, np.zeros(2), measured=np.array([True, True]))
+    assert est.step(None, np.zeros(4), measured=np.array([False] * 4)).status.startswith("predicted")
+    est.step(None, np.array([0.0, 0.0, 8.0, 3.0]), measured=np.array([True] * 4))
+
+
+@pytest.mark.parametrize("name", ["rmhe", "mhe"])
+def test_the_linear_moving_horizon_estimators_drop_the_unmeasured_rows(name):
+    # R is diagonal: a partial sample is the sample of a model whose unmeasured rows are zero (a
+    # value never read), the same numbers.
+    a, b = np.array([[1.0, 0.1], [0.0, 0.9]]), np.zeros((2, 0))
+    box = {"w_lower": [-0.1] * 2, "w_upper": [0.1] * 2, "v_lower": [-0.5] * 2, "v_upper": [0.5] * 2}
+    kw = {"x0": np.zeros(2), "P0": 1.0, "Q": 1e-2, "R": [1e-2, 2e-2], "horizon": 4, **box}
+    ours = pe.Estimator(name, pe.Model(a, b, np.eye(2)), **kw)
+    blind = pe.Estimator(name, pe.Model(a, b, np.array([[1.0, 0.0], [0.0, 0.0]])), **kw)
+    rng = np.random.default_rng(2)
+    for _ in range(12):
+        y = rng.normal(scale=0.1, size=2)
+        e = ours.step(None, np.array([y[0], np.nan]), measured=np.array([True, False]))
+        np.testing.assert_array_equal(e.center, blind.step(None, np.array([y[0], 0.0])).center)
 
 
 def test_bad_masks_are_refused():

@@ -61,6 +61,8 @@ pub(crate) struct Sample<'a> {
     pub y: &'a [f64],
     /// Whether `x_j` was measured.
     pub measured: bool,
+    /// Which outputs of it (a partial measurement's unmeasured rows have no residual to bound).
+    pub outputs: &'a [bool],
 }
 
 /// What the check found.
@@ -92,6 +94,9 @@ where
         }
         let x = &traj[j * n..(j + 1) * n];
         for i in 0..m {
+            if !s.outputs[i] {
+                continue;
+            }
             let mut cx = 0.0;
             for k in 0..n {
                 cx += s.c[k * m + i] * x[k];
@@ -157,6 +162,9 @@ where
             continue;
         }
         for i in 0..m {
+            if !s.outputs[i] {
+                continue;
+            }
             let d = (v_hi[i] - v_lo[i]).max(1e-12 * (1.0 + v_lo[i].abs() + v_hi[i].abs()));
             let (r_hi, r_lo) = (b.len(), b.len() + 1);
             for k in 0..n {
@@ -207,8 +215,10 @@ mod tests {
     /// A scalar random walk `x_{j+1} = x_j + w_j`, `|w| ≤ 1`, measured directly with `|v| ≤ 0.5`.
     fn walk(ys: &[f64]) -> WindowCheck {
         let (a, bu, c) = ([1.0], [0.0], [1.0]);
-        let samples: Vec<Sample<'_>> =
-            ys.iter().map(|y| Sample { a: &a, bu: &bu, c: &c, y: std::slice::from_ref(y), measured: true }).collect();
+        let samples: Vec<Sample<'_>> = ys
+            .iter()
+            .map(|y| Sample { a: &a, bu: &bu, c: &c, y: std::slice::from_ref(y), measured: true, outputs: &[true] })
+            .collect();
         let data = WindowData {
             n: 1,
             m: 1,
@@ -236,8 +246,10 @@ mod tests {
     fn the_witness_accepts_residuals_on_the_boundary_and_refuses_beyond() {
         let (a, bu, c) = ([1.0], [0.0], [1.0]);
         let ys = [0.5, 1.5];
-        let samples: Vec<Sample<'_>> =
-            ys.iter().map(|y| Sample { a: &a, bu: &bu, c: &c, y: std::slice::from_ref(y), measured: true }).collect();
+        let samples: Vec<Sample<'_>> = ys
+            .iter()
+            .map(|y| Sample { a: &a, bu: &bu, c: &c, y: std::slice::from_ref(y), measured: true, outputs: &[true] })
+            .collect();
         let data =
             WindowData { n: 1, m: 1, len: 2, sample: |j| samples[j], w: (&[-1.0], &[1.0]), v: (&[-0.5], &[0.5]) };
         assert!(witnesses(&data, &[0.0, 1.0]));

@@ -131,6 +131,10 @@ pub struct MovingHorizonEstimator {
     c_ring: Vec<f64>,
     y_ring: Vec<f64>,
     has_y: Vec<bool>,
+    /// Which outputs each sample measured (all but for a partial step's).
+    outputs_ring: Vec<bool>,
+    /// A partial step's measured outputs.
+    partial_rows: Vec<usize>,
     p_ring: Vec<f64>,
     traj_ring: Vec<f64>,
     filt_ring: Vec<f64>,
@@ -213,6 +217,8 @@ impl MovingHorizonEstimator {
             c_ring: vec![0.0; cap * m * n],
             y_ring: vec![0.0; cap * m],
             has_y: vec![false; cap],
+            outputs_ring: vec![true; cap * m],
+            partial_rows: Vec::with_capacity(m),
             p_ring,
             traj_ring,
             filt_ring,
@@ -335,14 +341,18 @@ impl MovingHorizonEstimator {
         Ok(())
     }
 
-    /// One update to time `t + 1` with input `u_t` and, if given, `y_{t+1}`.
+    /// One update to time `t + 1` with input `u_t` and, if given, `y_{t+1}` (with `measured`,
+    /// its measured outputs only; the data then checked by the caller).
     fn advance<M: LinearModel + ?Sized>(
         &mut self,
         model: &M,
         u: &DVector<f64>,
         y: Option<&DVector<f64>>,
+        measured: Option<&[bool]>,
     ) -> Result<&MheEstimate, EstimatorError> {
-        self.check(model, Some(u), y)?;
+        if measured.is_none() {
+            self.check(model, Some(u), y)?;
+        }
         let start = Instant::now();
         let (n, m, p, cap) = (self.n, self.m, self.p, self.cap);
         let t = self.t;
@@ -367,6 +377,22 @@ impl MovingHorizonEstimator {
                 self.has_y[sn] = true;
             }
             None => self.has_y[sn] = false,
+        }
+        // A partial measurement: its unmeasured outputs' rows of C and entries of y are zero, so
+        // they weigh nothing in the window, the arrival recursion or the Riccati step (R is
+        // diagonal: dropping a row is the update with the others), and the data check skips them.
+        let outputs = &mut self.outputs_ring[sn * m..(sn + 1) * m];
+        match measured {
+            Some(mask) if y.is_some() => {
+                outputs.copy_from_slice(mask);
+                for (i, _) in mask.iter().enumerate().filter(|(_, m)| !**m) {
+                    self.y_ring[sn * m + i] = 0.0;
+                    for col in 0..n {
+                        self.c_ring[sn * m * n + col * m + i] = 0.0;
+                    }
+                }
+            }
+            _ => outputs.fill(true),
         }
         // (20): P_{t+1} from P_t, the measurement at t and A_t.
         let arrival = self.riccati(st);
@@ -442,6 +468,7 @@ impl MovingHorizonEstimator {
                 c: &self.c_ring[sl * m * n..(sl + 1) * m * n],
                 y: &self.y_ring[sl * m..(sl + 1) * m],
                 measured: self.has_y[sl],
+                outputs: &self.outputs_ring[sl * m..(sl + 1) * m],
             }
         };
         let data = WindowData { n, m, len, sample, w: (&self.w_lo, &self.w_hi), v: (&self.v_lo, &self.v_hi) };
@@ -744,11 +771,40 @@ impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
     type Estimate = MheEstimate;
 
     fn step(&mut self, model: &M, u: &DVector<f64>, y: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
-        self.advance(model, u, Some(y))
+        self.advance(model, u, Some(y), None)
     }
 
     fn predict(&mut self, model: &M, u: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
-        self.advance(model, u, None)
+        self.advance(model, u, None, None)
+    }
+
+    /// A step with the outputs where `measured` is true (the others' entries of `y` are not
+    /// read): `R` is diagonal, so the window, the arrival recursion and the Riccati step drop the
+    /// unmeasured rows (kept as zero rows of `C` and entries of `y` in the sample's slot) and
+    /// the data check skips them. Every output: a step; none: a prediction. Refused with the
+    /// output constraint (its constraints are built for whole samples). On error the estimator
+    /// is unchanged.
+    fn step_partial(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&MheEstimate, EstimatorError> {
+        check_model(model, self.n, self.p, self.m)?;
+        let mut rows = std::mem::take(&mut self.partial_rows);
+        let class = crate::partial::classify(measured, u, y, (self.m, self.p), &mut rows);
+        self.partial_rows = rows;
+        match class? {
+            crate::partial::Measured::All => self.advance(model, u, Some(y), None),
+            crate::partial::Measured::Nothing => self.advance(model, u, None, None),
+            crate::partial::Measured::Some(_) if self.settings.output_constraint => Err(EstimatorError::Unsupported {
+                estimator: "the moving-horizon estimator with the output constraint",
+                operation: "a partial measurement",
+                reason: "its output constraints are built for whole samples",
+            }),
+            crate::partial::Measured::Some(_) => self.advance(model, u, Some(y), Some(measured)),
+        }
     }
 
     fn update(&mut self, _model: &M, _y: &DVector<f64>) -> Result<&MheEstimate, EstimatorError> {
