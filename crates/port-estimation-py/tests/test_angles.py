@@ -184,9 +184,17 @@ def test_an_unknown_angle_name_in_a_model_file_is_refused_at_its_place(tmp_path)
         pe.read_model(path)
 
 
-def test_the_linear_set_membership_filter_refuses_angle_outputs():
-    model = pe.Model(np.eye(2), np.zeros((2, 0)), np.eye(2)[:1], angles={"outputs": [0]})
-    smf = pe.SetMembershipFilter(model, x0=np.zeros(2), P0=np.eye(2), Q=np.eye(2) * 1e-3, R=np.eye(1) * 1e-2)
-    with pytest.raises(Exception, match="smf-nl or czf"):
-        smf.step(np.zeros(0), np.array([0.1]))
-    assert_close(smf.x, np.zeros(2))
+def test_the_linear_set_membership_filter_chooses_the_branch_of_an_angle_output():
+    # A heading turning at 0.5 rad/s, measured by a compass across the cut: the filter of the
+    # unwrapped measurement, to the rounding of the shift.
+    a, c = np.array([[1.0, 0.1], [0.0, 1.0]]), np.eye(2)
+    kw = {"x0": np.array([3.0, 0.5]), "P0": np.eye(2) * 0.1, "Q": np.eye(2) * 1e-4, "R": np.diag([0.01, 1e-4])}
+    angled = pe.SetMembershipFilter(pe.Model(a, np.zeros((2, 0)), c, angles={"outputs": [0]}), **kw)
+    plain = pe.SetMembershipFilter(pe.Model(a, np.zeros((2, 0)), c), **kw)
+    theta = 3.0
+    for _ in range(40):
+        theta += 0.05
+        y = np.array([theta, 0.5])
+        e = angled.step(np.zeros(0), np.array([np.angle(np.exp(1j * theta)), 0.5]))
+        assert_close(e.center, plain.step(np.zeros(0), y).center, rtol=1e-9)
+    assert theta > np.pi

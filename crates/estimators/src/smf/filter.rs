@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use models::{Dims, LinearModel, StepModel};
 
+use super::angles::AngleWork;
 use super::certify::{CertWork, Inflation, U, certify};
 use super::consistency::{self, Consistency, ConsistencyWork, InconsistencyPolicy};
 use super::fallback::{FallbackReason, GainCtx, clamp_tau, near_simplex};
@@ -15,6 +16,7 @@ use super::input::{InputModel, check_in_box, effective_noise};
 use super::partial::SubsetFilter;
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
+use crate::angle_branch::Branch;
 use crate::checks::DataChecks;
 use crate::error::EstimatorError;
 use crate::partial::Subsets;
@@ -206,6 +208,8 @@ pub struct SetMembershipFilter<S: UpdateSolver = TwoMultiplierSolver> {
     pub(super) pending: PendingPrediction,
     /// The filters of partial steps, by measured count (module `partial`).
     pub(super) partial: Subsets<SubsetFilter<S>>,
+    /// The branches of angle outputs (module `angles`).
+    pub(super) angles: AngleWork,
 }
 
 impl SetMembershipFilter<TwoMultiplierSolver> {
@@ -274,6 +278,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 u: DVector::zeros(inputs),
             },
             partial: Subsets::new(m),
+            angles: AngleWork::new(n, m),
         })
     }
 
@@ -410,7 +415,6 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         u: &DVector<f64>,
     ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
-        refuse_angle_outputs(model)?;
         let model = &StepModel::new(model.a(), model.b(), model.c());
         check_vec("u", u, self.p)?;
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
@@ -468,7 +472,6 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         y: &DVector<f64>,
     ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
-        refuse_angle_outputs(model)?;
         check_vec("y", y, self.m)?;
         if !self.pending.armed {
             return Err(EstimatorError::UpdateWithoutPrediction { estimator: "the set-membership filter" });
@@ -484,7 +487,9 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         };
         swap(&mut self.est, &mut pending, &mut prior_report);
         self.steps -= 1;
-        let result = self.step(&StepModel::new(&pending.a, &pending.b, model.c()), &pending.u, y).map(|_| ());
+        let angles = LinearModel::angles(model).outputs;
+        let result =
+            self.step_model(&StepModel::new(&pending.a, &pending.b, model.c()), angles, &pending.u, y).map(|_| ());
         match result {
             Ok(()) => {
                 pending.armed = false;
@@ -519,18 +524,55 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         y: &DVector<f64>,
     ) -> Result<&SetEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
-        refuse_angle_outputs(model)?;
-        let model = &StepModel::new(model.a(), model.b(), model.c());
+        let angles = LinearModel::angles(model).outputs;
+        self.step_model(&StepModel::new(model.a(), model.b(), model.c()), angles, u, y)
+    }
+
+    /// [`Self::step`] for the matrices of `model` whose outputs `angle_outputs` are angles
+    /// (module `angles`: their branch chosen over the predicted set, `R` inflated by its rounding).
+    pub(super) fn step_model(
+        &mut self,
+        model: &StepModel<'_>,
+        angle_outputs: &[usize],
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<&SetEstimate, EstimatorError> {
         check_vec("u", u, self.p)?;
         check_vec("y", y, self.m)?;
         if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
             check_in_box(u, lower, upper)?;
         }
         let Self {
-            q, r, input, solver, time_budget, est, sol, ws, n, m, policy, steps, guarantee_lost, pending, ..
+            q,
+            r,
+            input,
+            solver,
+            time_budget,
+            est,
+            sol,
+            ws,
+            n,
+            m,
+            policy,
+            steps,
+            guarantee_lost,
+            pending,
+            angles,
+            ..
         } = self;
         let (n, m) = (*n, *m);
         let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
+        let (y, r, off_branch) = if angle_outputs.is_empty() {
+            (y, &*r, false)
+        } else {
+            let q_pred = if bounded { &ws.q_eff } else { &*q };
+            let shape = (&est.center, &est.shape);
+            let found = angles.choose(model, angle_outputs, shape, q_pred, u_used, r, y, *steps + 1)?;
+            if found == Branch::Contradicted && *policy == InconsistencyPolicy::Error {
+                return Err(EstimatorError::SetMissed { step: *steps + 1, reason: ANGLE_MISSED });
+            }
+            (&angles.y, &angles.r, found == Branch::Contradicted)
+        };
         let warm = est.report.tau;
         // Consistency of y with the predicted set and the noise bounds, before anything changes.
         dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
@@ -643,7 +685,13 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         std::mem::swap(&mut est.center, &mut ws.cert.x_new);
         std::mem::swap(&mut est.shape, &mut ws.cert.p_new);
         est.set_bounds();
-        let guaranteed = !*guarantee_lost && consistency.is_consistent();
+        // An angle output off every branch of its enclosure contradicts the set (a policy other
+        // than the default let the step through): published marked, no later set guaranteed.
+        let consistency = match consistency {
+            _ if off_branch && *policy != InconsistencyPolicy::Off => Consistency::Inconsistent { excess: f64::NAN },
+            c => c,
+        };
+        let guaranteed = !*guarantee_lost && consistency.is_consistent() && !off_branch;
         *guarantee_lost = !guaranteed;
         *steps += 1;
         pending.armed = false;
@@ -659,6 +707,44 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             guaranteed,
         };
         Ok(est)
+    }
+}
+
+impl<S: UpdateSolver> SetMembershipFilter<S> {
+    /// For a partial step: the measured angle outputs (those of `angle_outputs` in `rows`) of
+    /// `y` on their branch over the set predicted with `model` and `u`, and `R` inflated by the
+    /// shifts' rounding, into `self.angles` (module `angles`). Whether one was off every branch
+    /// (with the default policy that is an error).
+    ///
+    /// # Errors
+    /// An input outside its box; [`EstimatorError::GuaranteeLost`] for an enclosure 2π wide;
+    /// [`EstimatorError::SetMissed`] for a reading off every branch with the default policy.
+    pub(super) fn branch_partial(
+        &mut self,
+        model: &StepModel<'_>,
+        angle_outputs: &[usize],
+        rows: &[usize],
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Result<bool, EstimatorError> {
+        if let InputModel::BoundedDisturbance { lower, upper, .. } = &self.input {
+            check_in_box(u, lower, upper)?;
+        }
+        let Self { q, r, input, est, ws, angles, steps, policy, .. } = self;
+        let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
+        let q_pred = if bounded { &ws.q_eff } else { &*q };
+        let mut measured = std::mem::take(&mut angles.measured);
+        measured.clear();
+        measured.extend(angle_outputs.iter().copied().filter(|i| rows.binary_search(i).is_ok()));
+        let found = angles.choose(model, &measured, (&est.center, &est.shape), q_pred, u_used, r, y, *steps + 1);
+        angles.measured = measured;
+        if found? == Branch::Contradicted {
+            if *policy == InconsistencyPolicy::Error {
+                return Err(EstimatorError::SetMissed { step: *steps + 1, reason: ANGLE_MISSED });
+            }
+            return Ok(true);
+        }
+        Ok(false)
     }
 }
 
@@ -724,18 +810,6 @@ impl Estimate for SetEstimate {
 
 forward_estimator!(impl<S: UpdateSolver> for SetMembershipFilter<S>, LinearModel, SetEstimate, partial);
 
-/// The linear filter takes `y = C x + v` as exact data: a measured angle's branch needs an
-/// enclosure of `h` that it does not carry, so models declaring angle outputs are refused here
-/// (the nonlinear filter and the constrained-zonotope filter choose the branch soundly and accept
-/// linear models).
-fn refuse_angle_outputs<M: LinearModel + ?Sized>(model: &M) -> Result<(), EstimatorError> {
-    if LinearModel::angles(model).outputs.is_empty() {
-        Ok(())
-    } else {
-        Err(EstimatorError::Unsupported {
-            estimator: "the linear set-membership filter",
-            operation: "angle outputs",
-            reason: "a measured angle's branch needs an enclosure of h: use smf-nl or czf, which accept linear models",
-        })
-    }
-}
+/// Why a step whose angle output has no branch in its enclosure was refused.
+const ANGLE_MISSED: &str =
+    "an angle output has no representative within the enclosure of C x over the predicted set widened by V";

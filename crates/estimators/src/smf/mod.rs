@@ -92,6 +92,7 @@
 //! an input outside it is refused with [`EstimatorError::InputOutsideBounds`] before anything
 //! changes.
 
+mod angles;
 pub mod certify;
 pub mod consistency;
 pub mod fallback;

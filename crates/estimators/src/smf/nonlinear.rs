@@ -260,7 +260,7 @@ where
 
 /// `Q' ⪰ Q ⊕ box(ρ)` (N3): `(1 + 1/β) Q + (1 + β) D`, `D = diag(ρ_i Σ_j ρ_j)` the least-trace
 /// diagonal ellipsoid holding the box, rounding covered. `Q'` is `Q` itself when `ρ = 0`.
-fn inflate(q: &DMatrix<f64>, rho: &DVector<f64>, out: &mut DMatrix<f64>) {
+pub(super) fn inflate(q: &DMatrix<f64>, rho: &DVector<f64>, out: &mut DMatrix<f64>) {
     out.copy_from(q);
     let mut sum = Interval::ZERO;
     for r in rho.iter() {

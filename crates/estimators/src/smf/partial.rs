@@ -56,19 +56,35 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             Measured::Nothing => return self.predict(model, u),
             Measured::Some(k) => k,
         };
+        // Measured angle outputs are put on their branch here, over this filter's predicted set
+        // (module `angles`); the filter of `k` outputs then takes them as ordinary data.
+        let angle_outputs = LinearModel::angles(model).outputs;
+        let off_branch = if angle_outputs.is_empty() {
+            false
+        } else {
+            let rows = std::mem::take(&mut self.partial.rows);
+            let found =
+                self.branch_partial(&StepModel::new(model.a(), model.b(), model.c()), angle_outputs, &rows, u, y);
+            self.partial.rows = rows;
+            found?
+        };
         let mut sub = match self.partial.take(k) {
             Some(sub) => sub,
             None => self.subset_filter(k)?,
         };
+        let (y, r) = if angle_outputs.is_empty() { (y, &self.r) } else { (&self.angles.y, &self.angles.r) };
         let rows = &self.partial.rows;
         gather_rows(model.c(), rows, &mut sub.c);
-        gather_block(&self.r, rows, &mut sub.r);
+        gather_block(r, rows, &mut sub.r);
         for (a, &i) in rows.iter().enumerate() {
             sub.y[a] = y[i];
         }
         let result = self.step_in(&mut sub, model, u);
         self.partial.put(k, sub);
         result?;
+        if off_branch {
+            self.mark_inconsistent();
+        }
         Ok(&self.est)
     }
 
