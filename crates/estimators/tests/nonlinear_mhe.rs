@@ -92,17 +92,7 @@ fn on_a_linear_model_it_is_the_linear_mhe_with_the_same_arrival_recursion() {
     let model = linear();
     for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper())] {
         let s = settings(3, 2, 5, arrival);
-        let mut lin = MheSettings::new(
-            (DVector::repeat(3, f64::NEG_INFINITY), DVector::repeat(3, f64::INFINITY)),
-            (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
-        );
-        lin.horizon = 5;
-        lin.blocks = vec![1; 5];
-        lin.cost = MheCost::LeastSquares;
-        lin.arrival = ArrivalRecursion::Kalman;
-        lin.prior_mean = PriorMean::Smoothed;
-        lin.solver = WindowSolver::exact_saddle();
-        let mut reference = MovingHorizonEstimator::new(s.setup(1), lin).unwrap();
+        let mut reference = MovingHorizonEstimator::new(s.setup(1), least_squares_window(5)).unwrap();
         let mut mhe = new_mhe(s, 1).unwrap();
         let (us, ys) = data(&model, 25, 2);
         for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
@@ -111,6 +101,22 @@ fn on_a_linear_model_it_is_the_linear_mhe_with_the_same_arrival_recursion() {
             assert!((&x - &xr).amax() < 1e-8, "{arrival:?} step {k}: {x} vs {xr}");
         }
     }
+}
+
+/// The linear MHE's window problem that is the nonlinear MHE's on a linear model: least squares,
+/// no disturbance box, the Kalman arrival recursion about the smoothed estimate, solved exactly.
+fn least_squares_window(horizon: usize) -> MheSettings {
+    let mut lin = MheSettings::new(
+        (DVector::repeat(3, f64::NEG_INFINITY), DVector::repeat(3, f64::INFINITY)),
+        (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
+    );
+    lin.horizon = horizon;
+    lin.blocks = vec![1; horizon];
+    lin.cost = MheCost::LeastSquares;
+    lin.arrival = ArrivalRecursion::Kalman;
+    lin.prior_mean = PriorMean::Smoothed;
+    lin.solver = WindowSolver::exact_saddle();
+    lin
 }
 
 /// A pendulum-like nonlinear model: `θ' = ω`, `ω' = −sin θ + u`, Euler at 0.1 s, measured
@@ -478,17 +484,7 @@ fn the_linear_mhes_partial_steps_are_the_nonlinear_mhes_on_a_linear_model() {
     let (us, ys) = data(&model, 30, 10);
     for arrival in [NonlinearArrival::Ekf, NonlinearArrival::Ukf(UkfParams::paper())] {
         let s = settings(3, 2, 5, arrival);
-        let mut lin = MheSettings::new(
-            (DVector::repeat(3, f64::NEG_INFINITY), DVector::repeat(3, f64::INFINITY)),
-            (DVector::repeat(2, -1.0), DVector::repeat(2, 1.0)),
-        );
-        lin.horizon = 5;
-        lin.blocks = vec![1; 5];
-        lin.cost = MheCost::LeastSquares;
-        lin.arrival = ArrivalRecursion::Kalman;
-        lin.prior_mean = PriorMean::Smoothed;
-        lin.solver = WindowSolver::exact_saddle();
-        let mut reference = MovingHorizonEstimator::new(s.setup(1), lin).unwrap();
+        let mut reference = MovingHorizonEstimator::new(s.setup(1), least_squares_window(5)).unwrap();
         let mut mhe = new_mhe(s, 1).unwrap();
         for (k, (u, y)) in us.iter().zip(&ys).enumerate() {
             let mask = MASKS[k % 4];
