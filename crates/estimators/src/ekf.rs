@@ -26,9 +26,7 @@ use crate::kalman::{GaussianEstimate, commit_prediction};
 use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
-use crate::validate::{
-    Covariances, InitialData, all_finite, check_initial_gaussian, check_vec, replace_psd, replace_spd,
-};
+use crate::validate::{Covariances, InitialData, all_finite, check_initial_as, check_vec, replace_psd, replace_spd};
 
 /// An extended Kalman filter; `Q`, `R` are covariances.
 #[derive(Debug, Clone)]
@@ -62,7 +60,7 @@ impl ExtendedKalmanFilter {
     /// # Errors
     /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix.
     pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_gaussian(setup, Covariances::Semidefinite)?;
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_as(setup, Covariances::Semidefinite)?;
         let nn = || DMatrix::zeros(n, n);
         Ok(Self {
             n,

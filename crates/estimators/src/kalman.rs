@@ -22,7 +22,7 @@ use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{DataCheck, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::all_finite;
-use crate::validate::{Covariances, InitialData, check_initial_gaussian, check_model, check_vec};
+use crate::validate::{Covariances, InitialData, check_initial_as, check_model, check_vec};
 
 /// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
 /// covariance, per-state standard deviations, the step's status and the filter's details.
@@ -121,7 +121,7 @@ impl KalmanFilter {
     /// # Errors
     /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix.
     pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_gaussian(setup, Covariances::Semidefinite)?;
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_as(setup, Covariances::Semidefinite)?;
         Ok(Self {
             n,
             p: inputs,

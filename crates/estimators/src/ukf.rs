@@ -55,7 +55,7 @@ use crate::kalman::{GaussianEstimate, data_check, nis};
 use crate::partial::{self, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, SolveOutcome, StepDetails, StepStatus};
-use crate::validate::{Covariances, InitialData, check_initial_gaussian, check_vec, replace_psd, replace_spd};
+use crate::validate::{Covariances, InitialData, check_initial_as, check_vec, replace_psd, replace_spd};
 
 /// The scaling parameters of the sigma points.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -304,7 +304,7 @@ impl UnscentedKalmanFilter {
     /// Dimension, finiteness, symmetry and positive-definiteness errors naming the matrix;
     /// [`EstimatorError::InvalidSetting`] for `params` (see [`UkfParams::weights`]).
     pub fn new(setup: Setup, params: UkfParams) -> Result<Self, EstimatorError> {
-        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_gaussian(setup, Covariances::DefinitePrior)?;
+        let InitialData { n, m, x0, p0, q, r, inputs } = check_initial_as(setup, Covariances::DefinitePrior)?;
         let (c, wm0, wc0, wi) = params.weights(n)?;
         let s = 2 * n + 1;
         let nn = || DMatrix::zeros(n, n);

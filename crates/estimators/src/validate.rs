@@ -107,6 +107,14 @@ pub(crate) fn check_spd(what: &'static str, m: &DMatrix<f64>, n: usize) -> Resul
     Ok(s)
 }
 
+/// As [`check_spd`] for a positive semidefinite matrix ([`check_psd_no_alloc`]). Allocates.
+pub(crate) fn check_psd(what: &'static str, m: &DMatrix<f64>, n: usize) -> Result<DMatrix<f64>, EstimatorError> {
+    check_psd_no_alloc(what, m, n, &mut DMatrix::zeros(n, n))?;
+    let mut s = m.clone();
+    dense_kernels::symmetrize(&mut s);
+    Ok(s)
+}
+
 /// [`check_spd`] without allocating: the Cholesky factorisation runs in `work` (`n × n`,
 /// overwritten). Used by the in-place noise setters.
 pub(crate) fn check_spd_no_alloc(
@@ -210,40 +218,24 @@ pub(crate) struct InitialData {
 /// Which of `P₀`, `Q` may be singular.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Covariances {
-    /// `P₀` and `Q` positive semidefinite (the Kalman filter, the EKF).
-    Semidefinite,
+    /// Both definite (shapes of sets, weights that are inverted).
+    Definite,
     /// `Q` positive semidefinite, `P₀` definite (the UKF takes its square root).
     DefinitePrior,
-}
-
-/// [`check_initial`] for a Gaussian filter: `P₀`, `Q` positive semidefinite as `which` says (a
-/// covariance may be singular), `R` definite (the innovation covariance must be invertible).
-pub(crate) fn check_initial_gaussian(setup: Setup, which: Covariances) -> Result<InitialData, EstimatorError> {
-    let n = setup.x0.len();
-    let mut work = DMatrix::zeros(n, n);
-    let symmetrised = |what, m: &DMatrix<f64>, work: &mut DMatrix<f64>| -> Result<DMatrix<f64>, EstimatorError> {
-        check_psd_no_alloc(what, m, n, work)?;
-        let mut s = m.clone();
-        dense_kernels::symmetrize(&mut s);
-        Ok(s)
-    };
-    if n > 0 && setup.measurement_noise.nrows() > 0 {
-        check_finite("x0", setup.x0.as_slice())?;
-        let p0 = match which {
-            Covariances::Semidefinite => symmetrised("P0", &setup.p0, &mut work)?,
-            Covariances::DefinitePrior => check_spd("P0", &setup.p0, n)?,
-        };
-        let q = symmetrised("Q", &setup.process_noise, &mut work)?;
-        let m = setup.measurement_noise.nrows();
-        let r = check_spd("R", &setup.measurement_noise, m)?;
-        return Ok(InitialData { n, m, inputs: setup.inputs, x0: setup.x0, p0, q, r });
-    }
-    check_initial(setup)
+    /// `P₀` and `Q` positive semidefinite (the Kalman filter, the EKF).
+    Semidefinite,
 }
 
 /// Checks `x₀` (finite, at least one state), `P₀`, `Q` (`n × n`) and `R` (`m × m`, at least one
 /// output) symmetric positive definite; returns them symmetrised.
 pub(crate) fn check_initial(setup: Setup) -> Result<InitialData, EstimatorError> {
+    check_initial_as(setup, Covariances::Definite)
+}
+
+/// [`check_initial`] with `P₀`, `Q` positive semidefinite as `which` says (a Gaussian filter's
+/// covariance may be singular); `R` always definite (the innovation covariance must be
+/// invertible).
+pub(crate) fn check_initial_as(setup: Setup, which: Covariances) -> Result<InitialData, EstimatorError> {
     let Setup { x0, p0, process_noise: q, measurement_noise: r, inputs } = setup;
     let n = x0.len();
     let m = r.nrows();
@@ -254,6 +246,14 @@ pub(crate) fn check_initial(setup: Setup) -> Result<InitialData, EstimatorError>
         return Err(EstimatorError::EmptySystem("no outputs"));
     }
     check_finite("x0", x0.as_slice())?;
-    let (p0, q, r) = (check_spd("P0", &p0, n)?, check_spd("Q", &q, n)?, check_spd("R", &r, m)?);
+    let p0 = match which {
+        Covariances::Semidefinite => check_psd("P0", &p0, n)?,
+        Covariances::Definite | Covariances::DefinitePrior => check_spd("P0", &p0, n)?,
+    };
+    let q = match which {
+        Covariances::Definite => check_spd("Q", &q, n)?,
+        Covariances::Semidefinite | Covariances::DefinitePrior => check_psd("Q", &q, n)?,
+    };
+    let r = check_spd("R", &r, m)?;
     Ok(InitialData { n, m, inputs, x0, p0, q, r })
 }

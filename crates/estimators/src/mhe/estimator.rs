@@ -792,10 +792,7 @@ impl<M: LinearModel + ?Sized> Estimator<M> for MovingHorizonEstimator {
         measured: &[bool],
     ) -> Result<&MheEstimate, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
-        let mut rows = std::mem::take(&mut self.partial_rows);
-        let class = crate::partial::classify(measured, u, y, (self.m, self.p), &mut rows);
-        self.partial_rows = rows;
-        match class? {
+        match crate::partial::classify(measured, u, y, (self.m, self.p), &mut self.partial_rows)? {
             crate::partial::Measured::All => self.advance(model, u, Some(y), None),
             crate::partial::Measured::Nothing => self.advance(model, u, None, None),
             crate::partial::Measured::Some(_) if self.settings.output_constraint => Err(EstimatorError::Unsupported {
