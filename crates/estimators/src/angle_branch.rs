@@ -45,10 +45,7 @@ pub(crate) fn branch(
         match models::angle_branch(y[i], h.lo(), h.hi()) {
             Ok(Some(shifted)) => {
                 if shifted != y[i] {
-                    let turns = ((shifted - y[i]) / std::f64::consts::TAU).round().abs();
-                    // |fl(2π) − 2π| < 2.5e-16 per turn; the product and the sum rounded.
-                    let bound = 2.0 * f64::EPSILON * (shifted.abs() + turns * (std::f64::consts::TAU + 1.0));
-                    err[i] = intervals::up(bound);
+                    err[i] = shift_error(y[i], shifted);
                     out[i] = shifted;
                 }
             }
@@ -65,6 +62,17 @@ pub(crate) fn branch(
         }
     }
     Ok(verdict)
+}
+
+/// A bound on the rounding of `shifted`, the representative `y + 2πk` computed in `f64` (0 when
+/// nothing was shifted).
+pub(crate) fn shift_error(y: f64, shifted: f64) -> f64 {
+    if shifted == y {
+        return 0.0;
+    }
+    let turns = ((shifted - y) / std::f64::consts::TAU).round().abs();
+    // |fl(2π) − 2π| < 2.5e-16 per turn; the product and the sum rounded.
+    intervals::up(2.0 * f64::EPSILON * (shifted.abs() + turns * (std::f64::consts::TAU + 1.0)))
 }
 
 /// The measurement `y ± err` as an interval (a point when `err` is 0).

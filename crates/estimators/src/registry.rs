@@ -44,7 +44,8 @@ use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
 use crate::mhe::{MheCost, MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
 use crate::smf::{
-    InconsistencyPolicy, NonlinearSetMembershipFilter, SdpUpdateSolver, SetMembershipFilter, TwoMultiplierSolver,
+    InconsistencyPolicy, NonlinearSetMembershipFilter, ObservedSetMembershipFilter, SdpUpdateSolver,
+    SetMembershipFilter, TwoMultiplierSolver,
 };
 use crate::traits::{DynEstimator, Estimate, EstimateKind, Setup};
 use crate::ukf::{UkfParams, UnscentedKalmanFilter};
@@ -129,16 +130,33 @@ impl SmfSolver {
 }
 
 /// Settings of the set-membership filters.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SetMembershipSettings {
     /// How (29) is solved.
     pub solver: SmfSolver,
     /// What a step does with data that contradict the noise bounds (default: an error).
     pub inconsistency: InconsistencyPolicy,
-    /// `(lower, upper)`: bounds the true state always respects (length `n` each, ±∞ where none),
-    /// for `smf-nl` only ([`NonlinearSetMembershipFilter::with_state_bounds`], docs/nonlinear-smf.md
-    /// (N1')); the linear filters refuse them.
+    /// `(lower, upper)`: bounds the true state always respects (length `n` each, ±∞ where none).
+    /// They cut the published interval: `smf-nl`'s (N1') ([`NonlinearSetMembershipFilter::with_state_bounds`],
+    /// docs/nonlinear-smf.md), the linear filters' through their interval observer (which they
+    /// then need).
     pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
+    /// The linear filters (`smf`, `yang-li*`): run the interval observer beside the ellipsoid
+    /// ([`ObservedSetMembershipFilter`], docs/carrier-smf.md §4.8), so that the published interval
+    /// is never wider than an interval observer's. Default `true`; `false` publishes the paper's
+    /// filter alone (the reproduction does). `smf-nl` always runs its own.
+    pub interval_observer: bool,
+}
+
+impl Default for SetMembershipSettings {
+    fn default() -> Self {
+        Self {
+            solver: SmfSolver::default(),
+            inconsistency: InconsistencyPolicy::default(),
+            state_bounds: None,
+            interval_observer: true,
+        }
+    }
 }
 
 /// The known range of the input, `lower ≤ u ≤ upper` componentwise.
@@ -368,14 +386,16 @@ pub mod names {
 }
 
 /// The set-membership filter built by `$build` (an expression of the solver `$t`) with the
-/// solver of `$choice` and the inconsistency policy `$policy`, behind the linear adapter.
+/// settings `$s` (solver, inconsistency policy, interval observer and state bounds), behind the
+/// linear adapter.
 macro_rules! set_membership {
-    ($e:expr, $choice:expr, $policy:expr, |$t:ident| $build:expr) => {
-        Ok(match solver($choice)? {
-            Solver::Two($t) => on_linear($e, with_policy($build?, $policy)),
-            Solver::Sdp($t) => on_linear($e, with_policy($build?, $policy)),
-        })
-    };
+    ($e:expr, $s:expr, |$t:ident| $build:expr) => {{
+        let s: &SetMembershipSettings = $s;
+        match solver(s.solver.clone())? {
+            Solver::Two($t) => linear_set_membership($e, s, with_policy($build?, s.inconsistency)),
+            Solver::Sdp($t) => linear_set_membership($e, s, with_policy($build?, s.inconsistency)),
+        }
+    }};
 }
 
 /// Every registered estimator, in display order.
@@ -383,14 +403,14 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
     EstimatorEntry {
         name: names::SMF,
         kind: EstimateKind::GuaranteedEllipsoid,
-        summary: "improved set-membership filter (carrier paper (13)-(29)), certified containment",
+        summary: "improved set-membership filter (carrier paper (13)-(29)), certified containment; an interval \
+                  observer beside it narrows the published interval (docs/carrier-smf.md §4.8)",
         needs: Capability::Linear,
         settings: SettingsKind::SetMembership,
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
-            no_state_bounds(e, &s)?;
-            set_membership!(e, s.solver, s.inconsistency, |t| SetMembershipFilter::with_solver(setup, t))
+            set_membership!(e, &s, |t| SetMembershipFilter::with_solver(setup, t))
         },
     },
     EstimatorEntry {
@@ -411,7 +431,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembershipInputBox(s, b) = s else { return Err(wrong_settings(e)) };
-            set_membership!(e, s.solver, s.inconsistency, |t| yang_li::without_input(setup, &b.lower, &b.upper, t))
+            set_membership!(e, &s, |t| yang_li::without_input(setup, &b.lower, &b.upper, t))
         },
     },
     EstimatorEntry {
@@ -423,8 +443,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
-            no_state_bounds(e, &s)?;
-            set_membership!(e, s.solver, s.inconsistency, |t| yang_li::with_input(setup, t))
+            set_membership!(e, &s, |t| yang_li::with_input(setup, t))
         },
     },
     EstimatorEntry {
@@ -515,6 +534,12 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         extra_measurements: 0,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
+            if !s.interval_observer {
+                return Err(EstimatorError::InvalidConfiguration {
+                    estimator: e.name,
+                    message: "its interval observer (docs/nonlinear-smf.md (N7)-(N8)) cannot be turned off".into(),
+                });
+            }
             let checks = DataChecks::with_policy(s.inconsistency);
             let bounds = s.state_bounds.as_ref();
             Ok(match solver(s.solver)? {
@@ -744,20 +769,31 @@ fn with_policy<S: crate::smf::UpdateSolver>(
     filter
 }
 
-/// The state bounds are `smf-nl`'s (N1'): a linear filter has no remainder for them to bound, so
-/// it refuses them rather than ignore them.
-fn no_state_bounds(e: &'static EstimatorEntry, s: &SetMembershipSettings) -> Result<(), EstimatorError> {
-    match s.state_bounds {
-        Some(_) => Err(EstimatorError::InvalidConfiguration {
-            estimator: e.name,
-            message: format!(
-                "state bounds are used by {} only (they bound its linearisation remainder); {} is linear",
-                names::SMF_NL,
-                e.name
-            ),
-        }),
-        None => Ok(()),
+/// A linear set-membership filter as the settings ask: with its interval observer and the state
+/// bounds (which only the observer can use: without it they are refused rather than ignored), or
+/// alone.
+fn linear_set_membership<S: crate::smf::UpdateSolver + Send + 'static>(
+    e: &'static EstimatorEntry,
+    s: &SetMembershipSettings,
+    filter: SetMembershipFilter<S>,
+) -> Result<Inner, EstimatorError> {
+    if !s.interval_observer {
+        if s.state_bounds.is_some() {
+            return Err(EstimatorError::InvalidConfiguration {
+                estimator: e.name,
+                message: "state bounds cut the published interval through the interval observer, which is off".into(),
+            });
+        }
+        return Ok(on_linear(e, filter));
     }
+    let observed = ObservedSetMembershipFilter::new(filter);
+    Ok(on_linear(
+        e,
+        match &s.state_bounds {
+            Some((lower, upper)) => observed.with_state_bounds(lower.as_slice(), upper.as_slice())?,
+            None => observed,
+        },
+    ))
 }
 
 /// `f` with the settings' state bounds, if any.

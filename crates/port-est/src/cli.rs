@@ -232,7 +232,8 @@ Files:
               `a` (n×n), `b` (n×p), `c` (m×n), `q` (n×n), `r` (m×m), `p0` (n×n) as arrays of rows and
               `x0` (length n); optional `u_lower`, `u_upper` (length p), the input range (yang-li),
               and `x_lower`, `x_upper` (length n, inf where none), bounds the true state always
-              respects, such as speed limits (smf-nl: docs/nonlinear-smf.md (N1')).
+              respects, such as speed limits (the set-membership filters cut their published
+              intervals by them: docs/carrier-smf.md §4.8, docs/nonlinear-smf.md (N1')).
               Set-membership filters read q, r, p0 as ellipsoid shapes, the Kalman filter as
               covariances. The moving-horizon estimators (rmhe, mhe) read them as weights (r
               diagonal) and need a table `[mhe]` with the noise boxes `w_lower`, `w_upper` (length

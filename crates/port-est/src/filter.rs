@@ -10,7 +10,7 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use estimators::registry::{
-    self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver, names,
+    self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
 };
 use estimators::{AnyEstimator, ConstrainedZonotopeSettings, DataChecks, EstimatorError};
 use nalgebra::DVector;
@@ -215,8 +215,9 @@ fn settings(
         path: model.path().to_owned(),
         message: format!("--estimator {} needs {what} in the model file (see README)", entry.name),
     };
-    // The state's range is the vehicle's, like `u_lower`: used by the estimator that can use it.
-    let state_bounds = if entry.name == names::SMF_NL { model.state_bounds.clone() } else { None };
+    // The state's range is the vehicle's, like `u_lower`: every set-membership filter cuts its
+    // published interval by it.
+    let state_bounds = model.state_bounds.clone();
     let smf =
         SetMembershipSettings { solver: solver.unwrap_or_default(), state_bounds, ..SetMembershipSettings::default() };
     Ok(match entry.settings {

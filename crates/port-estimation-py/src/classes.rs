@@ -197,11 +197,19 @@ impl UnscentedKalmanFilter {
 ///     ``InconsistentDataError``, the filter unchanged), ``"flag"`` (publish it marked inconsistent,
 ///     every later set marked not guaranteed) or ``"restart"`` (move the set to the data, marked
 ///     likewise).
+/// x_lower, x_upper : array_like, optional
+///     Bounds the true state always respects (length n, ``inf`` where none): they cut the
+///     published interval.
+/// interval_observer : bool, optional
+///     Run an interval observer beside the ellipsoid (default ``True``): the published interval
+///     is the ellipsoid's projection cut by the observer's box and the bounds, never wider than
+///     either. ``False`` publishes the paper's filter alone (no state bounds then).
 ///
 /// Attributes
 /// ----------
 /// x, P : ndarray
-///     The centre and shape of the current set.
+///     The centre and shape of the current set (``x`` may lie outside the published interval
+///     when the observer cuts it).
 ///
 /// Examples
 /// --------
@@ -215,8 +223,11 @@ pub struct SetMembershipFilter;
 #[pymethods]
 impl SetMembershipFilter {
     #[new]
-    #[pyo3(signature = (model, *, x0 = None, P0 = None, Q = None, R = None, solver = None, inconsistency = None))]
-    #[allow(non_snake_case)]
+    #[pyo3(signature = (
+        model, *, x0 = None, P0 = None, Q = None, R = None, solver = None, inconsistency = None, x_lower = None,
+        x_upper = None, interval_observer = None
+    ))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         model: &Bound<'_, Model>,
@@ -226,8 +237,17 @@ impl SetMembershipFilter {
         R: Option<&Bound<'_, PyAny>>,
         solver: Option<Bound<'_, PyAny>>,
         inconsistency: Option<Bound<'_, PyAny>>,
+        x_lower: Option<Bound<'_, PyAny>>,
+        x_upper: Option<Bound<'_, PyAny>>,
+        interval_observer: Option<Bound<'_, PyAny>>,
     ) -> PyResult<PyClassInitializer<Self>> {
-        let settings = [("solver", solver), ("inconsistency", inconsistency)];
+        let settings = [
+            ("solver", solver),
+            ("inconsistency", inconsistency),
+            ("x_lower", x_lower),
+            ("x_upper", x_upper),
+            ("interval_observer", interval_observer),
+        ];
         let e = base(py, names::SMF, model, Initial { x0, P0, Q, R }, &settings, None)?;
         Ok(PyClassInitializer::from(e).add_subclass(Self))
     }

@@ -25,7 +25,7 @@ use crate::errors::value_error;
 pub struct FileSettings<'a> {
     /// `u_lower`, `u_upper`.
     pub input_range: Option<&'a (DVector<f64>, DVector<f64>)>,
-    /// `x_lower`, `x_upper` (used by `smf-nl`).
+    /// `x_lower`, `x_upper` (used by the set-membership filters).
     pub state_bounds: Option<&'a (DVector<f64>, DVector<f64>)>,
     /// The `[mhe]` table.
     pub mhe: Option<&'a MheSettings>,
@@ -39,8 +39,10 @@ pub struct FileSettings<'a> {
 pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
     match kind {
         SettingsKind::None => &[],
-        SettingsKind::SetMembership => &["solver", "inconsistency", "x_lower", "x_upper"],
-        SettingsKind::SetMembershipInputBox => &["solver", "inconsistency", "u_lower", "u_upper"],
+        SettingsKind::SetMembership => &["solver", "inconsistency", "x_lower", "x_upper", "interval_observer"],
+        SettingsKind::SetMembershipInputBox => {
+            &["solver", "inconsistency", "u_lower", "u_upper", "x_lower", "x_upper", "interval_observer"]
+        }
         SettingsKind::MovingHorizon => &[
             "w_lower",
             "w_upper",
@@ -155,17 +157,19 @@ impl<'py> Kwargs<'py> {
     }
 }
 
-/// `x_lower`, `x_upper` (keywords over the model file's) for `smf-nl`; the linear filters refuse
-/// them given as keywords (the registry says why) and do not read the file's.
+/// `solver`, `inconsistency`, `interval_observer` (default true) and `x_lower`, `x_upper`
+/// (keywords over the model file's).
 fn set_membership(
     kw: &Kwargs<'_>,
-    entry: &EstimatorEntry,
     states: usize,
     file: Option<&(DVector<f64>, DVector<f64>)>,
 ) -> PyResult<SetMembershipSettings> {
+    let interval_observer = kw.extract::<bool>("interval_observer", "True or False")?.unwrap_or(true);
+    // The file's bounds are the vehicle's, used where they can be: not by a linear filter without
+    // its observer (bounds given as keywords then are refused by the registry).
     let state_bounds = match kw.bounds("x_lower", "x_upper", states)? {
         Some(b) => Some(b),
-        None if entry.name == estimators::registry::names::SMF_NL => file.cloned(),
+        None if interval_observer => file.cloned(),
         None => None,
     };
     let solver = match kw.extract::<String>("solver", "a string")? {
@@ -173,7 +177,7 @@ fn set_membership(
         None => SmfSolver::default(),
     };
     let inconsistency = inconsistency(kw)?;
-    Ok(SetMembershipSettings { solver, inconsistency, state_bounds })
+    Ok(SetMembershipSettings { solver, inconsistency, state_bounds, interval_observer })
 }
 
 fn moving_horizon(kw: &Kwargs<'_>, dims: Dims, file: Option<&MheSettings>) -> PyResult<MheSettings> {
@@ -421,10 +425,10 @@ pub fn settings(
     let settings = match entry.settings {
         SettingsKind::None => None,
         SettingsKind::SetMembership => {
-            Some(EstimatorSettings::SetMembership(set_membership(&kw, entry, dims.states, file.state_bounds)?))
+            Some(EstimatorSettings::SetMembership(set_membership(&kw, dims.states, file.state_bounds)?))
         }
         SettingsKind::SetMembershipInputBox => {
-            let smf = set_membership(&kw, entry, dims.states, None)?;
+            let smf = set_membership(&kw, dims.states, file.state_bounds)?;
             let (lower, upper) = match (kw.bounds("u_lower", "u_upper", dims.inputs)?, file.input_range) {
                 (Some(b), _) => b,
                 (None, Some(b)) => b.clone(),

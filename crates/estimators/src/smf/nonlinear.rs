@@ -380,29 +380,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
     /// [`EstimatorError::DimensionMismatch`] unless both have one entry per state;
     /// [`EstimatorError::InvalidSetting`] for a NaN or a lower bound above its upper bound.
     pub fn with_state_bounds(mut self, lower: &[f64], upper: &[f64]) -> Result<Self, EstimatorError> {
-        let n = self.dims.states;
-        for (what, found) in [("state lower bounds", lower.len()), ("state upper bounds", upper.len())] {
-            if found != n {
-                return Err(EstimatorError::DimensionMismatch { what, expected: n, found });
-            }
-        }
-        for (&lo, &hi) in lower.iter().zip(upper) {
-            for (what, value) in [("state lower bound", lo), ("state upper bound", hi)] {
-                if value.is_nan() {
-                    return Err(EstimatorError::InvalidSetting { what, value, requirement: "a number" });
-                }
-            }
-            if lo > hi || lo == f64::INFINITY || hi == f64::NEG_INFINITY {
-                return Err(EstimatorError::InvalidSetting {
-                    what: "state lower bound",
-                    value: lo,
-                    requirement: "finite or -inf, and not above its upper bound",
-                });
-            }
-        }
-        for (b, (&lo, &hi)) in self.bounds.iter_mut().zip(lower.iter().zip(upper)) {
-            *b = Interval::new(lo, hi);
-        }
+        self.bounds = super::observer::state_bounds(self.dims.states, lower, upper)?;
         Ok(self)
     }
 

@@ -240,6 +240,9 @@ class SetMembershipFilter(Estimator):
         R: ArrayLike | None = None,
         solver: str | None = None,
         inconsistency: Literal["error", "flag", "restart"] | None = None,
+        x_lower: ArrayLike | None = None,
+        x_upper: ArrayLike | None = None,
+        interval_observer: bool | None = None,
     ) -> None: ...
 
 class MovingHorizonEstimator(Estimator):

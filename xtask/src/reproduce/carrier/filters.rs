@@ -31,9 +31,15 @@ fn setup(sc: &Scenario) -> Setup {
     }
 }
 
+/// The paper's filter with `solver`: the registry's interval observer off, so that the published
+/// interval is the ellipsoid's projection, as in the paper.
+fn paper(solver: SmfSolver) -> SetMembershipSettings {
+    SetMembershipSettings { solver, interval_observer: false, ..SetMembershipSettings::default() }
+}
+
 /// The improved filter with the two-multiplier solver.
 pub fn proposed(sc: &Scenario) -> Result<Filter, String> {
-    Filter::new(PROPOSED, names::SMF, setup(sc), None)
+    Filter::new(PROPOSED, names::SMF, setup(sc), Some(EstimatorSettings::SetMembership(paper(SmfSolver::default()))))
 }
 
 /// The Kalman filter given `Q`, `R` as covariances and `P₀` as the initial covariance.
@@ -49,9 +55,7 @@ pub type ScheduledFilter = (Filter, usize);
 pub fn for_scenario(sc: &Scenario) -> Result<Vec<ScheduledFilter>, String> {
     let n = sc.len();
     let mut out: Vec<ScheduledFilter> = vec![(proposed(sc)?, n)];
-    let smf = |solver: SmfSolver| {
-        Some(EstimatorSettings::SetMembership(SetMembershipSettings { solver, ..SetMembershipSettings::default() }))
-    };
+    let smf = |solver: SmfSolver| Some(EstimatorSettings::SetMembership(paper(solver)));
     for name in lmi::backend_names() {
         let solver = SmfSolver::by_name(name).map_err(|e| e.to_string())?;
         let label = format!("{PROPOSED_VIA}{name}");
@@ -66,9 +70,10 @@ pub fn for_scenario(sc: &Scenario) -> Result<Vec<ScheduledFilter>, String> {
         }
     }
     let (lower, upper) = sc.input_range.clone();
-    let boxed = EstimatorSettings::SetMembershipInputBox(SetMembershipSettings::default(), InputBox { lower, upper });
+    let boxed = EstimatorSettings::SetMembershipInputBox(paper(SmfSolver::default()), InputBox { lower, upper });
     out.push((Filter::new(YANG_LI_NO_INPUT, names::YANG_LI, setup(sc), Some(boxed))?, n));
-    out.push((Filter::new(YANG_LI_WITH_INPUT, names::YANG_LI_WITH_INPUT, setup(sc), None)?, n));
+    let with_input = EstimatorSettings::SetMembership(paper(SmfSolver::default()));
+    out.push((Filter::new(YANG_LI_WITH_INPUT, names::YANG_LI_WITH_INPUT, setup(sc), Some(with_input))?, n));
     out.push((kalman(sc)?, n));
     Ok(out)
 }
