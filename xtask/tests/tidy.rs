@@ -24,6 +24,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("fuzzy-inference", &[]),
     ("atomic-output", &[]),
     ("svg-plot", &[]),
+    ("ros-bag", &["atomic-output"]),
     ("intervals", &[]),
     ("models", &["dense-kernels", "intervals"]),
     ("equation-models", &["models", "intervals"]),

@@ -1,0 +1,1 @@
+//! ROS 2 bags stored as MCAP (work in progress).
