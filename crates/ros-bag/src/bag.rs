@@ -77,9 +77,4 @@ impl Bag {
     pub(crate) fn walker(&self) -> Walker<'_> {
         Walker::data(&self.map, &self.path, self.max_chunk)
     }
-
-    /// The schema of a channel, if it has one.
-    pub(crate) fn schema_of(&self, channel: &ChannelRec) -> Option<&SchemaRec> {
-        if channel.schema_id == 0 { None } else { self.schemas.get(&channel.schema_id) }
-    }
 }
