@@ -179,7 +179,11 @@ impl Rd<'_> {
 
     fn skip(&mut self, n: usize, what: &str) -> Result<(), DecodeError> {
         if n > self.remaining() {
-            return fail(format!("{what} of {n} bytes at byte {} runs past the end ({} bytes)", self.pos + 4, self.b.len() + 4));
+            return fail(format!(
+                "{what} of {n} bytes at byte {} runs past the end ({} bytes)",
+                self.pos + 4,
+                self.b.len() + 4
+            ));
         }
         self.pos += n;
         Ok(())
@@ -188,7 +192,11 @@ impl Rd<'_> {
     fn bytes<const N: usize>(&mut self) -> Result<[u8; N], DecodeError> {
         self.align(N)?;
         let Some(s) = self.b.get(self.pos..self.pos + N) else {
-            return fail(format!("a {N}-byte number at byte {} runs past the end ({} bytes)", self.pos + 4, self.b.len() + 4));
+            return fail(format!(
+                "a {N}-byte number at byte {} runs past the end ({} bytes)",
+                self.pos + 4,
+                self.b.len() + 4
+            ));
         };
         let mut a = [0; N];
         a.copy_from_slice(s);
@@ -221,7 +229,14 @@ impl Rd<'_> {
 }
 
 /// Reads one element of type `base`: a number into `node`'s slots, a message through `node`.
-fn element(types: &Types, base: Base, node: Option<&Node>, rd: &mut Rd<'_>, out: &mut [f64], depth: usize) -> Result<(), DecodeError> {
+fn element(
+    types: &Types,
+    base: Base,
+    node: Option<&Node>,
+    rd: &mut Rd<'_>,
+    out: &mut [f64],
+    depth: usize,
+) -> Result<(), DecodeError> {
     match base {
         Base::Prim(p) => {
             let v = rd.prim(p)?;
@@ -247,7 +262,14 @@ fn element(types: &Types, base: Base, node: Option<&Node>, rd: &mut Rd<'_>, out:
     }
 }
 
-fn walk(types: &Types, msg: usize, sel: Option<&SelStruct>, rd: &mut Rd<'_>, out: &mut [f64], depth: usize) -> Result<(), DecodeError> {
+fn walk(
+    types: &Types,
+    msg: usize,
+    sel: Option<&SelStruct>,
+    rd: &mut Rd<'_>,
+    out: &mut [f64],
+    depth: usize,
+) -> Result<(), DecodeError> {
     if depth > MAX_DEPTH {
         return fail("nested too deep");
     }
@@ -283,11 +305,7 @@ fn walk(types: &Types, msg: usize, sel: Option<&SelStruct>, rd: &mut Rd<'_>, out
         };
         // Every element takes at least one byte: a count beyond the bytes left is corrupt.
         if count > rd.remaining() {
-            return fail(format!(
-                "array `{}` claims {count} elements with {} bytes left",
-                f.name,
-                rd.remaining()
-            ));
+            return fail(format!("array `{}` claims {count} elements with {} bytes left", f.name, rd.remaining()));
         }
         if let Some(&(i, _)) = els.iter().find(|(i, _)| *i >= count) {
             let slot = first_slot(els.iter().find(|(j, _)| *j == i).map(|(_, n)| n)).unwrap_or(0);

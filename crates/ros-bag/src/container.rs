@@ -134,7 +134,16 @@ pub(crate) struct Walker<'a> {
 impl<'a> Walker<'a> {
     /// The data section: after the magic, up to the data-end record.
     pub(crate) fn data(buf: &'a [u8], path: &'a Path, max_chunk: usize) -> Self {
-        Self { buf, path, pos: mcap::MAGIC.len(), end: buf.len(), max_chunk, chunk: None, done: false, data_section: true }
+        Self {
+            buf,
+            path,
+            pos: mcap::MAGIC.len(),
+            end: buf.len(),
+            max_chunk,
+            chunk: None,
+            done: false,
+            data_section: true,
+        }
     }
 
     /// The summary section, if the footer points at one.
@@ -233,7 +242,9 @@ impl<'a> Iterator for Walker<'a> {
             }
             if left < OPCODE_LEN {
                 self.done = true;
-                let detail = format!("the file ends after {left} bytes of a record header, without a data end record: truncated");
+                let detail = format!(
+                    "the file ends after {left} bytes of a record header, without a data end record: truncated"
+                );
                 return Some(Err(self.corrupt("record", at, detail)));
             }
             let opcode = self.buf[self.pos];
@@ -243,7 +254,8 @@ impl<'a> Iterator for Walker<'a> {
             let name = record_name(opcode);
             if len > (left - OPCODE_LEN) as u64 {
                 self.done = true;
-                let detail = format!("claims {len} bytes but {} remain: the file is truncated or corrupt", left - OPCODE_LEN);
+                let detail =
+                    format!("claims {len} bytes but {} remain: the file is truncated or corrupt", left - OPCODE_LEN);
                 return Some(Err(self.corrupt(name, at, detail)));
             }
             let start = self.pos;
@@ -287,7 +299,11 @@ impl<'a> Iterator for Walker<'a> {
 
 /// The schemas and channels of a file: from its summary section when it has a readable one,
 /// otherwise from a walk of the data section (up to any damage).
-pub(crate) fn channels(buf: &[u8], path: &Path, max_chunk: usize) -> (BTreeMap<u16, SchemaRec>, BTreeMap<u16, ChannelRec>) {
+pub(crate) fn channels(
+    buf: &[u8],
+    path: &Path,
+    max_chunk: usize,
+) -> (BTreeMap<u16, SchemaRec>, BTreeMap<u16, ChannelRec>) {
     let mut schemas = BTreeMap::new();
     let mut channels = BTreeMap::new();
     let mut take = |walker: Walker<'_>| -> bool {

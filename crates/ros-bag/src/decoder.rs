@@ -42,7 +42,8 @@ pub(crate) fn format(channel: &ChannelRec, schema: Option<&SchemaRec>) -> Result
         message_encoding: channel.message_encoding.clone(),
         schema_encoding: schema.map_or_else(String::new, |s| s.encoding.clone()),
     };
-    let schema_error = |reason: String| Error::Schema { schema: schema_name(schema), line: 0, text: String::new(), reason };
+    let schema_error =
+        |reason: String| Error::Schema { schema: schema_name(schema), line: 0, text: String::new(), reason };
     match (channel.message_encoding.as_str(), schema) {
         ("cdr", Some(s)) if s.encoding == "ros2msg" => {
             let text = std::str::from_utf8(&s.data).map_err(|e| schema_error(format!("not UTF-8: {e}")))?;
@@ -93,12 +94,9 @@ impl Decoder {
                 reason,
                 available: available(),
             },
-            Unresolved::NonNumeric(found) => Error::NonNumeric {
-                key: key.to_owned(),
-                topic: channel.topic.clone(),
-                field: field.to_owned(),
-                found,
-            },
+            Unresolved::NonNumeric(found) => {
+                Error::NonNumeric { key: key.to_owned(), topic: channel.topic.clone(), field: field.to_owned(), found }
+            }
         };
         match format {
             Format::Cdr(mut plan) => {

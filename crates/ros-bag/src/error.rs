@@ -17,7 +17,9 @@ impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.in_chunk {
             None => write!(f, "byte {}", self.offset),
-            Some(inner) => write!(f, "chunk at byte {}, record at offset {inner} of its uncompressed data", self.offset),
+            Some(inner) => {
+                write!(f, "chunk at byte {}, record at offset {inner} of its uncompressed data", self.offset)
+            }
         }
     }
 }

@@ -120,7 +120,8 @@ impl Bag {
 impl fmt::Display for Inspection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let header = ["topic", "type", "encoding", "messages", "rate (Hz)", "first (s)", "last (s)"];
-        let time = |t: Option<u64>| t.map_or_else(|| "-".to_owned(), |t| secs(t as i64).trim_end_matches(" s").to_owned());
+        let time =
+            |t: Option<u64>| t.map_or_else(|| "-".to_owned(), |t| secs(t as i64).trim_end_matches(" s").to_owned());
         let rows: Vec<[String; 7]> = self
             .topics
             .iter()
@@ -128,7 +129,11 @@ impl fmt::Display for Inspection {
                 [
                     t.topic.clone(),
                     t.message_type.clone(),
-                    format!("{}/{}", t.message_encoding, if t.schema_encoding.is_empty() { "-" } else { &t.schema_encoding }),
+                    format!(
+                        "{}/{}",
+                        t.message_encoding,
+                        if t.schema_encoding.is_empty() { "-" } else { &t.schema_encoding }
+                    ),
                     t.count.to_string(),
                     t.rate_hz().map_or_else(|| "-".to_owned(), |r| format!("{r:.2}")),
                     time(t.first_ns),

@@ -96,8 +96,10 @@ pub(crate) struct Types {
 pub(crate) const MAX_DEPTH: usize = 64;
 
 /// Built-in definitions used when a schema leaves them out.
-const BUILTIN: &[(&str, &str)] =
-    &[("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"), ("builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n")];
+const BUILTIN: &[(&str, &str)] = &[
+    ("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"),
+    ("builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n"),
+];
 
 /// `pkg/msg/Type` → `pkg/Type`.
 pub(crate) fn normalise(name: &str) -> String {

@@ -11,7 +11,8 @@ pub(crate) struct Segment {
 
 /// Parses a field path; `key` names the mapping in errors.
 pub(crate) fn parse(key: &str, field: &str) -> Result<Vec<Segment>> {
-    let bad = |reason: &str| Error::BadFieldPath { key: key.to_owned(), field: field.to_owned(), reason: reason.to_owned() };
+    let bad =
+        |reason: &str| Error::BadFieldPath { key: key.to_owned(), field: field.to_owned(), reason: reason.to_owned() };
     if field.is_empty() {
         return Err(bad("empty"));
     }

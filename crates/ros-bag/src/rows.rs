@@ -385,7 +385,9 @@ impl Rows<'_> {
 
     fn decode_error(&self, t: usize, msg: &RawMessage<'_>, e: DecodeError) -> Error {
         let topic = &self.topics[t];
-        let key_of = |slot: usize| topic.keys.get(slot).cloned().unwrap_or_else(|| ("header.stamp".into(), "header.stamp".into()));
+        let key_of = |slot: usize| {
+            topic.keys.get(slot).cloned().unwrap_or_else(|| ("header.stamp".into(), "header.stamp".into()))
+        };
         match e {
             DecodeError::Corrupt(reason) => {
                 Error::Undecodable { topic: topic.name.clone(), log_time: msg.log_time, location: msg.location, reason }
@@ -417,7 +419,11 @@ impl Rows<'_> {
         let topic = &self.topics[t];
         let time = match stamp {
             Some(0) => {
-                return Err(Error::ZeroStamp { topic: topic.name.clone(), log_time: msg.log_time, location: msg.location });
+                return Err(Error::ZeroStamp {
+                    topic: topic.name.clone(),
+                    log_time: msg.log_time,
+                    location: msg.location,
+                });
             }
             Some(s) => s,
             None => i64::try_from(msg.log_time).map_err(|_| Error::Undecodable {

@@ -42,7 +42,12 @@ pub struct EstimateLayout {
 impl EstimateLayout {
     /// Messages on `topic` with the centre of `states` (in order).
     pub fn new(topic: impl Into<String>, states: impl IntoIterator<Item = impl Into<String>>) -> Self {
-        Self { topic: topic.into(), states: states.into_iter().map(Into::into).collect(), spread: Spread::None, status: false }
+        Self {
+            topic: topic.into(),
+            states: states.into_iter().map(Into::into).collect(),
+            spread: Spread::None,
+            status: false,
+        }
     }
 
     /// With a spread (bounds or standard deviations).
@@ -209,8 +214,9 @@ impl EstimateWriter {
     /// [`Error::Config`] if a vector's length is not the number of states or the layout's
     /// spread or status is missing, or the time is negative; [`Error::Write`] from the writer.
     pub fn write(&mut self, e: &Estimate<'_>) -> Result<()> {
-        let time = u64::try_from(e.t_ns)
-            .map_err(|_| Error::Config(format!("step {}: time {} ns is before 1970: MCAP times are unsigned", e.k, e.t_ns)))?;
+        let time = u64::try_from(e.t_ns).map_err(|_| {
+            Error::Config(format!("step {}: time {} ns is before 1970: MCAP times are unsigned", e.k, e.t_ns))
+        })?;
         self.buf.clear();
         self.buf.extend_from_slice(format!("{{\"k\":{},\"t\":", e.k).as_bytes());
         push_number(&mut self.buf, e.t_ns as f64 / 1e9);
@@ -231,7 +237,8 @@ impl EstimateWriter {
             self.buf.extend_from_slice(serde_json::Value::from(s).to_string().as_bytes());
         }
         self.buf.push(b'}');
-        let header = MessageHeader { channel_id: self.channel, sequence: self.sequence, log_time: time, publish_time: time };
+        let header =
+            MessageHeader { channel_id: self.channel, sequence: self.sequence, log_time: time, publish_time: time };
         self.sequence = self.sequence.wrapping_add(1);
         let buf = std::mem::take(&mut self.buf);
         let path = self.path.clone();
@@ -283,13 +290,18 @@ impl EstimateWriter {
                             }
                         },
                     };
-                    let id = self.writer()?.add_channel(schema_id, &c.topic, &c.message_encoding, &c.metadata).map_err(w)?;
+                    let id =
+                        self.writer()?.add_channel(schema_id, &c.topic, &c.message_encoding, &c.metadata).map_err(w)?;
                     self.copied.insert(c.id, id);
                     id
                 }
             };
-            let header =
-                MessageHeader { channel_id: id, sequence: m.sequence, log_time: m.log_time, publish_time: m.publish_time };
+            let header = MessageHeader {
+                channel_id: id,
+                sequence: m.sequence,
+                log_time: m.log_time,
+                publish_time: m.publish_time,
+            };
             self.writer()?.write_to_known_channel(&header, &m.data).map_err(w)?;
             n += 1;
         }
@@ -302,7 +314,8 @@ impl EstimateWriter {
     /// [`Error::Write`] from the writer, [`Error::Io`] if the file cannot be published.
     pub fn finish(mut self) -> Result<()> {
         let path = self.path.clone();
-        let mut out = self.out.take().ok_or_else(|| Error::Write { path: path.clone(), detail: "already finished".into() })?;
+        let mut out =
+            self.out.take().ok_or_else(|| Error::Write { path: path.clone(), detail: "already finished".into() })?;
         out.finish().map_err(|e| Error::Write { path: path.clone(), detail: chain(&e) })?;
         let file = out.into_inner().into_inner();
         file.commit().map_err(|source| Error::Io { path, source })
