@@ -18,6 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use equation_models::EquationModel;
+use estimators::smf::ObservedSetMembershipFilter;
 use estimators::{
     ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, EstimatorError, SetMembershipFilter, Setup,
 };
@@ -87,6 +88,11 @@ pub struct EllipsoidComparison {
     pub misses: usize,
     /// The step time of `smf`.
     pub step_time: StepTiming,
+    /// Steps with a state outside the interval of `smf` with its interval observer (the
+    /// registry's default, docs/carrier-smf.md §4.8; must be 0).
+    pub observer_misses: usize,
+    /// Per state, the median of its width / `smf`'s alone over the compared steps.
+    pub observer_width_ratio: Vec<f64>,
 }
 
 /// One run's counts.
@@ -101,6 +107,8 @@ struct RunTally {
     ns: Vec<u64>,
     smf_ns: Vec<u64>,
     smf_misses: usize,
+    observer_misses: usize,
+    observer_ratios: Vec<Vec<f64>>,
     czf_wider: usize,
     compared: usize,
     ratios: Vec<Vec<f64>>,
@@ -230,7 +238,8 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
         ),
         None => None,
     };
-    let mut t = RunTally { ratios: vec![Vec::new(); n], ..RunTally::default() };
+    let mut observed = smf.clone().map(ObservedSetMembershipFilter::new);
+    let mut t = RunTally { ratios: vec![Vec::new(); n], observer_ratios: vec![Vec::new(); n], ..RunTally::default() };
     let mut widths: Vec<Vec<f64>> = vec![Vec::with_capacity(sc.steps); n];
     let (mut next, mut y) = (DVector::zeros(n), DVector::zeros(m));
     for k in 0..sc.steps {
@@ -262,12 +271,21 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
             t.smf_ns.push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
             let b: Vec<(f64, f64)> = (0..n).map(|i| e.bounds(i).unwrap_or((f64::NAN, f64::NAN))).collect();
             t.smf_misses += usize::from(b.iter().enumerate().any(|(i, &(l, h))| !(l <= x[i] && x[i] <= h)));
+            let o = match observed.as_mut() {
+                Some(f) => {
+                    f.step(lin, &u, &y).map_err(|e| format!("{} smf observed, seed {seed}, step {k}: {e}", sc.name))?
+                }
+                None => return Err(format!("{}: the observed smf is missing", sc.name)),
+            };
+            let ob: Vec<(f64, f64)> = (0..n).map(|i| o.bounds(i).unwrap_or((f64::NAN, f64::NAN))).collect();
+            t.observer_misses += usize::from(ob.iter().enumerate().any(|(i, &(l, h))| !(l <= x[i] && x[i] <= h)));
             if k >= 50 {
                 t.compared += 1;
                 let wider = (0..n).any(|i| czf_bounds[i].1 - czf_bounds[i].0 > b[i].1 - b[i].0);
                 t.czf_wider += usize::from(wider);
                 for i in 0..n {
                     t.ratios[i].push((czf_bounds[i].1 - czf_bounds[i].0) / (b[i].1 - b[i].0));
+                    t.observer_ratios[i].push((ob[i].1 - ob[i].0) / (b[i].1 - b[i].0));
                 }
             }
         }
@@ -338,6 +356,10 @@ fn summarise(sc: &Scenario, tallies: Vec<RunTally>) -> ScenarioResult {
             .collect(),
         misses: tallies.iter().map(|t| t.smf_misses).sum(),
         step_time: StepTiming::of(tallies.iter().flat_map(|t| t.smf_ns.clone()).collect()),
+        observer_misses: tallies.iter().map(|t| t.observer_misses).sum(),
+        observer_width_ratio: (0..n)
+            .map(|i| median(tallies.iter().flat_map(|t| t.observer_ratios[i].clone()).collect()))
+            .collect(),
     });
     ScenarioResult {
         name: sc.name.to_owned(),
