@@ -205,8 +205,9 @@ enum Steps {
     PerMessage { topic: usize, times: VecDeque<i64> },
 }
 
-/// Rows of a bag, one at a time ([`Bag::rows`]). After an error (returned once) the iterator
-/// ends; the rows it gave before the error stand.
+/// Rows of a bag, one at a time ([`Bag::rows`]). An error ends the rows: first come the steps
+/// whose whole window lies before the last stamp read (with log times, the rows the intact file
+/// gives up to there), then the error, once.
 #[derive(Debug)]
 pub struct Rows<'b> {
     bag: &'b Bag,
@@ -232,6 +233,8 @@ pub struct Rows<'b> {
     queued: usize,
     max_backlog: usize,
     eof: bool,
+    /// The error that stopped reading, returned once the rows before it are out.
+    pending: Option<Error>,
     finished: bool,
     scratch: Vec<f64>,
 }
@@ -333,6 +336,7 @@ impl Bag {
             queued: 0,
             max_backlog: spec.max_backlog,
             eof: false,
+            pending: None,
             finished: false,
             scratch: Vec::new(),
         };
@@ -488,13 +492,17 @@ impl Rows<'_> {
                 let Ok(tk) = i64::try_from(tk) else { return Err(()) };
                 (tk, tk.saturating_add(*ts))
             }
-            Steps::Fixed { t0: None, .. } => return if self.eof { Err(()) } else { Ok(None) },
+            Steps::Fixed { t0: None, .. } => return if self.stopped() { Err(()) } else { Ok(None) },
             Steps::PerMessage { times, .. } => match (times.front(), times.get(1)) {
                 (Some(&a), Some(&b)) => (a, b),
-                _ => return if self.eof { Err(()) } else { Ok(None) },
+                _ => return if self.stopped() { Err(()) } else { Ok(None) },
             },
         };
-        let Some(frontier) = self.frontier else { return if self.eof { Err(()) } else { Ok(None) } };
+        let Some(frontier) = self.frontier else { return if self.stopped() { Err(()) } else { Ok(None) } };
+        if self.pending.is_some() {
+            // Reading stopped: the steps whose whole window lies before the last stamp read.
+            return if end < frontier { Ok(Some((tk, end))) } else { Err(()) };
+        }
         if self.eof {
             let fixed = matches!(self.steps, Steps::Fixed { .. });
             return if fixed && tk > frontier { Err(()) } else { Ok(Some((tk, end))) };
@@ -554,7 +562,14 @@ impl Rows<'_> {
         Some(Row { k, t_ns: tk, t: tk as f64 / 1e9, u, y, measured })
     }
 
+    fn stopped(&self) -> bool {
+        self.eof || self.pending.is_some()
+    }
+
     fn at_end(&mut self) -> Option<Error> {
+        if let Some(e) = self.pending.take() {
+            return Some(e);
+        }
         for &(t, slot) in &self.inputs {
             let topic = &self.topics[t];
             if topic.count == 0 {
@@ -606,8 +621,8 @@ impl Iterator for Rows<'_> {
                 Some(Ok(Item::Message(m))) => self.ingest(m),
             };
             if let Err(e) = result {
-                self.finished = true;
-                return Some(Err(e));
+                // The rows whose windows closed before the error come first.
+                self.pending = Some(e);
             }
         }
     }

@@ -66,6 +66,6 @@ fn the_gnss_dropout_leaves_a_second_of_steps_unmeasured() {
     let longest_gap = gnss.split(|m| *m).map(<[bool]>::len).max().unwrap();
     assert!((100..=112).contains(&longest_gap), "longest run without GNSS: {longest_gap} steps");
     let gyro = rows.iter().filter(|r| r.measured[2]).count();
-    assert!(gyro * 100 >= rows.len() * 95, "the 100 Hz gyro (jittered) is in nearly every 10 ms step: {gyro} of {}", rows.len());
+    assert!(gyro * 100 >= rows.len() * 80, "the 100 Hz gyro (jittered) is in most 10 ms steps: {gyro} of {}", rows.len());
     assert!(rows.iter().any(|r| r.y[1] == -1.0), "the int8 status reads as a number, negative too");
 }
