@@ -1,13 +1,15 @@
-//! The MCAP container: the file memory-mapped, its top-level records walked here (so that every
-//! record has its byte offset), chunks decompressed one at a time by the `mcap` crate's
-//! sans-I/O reader with a record-length limit.
+//! The MCAP container: the file memory-mapped, its records walked here (so that every record has
+//! its byte offset) and parsed by the `mcap` crate. A chunk is decompressed whole into a buffer
+//! that grows with the bytes the decoder actually produces (never reserved from the size the
+//! file declares), at most the declared size and the limit, and its CRC checked before any of its
+//! records is used; an uncompressed chunk is read in place.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::Path;
 
-use mcap::records::{Record, op};
-use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::records::op;
 
 use crate::error::{Error, Location};
 
@@ -80,42 +82,144 @@ pub(crate) fn chain(e: &dyn std::error::Error) -> String {
     s
 }
 
-/// Turns a schema, channel or message record into an item (others: `None`).
-fn item<'a>(record: Record<'a>, location: Location) -> Option<Item<'a>> {
-    match record {
-        Record::Schema { header, data } => Some(Item::Schema(SchemaRec {
-            id: header.id,
-            name: header.name,
-            encoding: header.encoding,
-            data: data.into_owned(),
-        })),
-        Record::Channel(c) => Some(Item::Channel(ChannelRec {
-            id: c.id,
-            schema_id: c.schema_id,
-            topic: c.topic,
-            message_encoding: c.message_encoding,
-            metadata: c.metadata,
-        })),
-        Record::Message { header, data } => Some(Item::Message(RawMessage {
-            channel_id: header.channel_id,
-            sequence: header.sequence,
-            log_time: header.log_time,
-            publish_time: header.publish_time,
-            data,
-            location,
-        })),
-        _ => None,
+/// Little-endian fields of a record body, every length checked against the bytes left before
+/// anything is taken or allocated. (The `mcap` crate's parser reserves a string's declared
+/// length before reading it: a damaged length would ask for up to 4 GiB.)
+struct Fields<'a> {
+    b: &'a [u8],
+}
+
+impl<'a> Fields<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        if n > self.b.len() {
+            return Err(format!("its {what} needs {n} bytes, {} remain in the record", self.b.len()));
+        }
+        let (x, rest) = self.b.split_at(n);
+        self.b = rest;
+        Ok(x)
+    }
+
+    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+        let mut a = [0; N];
+        a.copy_from_slice(self.take(N, what)?);
+        Ok(a)
+    }
+
+    fn u16(&mut self, what: &str) -> Result<u16, String> {
+        Ok(u16::from_le_bytes(self.array(what)?))
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.array(what)?))
+    }
+
+    fn u64(&mut self, what: &str) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.array(what)?))
+    }
+
+    /// A `uint32` length, then that many bytes.
+    fn bytes(&mut self, what: &str) -> Result<&'a [u8], String> {
+        let n = self.u32(what)? as usize;
+        self.take(n, what)
+    }
+
+    fn string(&mut self, what: &str) -> Result<String, String> {
+        let b = self.bytes(what)?;
+        String::from_utf8(b.to_vec()).map_err(|_| format!("its {what} is not UTF-8"))
     }
 }
 
-/// The records of one chunk, decompressed one at a time.
+/// A schema, channel or message record as an item (other records: `None`).
+fn parse_item(opcode: u8, body: &[u8], location: Location) -> Result<Option<Item<'_>>, String> {
+    let mut f = Fields { b: body };
+    Ok(Some(match opcode {
+        op::SCHEMA => Item::Schema(SchemaRec {
+            id: f.u16("id")?,
+            name: f.string("name")?,
+            encoding: f.string("encoding")?,
+            data: f.bytes("data")?.to_vec(),
+        }),
+        op::CHANNEL => {
+            let id = f.u16("id")?;
+            let schema_id = f.u16("schema id")?;
+            let topic = f.string("topic")?;
+            let message_encoding = f.string("message encoding")?;
+            let mut m = Fields { b: f.bytes("metadata")? };
+            let mut metadata = BTreeMap::new();
+            while !m.b.is_empty() {
+                let k = m.string("metadata key")?;
+                metadata.insert(k, m.string("metadata value")?);
+            }
+            Item::Channel(ChannelRec { id, schema_id, topic, message_encoding, metadata })
+        }
+        op::MESSAGE => Item::Message(RawMessage {
+            channel_id: f.u16("channel id")?,
+            sequence: f.u32("sequence")?,
+            log_time: f.u64("log time")?,
+            publish_time: f.u64("publish time")?,
+            data: Cow::Borrowed(f.b),
+            location,
+        }),
+        _ => return Ok(None),
+    }))
+}
+
+/// A chunk record's header.
+struct ChunkHeader {
+    uncompressed_size: u64,
+    uncompressed_crc: u32,
+    compression: String,
+}
+
+fn parse_chunk(body: &[u8]) -> Result<(ChunkHeader, &[u8]), String> {
+    let mut f = Fields { b: body };
+    f.u64("start time")?;
+    f.u64("end time")?;
+    let uncompressed_size = f.u64("uncompressed size")?;
+    let uncompressed_crc = f.u32("CRC")?;
+    let compression = f.string("compression")?;
+    let n = f.u64("records' size")?;
+    let records = f.take(usize::try_from(n).unwrap_or(usize::MAX), "records")?;
+    Ok((ChunkHeader { uncompressed_size, uncompressed_crc, compression }, records))
+}
+
+/// The records of one chunk.
 struct ChunkRecords<'a> {
-    reader: LinearReader,
-    /// The chunk record's bytes not yet given to the reader.
-    feed: &'a [u8],
+    data: Cow<'a, [u8]>,
+    pos: usize,
     offset: u64,
-    /// Offset of the next record in the uncompressed data.
-    inner: u64,
+}
+
+/// Decompresses a chunk's records: `Err` says why not.
+fn decompress<'a>(header: &ChunkHeader, data: &'a [u8], limit: usize) -> Result<Cow<'a, [u8]>, String> {
+    let declared = header.uncompressed_size;
+    let cap = usize::try_from(declared).ok().filter(|&n| n <= limit).ok_or_else(|| {
+        format!("declares {declared} uncompressed bytes, more than the limit of {limit}")
+    })?;
+    let out: Cow<'a, [u8]> = match header.compression.as_str() {
+        "" => Cow::Borrowed(data),
+        name @ ("zstd" | "lz4") => {
+            let mut out = Vec::new();
+            let read = match name {
+                "zstd" => zstd::stream::read::Decoder::with_buffer(data)
+                    .and_then(|d| d.take(cap as u64 + 1).read_to_end(&mut out)),
+                _ => lz4::Decoder::new(data).and_then(|d| d.take(cap as u64 + 1).read_to_end(&mut out)),
+            };
+            read.map_err(|e| format!("{name} data does not decompress: {e}"))?;
+            Cow::Owned(out)
+        }
+        other => return Err(format!("compression `{other}` is not supported (zstd, lz4 or none)")),
+    };
+    if out.len() != cap {
+        return Err(format!("holds {} bytes of records, not the {declared} it declares", out.len()));
+    }
+    if header.uncompressed_crc != 0 {
+        let crc = crc32fast::hash(&out);
+        if crc != header.uncompressed_crc {
+            return Err(format!("CRC {crc:08x} of its records is not the {:08x} it declares", header.uncompressed_crc));
+        }
+    }
+    Ok(out)
 }
 
 /// Walks the top-level records of `buf[start..end]`, descending into chunks.
@@ -172,45 +276,51 @@ impl<'a> Walker<'a> {
     fn next_in_chunk(&mut self) -> Option<Result<Item<'a>, Error>> {
         let c = self.chunk.as_mut()?;
         loop {
-            let at = Location { offset: c.offset, in_chunk: Some(c.inner) };
-            match c.reader.next_event() {
-                None => {
-                    self.chunk = None;
-                    return None;
-                }
-                Some(Ok(LinearReadEvent::ReadRequest(n))) => {
-                    let n = n.min(c.feed.len());
-                    c.reader.insert(n).copy_from_slice(&c.feed[..n]);
-                    c.reader.notify_read(n);
-                    c.feed = &c.feed[n..];
-                }
-                Some(Ok(LinearReadEvent::Record { data, opcode })) => {
-                    c.inner += (OPCODE_LEN + data.len()) as u64;
-                    if !matches!(opcode, op::SCHEMA | op::CHANNEL | op::MESSAGE) {
-                        continue;
-                    }
-                    let parsed = mcap::parse_record(opcode, data).map(Record::into_owned);
-                    match parsed {
-                        Ok(r) => {
-                            if let Some(it) = item(r, at) {
-                                return Some(Ok(it));
-                            }
-                        }
-                        Err(e) => {
-                            let name = record_name(opcode);
-                            self.chunk = None;
-                            self.done = true;
-                            return Some(Err(self.corrupt(name, at, chain(&e))));
-                        }
-                    }
-                }
-                Some(Err(e)) => {
+            let at = Location { offset: c.offset, in_chunk: Some(c.pos as u64) };
+            let left = c.data.len() - c.pos;
+            if left == 0 {
+                self.chunk = None;
+                return None;
+            }
+            let header = c.data.get(c.pos..c.pos + OPCODE_LEN);
+            let len = header.map(|h| u64::from_le_bytes([h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8]]));
+            let (opcode, len) = match (header, len) {
+                (Some(h), Some(len)) if len <= (left - OPCODE_LEN) as u64 => (h[0], len as usize),
+                _ => {
+                    let detail = format!("a record inside the chunk runs past its end ({left} bytes left)");
                     self.chunk = None;
                     self.done = true;
-                    return Some(Err(self.corrupt("chunk", at, chain(&e))));
+                    return Some(Err(self.corrupt("chunk", at, detail)));
+                }
+            };
+            let start = c.pos + OPCODE_LEN;
+            c.pos = start + len;
+            if !matches!(opcode, op::SCHEMA | op::CHANNEL | op::MESSAGE) {
+                continue;
+            }
+            let parsed = match &c.data {
+                Cow::Borrowed(d) => parse_item(opcode, &d[start..start + len], at),
+                Cow::Owned(d) => parse_item(opcode, &d[start..start + len], at).map(|i| i.map(owned)),
+            };
+            match parsed {
+                Ok(Some(it)) => return Some(Ok(it)),
+                Ok(None) => {}
+                Err(detail) => {
+                    self.chunk = None;
+                    self.done = true;
+                    return Some(Err(self.corrupt(record_name(opcode), at, detail)));
                 }
             }
         }
+    }
+}
+
+/// An item that borrows nothing.
+fn owned(item: Item<'_>) -> Item<'static> {
+    match item {
+        Item::Schema(s) => Item::Schema(s),
+        Item::Channel(c) => Item::Channel(c),
+        Item::Message(m) => Item::Message(RawMessage { data: Cow::Owned(m.data.into_owned()), ..m }),
     }
 }
 
@@ -263,30 +373,21 @@ impl<'a> Iterator for Walker<'a> {
             let body = &self.buf[start + OPCODE_LEN..body_end];
             self.pos = body_end;
             match opcode {
-                op::SCHEMA | op::CHANNEL | op::MESSAGE => match mcap::parse_record(opcode, body) {
-                    Ok(r) => {
-                        if let Some(it) = item(r, at) {
-                            return Some(Ok(it));
-                        }
-                    }
-                    Err(e) => {
+                op::SCHEMA | op::CHANNEL | op::MESSAGE => match parse_item(opcode, body, at) {
+                    Ok(Some(it)) => return Some(Ok(it)),
+                    Ok(None) => {}
+                    Err(detail) => {
                         self.done = true;
-                        return Some(Err(self.corrupt(name, at, chain(&e))));
+                        return Some(Err(self.corrupt(name, at, detail)));
                     }
                 },
-                op::CHUNK => {
-                    let options = LinearReaderOptions::default()
-                        .with_skip_start_magic(true)
-                        .with_skip_end_magic(true)
-                        .with_prevalidate_chunk_crcs(true)
-                        .with_record_length_limit(self.max_chunk);
-                    self.chunk = Some(ChunkRecords {
-                        reader: LinearReader::new_with_options(options),
-                        feed: &self.buf[start..body_end],
-                        offset: start as u64,
-                        inner: 0,
-                    });
-                }
+                op::CHUNK => match parse_chunk(body).and_then(|(h, data)| decompress(&h, data, self.max_chunk)) {
+                    Ok(data) => self.chunk = Some(ChunkRecords { data, pos: 0, offset: start as u64 }),
+                    Err(detail) => {
+                        self.done = true;
+                        return Some(Err(self.corrupt(name, at, detail)));
+                    }
+                },
                 op::DATA_END | op::FOOTER if self.data_section => {
                     self.done = true;
                     return None;
