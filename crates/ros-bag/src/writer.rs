@@ -248,7 +248,10 @@ impl EstimateWriter {
     }
 
     /// Copies every message of `topics` from `bag` (their channels and schemas too), in file
-    /// order; returns the number of messages copied.
+    /// order; returns the number of messages copied. The copied messages come in the file where
+    /// this is called (before or after the estimates): readers that use the file's index, as
+    /// Foxglove and PlotJuggler do, show them in time order; [`Bag::rows`] needs a reorder
+    /// window spanning the run to align them with the estimates.
     ///
     /// # Errors
     /// [`Error::UnknownTopic`] for a topic the bag does not have; the bag's read errors;
