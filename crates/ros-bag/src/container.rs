@@ -193,9 +193,10 @@ struct ChunkRecords<'a> {
 /// Decompresses a chunk's records: `Err` says why not.
 fn decompress<'a>(header: &ChunkHeader, data: &'a [u8], limit: usize) -> Result<Cow<'a, [u8]>, String> {
     let declared = header.uncompressed_size;
-    let cap = usize::try_from(declared).ok().filter(|&n| n <= limit).ok_or_else(|| {
-        format!("declares {declared} uncompressed bytes, more than the limit of {limit}")
-    })?;
+    let cap = usize::try_from(declared)
+        .ok()
+        .filter(|&n| n <= limit)
+        .ok_or_else(|| format!("declares {declared} uncompressed bytes, more than the limit of {limit}"))?;
     let out: Cow<'a, [u8]> = match header.compression.as_str() {
         "" => Cow::Borrowed(data),
         name @ ("zstd" | "lz4") => {

@@ -89,7 +89,6 @@ impl Decoder {
             Unresolved::Unknown(reason) => Error::UnknownField {
                 key: key.to_owned(),
                 topic: channel.topic.clone(),
-                message_type: schema_name(schema),
                 field: field.to_owned(),
                 reason,
                 available: available(),

@@ -87,7 +87,7 @@ pub enum Error {
     },
     /// A field path the topic's message type does not have (or that is not a number).
     #[error(
-        "mapping `{key}`: topic `{topic}` ({message_type}) has no numeric field `{field}` ({reason}); its numeric fields: {}",
+        "mapping `{key}`: topic `{topic}` has no numeric field `{field}` ({reason}); its numeric fields: {}",
         list(available)
     )]
     UnknownField {
@@ -95,11 +95,9 @@ pub enum Error {
         key: String,
         /// The topic.
         topic: String,
-        /// The topic's message type.
-        message_type: String,
         /// The field path asked for.
         field: String,
-        /// Why it does not resolve.
+        /// Why it does not resolve (naming the message type).
         reason: String,
         /// The numeric field paths a mapping can use.
         available: Vec<String>,

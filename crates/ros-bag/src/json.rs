@@ -64,7 +64,7 @@ pub(crate) fn check_path(schema: &Value, path: &[Segment]) -> Result<(), Unresol
     let mut s = schema;
     for seg in path {
         let Some(sub) = s.get("properties").and_then(|p| p.get(&seg.name)) else {
-            return Err(Unresolved::Unknown(format!("the schema has no field `{}`", seg.name)));
+            return Err(Unresolved::Unknown(format!("its JSON schema has no field `{}`", seg.name)));
         };
         s = sub;
         if seg.index.is_some() {

@@ -37,7 +37,11 @@ fn fixed_step_from_a_given_start() {
 
 #[test]
 fn one_step_per_imu_message_with_header_stamps_and_log_times() {
-    check("ros2_zstd.mcap", "ros2_zstd.imu_header.csv", ros2_mapping(LogSpec::per_message("/imu")).stamps(Stamps::Header));
+    check(
+        "ros2_zstd.mcap",
+        "ros2_zstd.imu_header.csv",
+        ros2_mapping(LogSpec::per_message("/imu")).stamps(Stamps::Header),
+    );
     check("ros2_zstd.mcap", "ros2_zstd.imu_logtime.csv", ros2_mapping(LogSpec::per_message("/imu")));
 }
 
@@ -66,6 +70,10 @@ fn the_gnss_dropout_leaves_a_second_of_steps_unmeasured() {
     let longest_gap = gnss.split(|m| *m).map(<[bool]>::len).max().unwrap();
     assert!((100..=112).contains(&longest_gap), "longest run without GNSS: {longest_gap} steps");
     let gyro = rows.iter().filter(|r| r.measured[2]).count();
-    assert!(gyro * 100 >= rows.len() * 80, "the 100 Hz gyro (jittered) is in most 10 ms steps: {gyro} of {}", rows.len());
+    assert!(
+        gyro * 100 >= rows.len() * 80,
+        "the 100 Hz gyro (jittered) is in most 10 ms steps: {gyro} of {}",
+        rows.len()
+    );
     assert!(rows.iter().any(|r| r.y[1] == -1.0), "the int8 status reads as a number, negative too");
 }

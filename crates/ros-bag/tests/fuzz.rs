@@ -20,9 +20,15 @@ fn exercise(bytes: &[u8], dir: &std::path::Path, json: bool) -> usize {
         let Ok(bag) = Bag::open(&p) else { return 0 };
         let _ = bag.inspect().to_string();
         let specs = if json {
-            vec![json_mapping(LogSpec::fixed_step(0.05)), json_mapping(LogSpec::per_message("/speed_json")).stamps(Stamps::Header)]
+            vec![
+                json_mapping(LogSpec::fixed_step(0.05)),
+                json_mapping(LogSpec::per_message("/speed_json")).stamps(Stamps::Header),
+            ]
         } else {
-            vec![ros2_mapping(LogSpec::fixed_step(0.01)), ros2_mapping(LogSpec::per_message("/imu")).stamps(Stamps::Header)]
+            vec![
+                ros2_mapping(LogSpec::fixed_step(0.01)),
+                ros2_mapping(LogSpec::per_message("/imu")).stamps(Stamps::Header),
+            ]
         };
         let mut n = 0;
         for spec in specs {

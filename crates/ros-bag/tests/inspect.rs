@@ -12,7 +12,10 @@ fn the_ros2_fixture_table() {
     let names: Vec<&str> = i.topics.iter().map(|t| t.topic.as_str()).collect();
     assert_eq!(names, ["/cmd_vel", "/gnss/fix", "/imu", "/odom"]);
     let imu = &i.topics[2];
-    assert_eq!((imu.message_type.as_str(), imu.message_encoding.as_str(), imu.schema_encoding.as_str()), ("sensor_msgs/msg/Imu", "cdr", "ros2msg"));
+    assert_eq!(
+        (imu.message_type.as_str(), imu.message_encoding.as_str(), imu.schema_encoding.as_str()),
+        ("sensor_msgs/msg/Imu", "cdr", "ros2msg")
+    );
     assert_eq!(imu.count, 300);
     let rate = imu.rate_hz().unwrap();
     assert!((99.0..101.0).contains(&rate), "{rate}");

@@ -27,7 +27,8 @@ fn write(path: &std::path::Path, n: u64, copy: &[&str]) {
     for k in 0..n {
         let (t, x, lo, hi) = step(k);
         let status = if k % 2 == 0 { "converged" } else { "predicted \"only\"" };
-        w.write(&Estimate { lower: Some(&lo), upper: Some(&hi), status: Some(status), ..Estimate::new(k, t, &x) }).unwrap();
+        w.write(&Estimate { lower: Some(&lo), upper: Some(&hi), status: Some(status), ..Estimate::new(k, t, &x) })
+            .unwrap();
     }
     if !copy.is_empty() {
         let n = w.copy_topics(&Bag::open(fixture("ros2_zstd.mcap")).unwrap(), copy).unwrap();
@@ -115,7 +116,8 @@ fn nothing_is_left_behind_on_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("est.mcap");
     {
-        let mut w = EstimateWriter::create(&path, EstimateLayout::new("/e", ["a", "b"]).spread(Spread::StdDev)).unwrap();
+        let mut w =
+            EstimateWriter::create(&path, EstimateLayout::new("/e", ["a", "b"]).spread(Spread::StdDev)).unwrap();
         w.write(&Estimate { std_dev: Some(&[1.0, 2.0]), ..Estimate::new(0, 5, &[1.0, 2.0]) }).unwrap();
         let e = w.write(&Estimate::new(1, 6, &[1.0, 2.0])).unwrap_err();
         assert!(matches!(&e, Error::Config(m) if m.contains("`std`")), "{e}");
@@ -158,10 +160,11 @@ fn non_finite_numbers_are_written_as_null() {
 }
 
 fn python() -> Option<PathBuf> {
-    let p = std::env::var_os("ROS_BAG_PYTHON").map(PathBuf::from).unwrap_or_else(|| {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/python-venv/bin/python")
-    });
-    let ok = std::process::Command::new(&p).args(["-c", "import mcap.reader"]).output().is_ok_and(|o| o.status.success());
+    let p = std::env::var_os("ROS_BAG_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/python-venv/bin/python"));
+    let ok =
+        std::process::Command::new(&p).args(["-c", "import mcap.reader"]).output().is_ok_and(|o| o.status.success());
     ok.then_some(p)
 }
 

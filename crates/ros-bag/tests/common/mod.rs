@@ -60,10 +60,11 @@ pub fn ros2_mapping(spec: LogSpec) -> LogSpec {
 
 /// The mapping of the JSON fixture.
 pub fn json_mapping(spec: LogSpec) -> LogSpec {
-    spec.input("v", "/speed_json", "v")
-        .output("x", "/pose_json", "x")
-        .output("valid", "/pose_json", "valid")
-        .output("wz", "/speed_json", "gyro[2]")
+    spec.input("v", "/speed_json", "v").output("x", "/pose_json", "x").output("valid", "/pose_json", "valid").output(
+        "wz",
+        "/speed_json",
+        "gyro[2]",
+    )
 }
 
 /// `make_bags.py`'s `T0`.
