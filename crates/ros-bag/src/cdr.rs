@@ -363,3 +363,48 @@ fn first_slot(node: Option<&Node>) -> Option<usize> {
         }),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::msgdef;
+    use crate::path;
+
+    fn plan(text: &str, fields: &[&str]) -> Plan {
+        let mut p = Plan::new(msgdef::parse("t/msg/T", text).unwrap()).unwrap();
+        for (slot, f) in fields.iter().enumerate() {
+            p.select(&path::parse("k", f).unwrap(), slot).unwrap();
+        }
+        p
+    }
+
+    #[test]
+    fn both_byte_orders_and_alignment_after_the_header() {
+        let p = plan("uint8 a\nfloat64 b\nstring s\nint16[2] c\nbool d\n", &["a", "b", "c[1]", "d"]);
+        let mut le = vec![0, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0];
+        le.extend_from_slice(&2.5f64.to_le_bytes());
+        le.extend_from_slice(&[3, 0, 0, 0, b'h', b'i', 0, 0]);
+        le.extend_from_slice(&[1, 0, 0xfe, 0xff, 1]);
+        let mut be = vec![0, 0, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0];
+        be.extend_from_slice(&2.5f64.to_be_bytes());
+        be.extend_from_slice(&[0, 0, 0, 3, b'h', b'i', 0, 0]);
+        be.extend_from_slice(&[0, 1, 0xff, 0xfe, 1]);
+        for data in [le, be] {
+            let mut out = [0.0; 4];
+            p.decode(&data, &mut out).unwrap();
+            assert_eq!(out, [7.0, 2.5, -2.0, 1.0]);
+        }
+    }
+
+    #[test]
+    fn an_empty_message_takes_one_byte_and_a_bounded_sequence_is_checked() {
+        let p = plan("t/E e\nuint8 x\nint32[<=2] s\n===\nMSG: t/E\n", &["x"]);
+        let mut out = [0.0];
+        p.decode(&[0, 1, 0, 0, 0, 9, 0, 0, 0, 0, 0, 0], &mut out).unwrap();
+        assert_eq!(out, [9.0]);
+        let e = p.decode(&[0, 1, 0, 0, 0, 9, 0, 0, 3, 0, 0, 0], &mut out).unwrap_err();
+        assert!(matches!(e, DecodeError::Corrupt(r) if r.contains("bound 2")));
+        assert!(matches!(p.decode(&[0, 1], &mut out), Err(DecodeError::Corrupt(_))));
+        assert!(matches!(p.decode(&[0, 9, 0, 0, 1], &mut out), Err(DecodeError::Corrupt(_))));
+    }
+}
