@@ -57,6 +57,28 @@ def test_the_set_holds_the_state_with_noise_on_the_boundary(name, settings, seed
     assert _contained(est.x, est.P, xs[-1]) <= 1.0 + 1e-9
 
 
+def test_the_interval_observer_narrows_the_published_interval_and_leaves_the_set():
+    # A drifting second state dominates the ellipsoid's trace; the first is measured to ±0.1. With
+    # the observer (the default) the first state's interval is y ± 0.1 at most, inside the plain
+    # filter's, holding the truth; the ellipsoid is the same bit for bit.
+    rng = np.random.default_rng(7)
+    a, b, c = np.array([[1.0, 0.1], [0.0, 1.0]]), np.zeros((2, 1)), np.array([[1.0, 0.0]])
+    q, r, p0 = np.diag([1e-4, 1.0]), np.array([[0.01]]), 4.0 * np.eye(2)
+    us, ys, xs = _boundary_run(rng, a, b, c, q, r, p0, np.zeros(2), 200)
+    kw = dict(x0=np.zeros(2), P0=p0, Q=q, R=r)
+    filters = [pe.Estimator("smf", pe.Model(a, b, c), **kw), pe.SetMembershipFilter(pe.Model(a, b, c), **kw)]
+    plain_filter = pe.Estimator("smf", pe.Model(a, b, c), interval_observer=False, **kw)
+    observed, same = (f.run(us, ys) for f in filters)
+    plain = plain_filter.run(us, ys)
+    assert np.array_equal(observed.center, plain.center) and np.array_equal(filters[0].P, plain_filter.P)
+    assert np.array_equal(same.lower, observed.lower) and np.array_equal(same.upper, observed.upper)
+    assert np.all(observed.lower <= xs) and np.all(xs <= observed.upper)
+    assert np.all(plain.lower <= observed.lower) and np.all(observed.upper <= plain.upper)
+    width = observed.upper[:, 0] - observed.lower[:, 0]
+    assert np.all(width <= 0.2 + 1e-12)
+    assert np.median(plain.upper[:, 0] - plain.lower[:, 0]) > 0.3
+
+
 def test_the_carrier_set_holds_the_state():
     """The straddle carrier of the paper, at 1 ms, steering inputs of a few degrees."""
     rng = np.random.default_rng(3)
@@ -147,12 +169,20 @@ def test_declared_speed_limits_keep_the_vessels_set_from_growing():
             assert _contained(e.center, e.shape, x) <= 1.0, k
     wb, wf = 2 * np.sqrt(bounded.P[0, 0]), 2 * np.sqrt(free.P[0, 0])
     assert wb < 5.0 and wf > 3 * wb, (wb, wf)
-    # The linear filter refuses them (it has no remainder to bound); a set outside them is
-    # inconsistent data, named with its step and state.
+    # The linear filter cuts its published interval by them through its interval observer (and
+    # refuses them with the observer off); a set outside them is inconsistent data, named with its
+    # step and state.
     lin = pe.Model(np.array([[1.0, 0.1], [0.0, 0.9]]), np.array([[0.0], [0.1]]), np.array([[1.0, 0.0]]))
     small = dict(x0=np.zeros(2), P0=np.eye(2), Q=np.eye(2) * 0.01, R=np.eye(1) * 0.1)
-    with pytest.raises(ValueError, match="smf-nl only"):
-        pe.Estimator("smf", lin, x_lower=[-1, -1], x_upper=[1, 1], **small)
+    cut = pe.SetMembershipFilter(lin, x_lower=[-0.5, -inf], x_upper=[0.25, inf], **small)
+    assert cut.estimate.lower[0] == -0.5 and cut.estimate.upper[0] == 0.25
+    assert cut.estimate.lower[1] == pytest.approx(-1.0)
+    with pytest.raises(ValueError, match="interval observer, which is off"):
+        pe.Estimator("smf", lin, x_lower=[-1, -1], x_upper=[1, 1], interval_observer=False, **small)
+    with pytest.raises(ValueError, match="cannot be turned off"):
+        pe.Estimator("smf-nl", lin, interval_observer=False, **small)
+    with pytest.raises(ValueError, match="interval_observer must be True or False"):
+        pe.Estimator("smf", lin, interval_observer="yes", **small)
     est = pe.Estimator("smf-nl", lin, x_lower=[-inf, 5.0], x_upper=[inf, 6.0], **small)
     with pytest.raises(pe.InconsistentDataError) as info:
         est.step([0.0], [0.0])
