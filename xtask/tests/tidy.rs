@@ -49,6 +49,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "fuzzy-inference",
             "atomic-output",
             "equation-models",
+            "ros-bag",
         ],
     ),
     (

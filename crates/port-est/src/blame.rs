@@ -2,13 +2,11 @@
 //! that the estimate still carries, or the model. Decided by trying the failed step again from the
 //! same state (a failed step leaves the estimator unchanged) with moderate data in the row's place.
 
-use std::io::Read;
-
 use estimators::AnyEstimator;
 use models::AnyModel;
 use nalgebra::DVector;
 
-use crate::data::{DataReader, DataRow};
+use crate::data::{DataRow, RowSource};
 use crate::error::{Error, Location};
 use crate::model::Model;
 
@@ -18,7 +16,7 @@ pub(crate) struct LargestCell(Option<(f64, String, Location)>);
 
 impl LargestCell {
     /// Notes the cells of `row` (inputs and the model's `m` outputs) once its step succeeded.
-    pub(crate) fn observe<R: Read>(&mut self, row: &DataRow, m: usize, data: &DataReader<R>) {
+    pub(crate) fn observe(&mut self, row: &DataRow, m: usize, data: &dyn RowSource) {
         let cells = row.u.iter().chain(row.y.iter().take(m));
         let Some((j, v)) = cells.enumerate().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())) else { return };
         if self.0.as_ref().is_none_or(|(big, ..)| v.abs() > big.abs()) {
@@ -31,7 +29,7 @@ impl LargestCell {
 
 /// The error for a numerical failure (`what`) of `row`'s step, after finding its cause: `est`
 /// is tried again (and spent: the run stops here).
-pub(crate) fn numerical_failure<R: Read>(
+pub(crate) fn numerical_failure(
     what: &str,
     est: &mut AnyEstimator,
     model: &Model,
@@ -39,7 +37,7 @@ pub(crate) fn numerical_failure<R: Read>(
     row: &DataRow,
     last_u: Option<&DVector<f64>>,
     largest: &LargestCell,
-    data: &DataReader<R>,
+    data: &dyn RowSource,
 ) -> Error {
     let (p, m) = (model.inputs(), model.outputs());
     let k = row.k;

@@ -56,6 +56,17 @@ pub enum Command {
     /// List the estimators (--estimator) and the solvers of the set-membership filters (--solver);
     /// with --model, which estimators run on that model and why the others do not
     Estimators(EstimatorsArgs),
+    /// List a ROS 2 bag's (MCAP) topics: type, encoding, messages, rate and the numeric field
+    /// paths a model file's `[log]` table can map
+    Inspect(InspectArgs),
+}
+
+/// The arguments of `port-est inspect`.
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The bag (MCAP)
+    #[arg(value_name = "BAG.mcap")]
+    pub bag: PathBuf,
 }
 
 const TRUCK_FORMATS: &str = "\
@@ -246,6 +257,12 @@ Files:
               (crates/equation-models/README.md), with x0, p0, q, r… and an optional [ukf] table
               (alpha, beta, kappa) as top-level keys before the first table. Estimators the model
               cannot serve are refused with the reason (`port-est estimators --model MODEL.toml`).
+  BAG.mcap    a ROS 2 bag, read as the model file's `[log]` table says: `ts` (a step, s) or
+              `driving` (a topic: one step per message), optional `stamps` (`log` or `header`),
+              `reorder_window` (s), and a table `[log.fields]` mapping every input and output name
+              (`u1…`, `y1…` for matrices) to `{ topic = '/name', field = 'a.b[0]' }`; an output with no
+              message in a step is not measured. `port-est inspect BAG.mcap` lists the fields. An
+              error's position is BAG:ROW:COLUMN of the rows the mapping makes.
   DATA.csv    header `k,u1,…,up,y1,…,ym` (or the model's input and output names, in its order);
               row k holds the input u_k and the measurement y_{k+1}
               (fkf: two more columns, the satellite count and the RTK code, 0 = no fix).
@@ -282,7 +299,8 @@ pub struct FilterArgs {
     #[arg(short, long, value_name = "MODEL.toml")]
     pub model: PathBuf,
     /// The logged data: header `k,u1,…,up,y1,…,ym` or the model's names, in any order (CSV); an
-    /// empty output cell is a sensor that did not report; `-` reads standard input
+    /// empty output cell is a sensor that did not report; `-` reads standard input. Or a ROS 2
+    /// bag (`.mcap`), read through the model file's `[log]` table
     #[arg(short, long, value_name = "DATA.csv")]
     pub input: PathBuf,
     /// Where to write the estimates (CSV; replaced only if the run succeeds); `-` writes standard

@@ -98,6 +98,38 @@ impl DataRow {
     }
 }
 
+/// Where the rows of a run come from: a CSV log ([`DataReader`]) or a ROS 2 bag
+/// ([`crate::bag::BagRows`]). Columns are `k`, the inputs, the outputs (and any extra the
+/// estimator reads); a position names a row and a column of that table.
+pub trait RowSource {
+    /// Reads the next row into `row`; `false` at the end.
+    ///
+    /// # Errors
+    /// A malformed row, at its position.
+    fn read_row(&mut self, row: &mut DataRow) -> Result<bool, Error>;
+    /// The position of `column` (0-based; `None` for the row itself) of the last row read.
+    fn locate(&self, column: Option<usize>) -> Location;
+    /// The columns' names: `k`, inputs, outputs.
+    fn columns(&self) -> &[String];
+    /// The number of inputs `p`.
+    fn inputs(&self) -> usize;
+}
+
+impl<R: Read> RowSource for DataReader<R> {
+    fn read_row(&mut self, row: &mut DataRow) -> Result<bool, Error> {
+        DataReader::read_row(self, row)
+    }
+    fn locate(&self, column: Option<usize>) -> Location {
+        DataReader::locate(self, column)
+    }
+    fn columns(&self) -> &[String] {
+        DataReader::columns(self)
+    }
+    fn inputs(&self) -> usize {
+        DataReader::inputs(self)
+    }
+}
+
 /// Reads `DATA.csv` row by row for a model with `p` inputs and `m` outputs, from any stream
 /// (a file, a pipe, memory).
 #[derive(Debug)]

@@ -16,7 +16,7 @@ use estimators::{AnyEstimator, ConstrainedZonotopeSettings, DataChecks, Estimato
 use nalgebra::DVector;
 
 use crate::blame::{self, LargestCell};
-use crate::data::{DataReader, DataRow};
+use crate::data::{DataReader, DataRow, RowSource};
 use crate::error::{Error, echo};
 use crate::limits::Limits;
 use crate::model::{Model, read_model_with};
@@ -137,6 +137,14 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (p, m) = (model.inputs(), entry.measurement_len(model.outputs()));
     let names = model.column_names();
     let go = |out: &mut dyn Write, tally: &mut StatusTally| -> Result<Vec<String>, Error> {
+        if !stdin && crate::bag::is_bag(&options.input) {
+            let policy = (options.status, options.checks);
+            let mut out = out;
+            crate::bag::run_on_bag(&model, &options.input, |data| {
+                run_filter_into(&model, data, entry, solver, policy, &mut out, &options.output, tally)
+            })?;
+            return Ok(Vec::new());
+        }
         if stdin {
             let lock = std::io::stdin().lock();
             let mut data = DataReader::from_reader_named(Path::new("<stdin>"), lock, p, m, names)?;
@@ -181,6 +189,7 @@ fn run_on<R: Read>(
     let ignored = data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
     data.set_allow_gaps(options.gaps == GapPolicy::Bridge);
     data.set_max_gap(options.limits.max_gap);
+    data.set_allow_empty_outputs(true);
     let policy = (options.status, options.checks);
     run_filter_into(model, data, entry, solver, policy, &mut out, &options.output, tally)?;
     Ok(ignored)
@@ -295,15 +304,18 @@ pub fn run_filter<R: Read, W: Write>(
     out_path: &Path,
 ) -> Result<FilterSummary, Error> {
     let mut tally = StatusTally::default();
+    // An empty output cell: that output was not measured at that row (a partial step).
+    data.set_allow_empty_outputs(true);
     run_filter_into(model, data, entry, solver, (status, checks), out, out_path, &mut tally)?;
     let ignored_columns = data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
     Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
 }
 
-/// [`run_filter`], counting the steps written in `tally` (also when it fails).
-fn run_filter_into<R: Read, W: Write>(
+/// [`run_filter`] over any [`RowSource`], counting the steps written in `tally` (also when it
+/// fails). A CSV source must allow empty output cells (a partial step).
+pub(crate) fn run_filter_into<W: Write>(
     model: &Model,
-    data: &mut DataReader<R>,
+    data: &mut dyn RowSource,
     entry: &'static EstimatorEntry,
     solver: Option<SmfSolver>,
     (status, checks): (StatusPolicy, Option<DataChecks>),
@@ -320,8 +332,6 @@ fn run_filter_into<R: Read, W: Write>(
     writeln!(out, "k{}", columns.header()).map_err(wio)?;
 
     let sm = model.any();
-    // An empty output cell: that output was not measured at that row (a partial step).
-    data.set_allow_empty_outputs(true);
     let mut row = DataRow::zeros(model.inputs(), entry.measurement_len(model.outputs()));
     let mut last: Option<(u64, DVector<f64>)> = None;
     let mut largest = LargestCell::default();

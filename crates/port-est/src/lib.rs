@@ -19,6 +19,7 @@
 //! `--on-error keep-partial` keeps the steps before an error in `OUT.partial.csv`; temporary
 //! files are removed on SIGINT/SIGTERM, and those of a killed run are named by the next.
 
+pub mod bag;
 pub mod bds_ins;
 mod blame;
 pub mod builtin;
@@ -111,6 +112,7 @@ pub fn execute(cli: Cli, stdout: &mut dyn Write, stderr: &mut dyn Write) -> Resu
             remove_stale_partial(&options.output, options.on_error, stderr);
             Ok(())
         }
+        Command::Inspect(args) => bag::inspect(&args.bag, stdout),
         Command::Estimators(args) => {
             let written = match args.model {
                 None => write_estimators(stdout),

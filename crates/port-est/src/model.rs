@@ -26,7 +26,7 @@ type Bounds = (DVector<f64>, DVector<f64>);
 /// The top-level keys of a model file that `port-est` reads itself; the rest of a model written
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
-pub const NOISE_KEYS: [&str; 16] = [
+pub const NOISE_KEYS: [&str; 17] = [
     "x0",
     "p0",
     "q",
@@ -43,6 +43,7 @@ pub const NOISE_KEYS: [&str; 16] = [
     "x0_generators",
     "w_generators",
     "v_generators",
+    "log",
 ];
 
 impl std::fmt::Debug for Dynamics {
@@ -88,6 +89,7 @@ struct ModelFile {
     v_generators: Option<Spanned<Vec<Vec<f64>>>>,
     mhe: Option<Spanned<crate::mhe_table::MheTable>>,
     ukf: Option<Spanned<UkfTable>>,
+    log: Option<Spanned<crate::bag::LogTable>>,
     // The equation tables, read by `equation-models`.
     model: Option<Spanned<toml::Value>>,
     parameters: Option<IgnoredAny>,
@@ -162,6 +164,8 @@ pub struct Model {
     pub mhe: Option<estimators::MheSettings>,
     /// The unscented filter's `[ukf]` table, if given (missing entries: the defaults).
     pub ukf: Option<UkfParams>,
+    /// How a ROS 2 bag is read as this model's log (the `[log]` table, module [`crate::bag`]).
+    pub log: Option<ros_bag::LogSpec>,
     /// The file it was read from and where each key's value starts, to report later complaints
     /// (an estimator rejecting `q`, say) at the right place.
     source: Source,
@@ -589,8 +593,31 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
     if let (Some(params), Some(t)) = (&ukf, &f.ukf) {
         params.weights(n).map_err(|e| Error::at(cx.at(t.span()), format!("`ukf`: {e}")))?;
     }
+    let log = match &f.log {
+        Some(t) => {
+            let named = |given: Option<&[String]>, prefix: &str, len: usize| -> Vec<String> {
+                match given {
+                    Some(names) if names.len() == len => names.to_vec(),
+                    _ => (1..=len).map(|i| format!("{prefix}{i}")).collect(),
+                }
+            };
+            let names = match &dynamics {
+                Dynamics::Matrices(_) => None,
+                Dynamics::Equations(m) => Some((m.input_names(), m.output_names())),
+                Dynamics::Builtin { names, .. } => Some((&names.0[..], &names.1[..])),
+            };
+            let inputs = named(names.map(|n| n.0), "u", p);
+            let outputs = named(names.map(|n| n.1), "y", m);
+            let spec = t
+                .get_ref()
+                .spec(t.span(), &inputs, &outputs)
+                .map_err(|(span, message)| Error::at(cx.at(span), message))?;
+            Some(spec)
+        }
+        None => None,
+    };
     let source = Source { path: path.to_owned(), keys };
-    Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, source })
+    Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, log, source })
 }
 
 /// The zonotopes `X₀`, `W`, `V`: for each, a box `NAME_radius` (finite, non-negative half-widths)

@@ -2,11 +2,11 @@
 //! is written as (named after what the numbers mean), the `status` column, the tally of steps
 //! that did not end cleanly with its warning, `--strict`, and the location of a step's error.
 
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 
 use estimators::{DataCheck, Estimate, EstimateKind, EstimatorError, Guarantee, SolveOutcome, StepDetails, StepStatus};
 
-use crate::data::DataReader;
+use crate::data::RowSource;
 use crate::error::{Error, Location};
 
 /// What a run does with a step whose status is not clean (not converged, a fallback, a relaxed
@@ -111,7 +111,7 @@ pub fn enforce(policy: StatusPolicy, status: StepStatus, at: impl FnOnce() -> Lo
 
 /// A step's error at its data row: at the cell the estimator names (an input outside its box),
 /// else at `k`.
-pub fn step_error<R: Read>(source: EstimatorError, data: &DataReader<R>, k: u64) -> Error {
+pub fn step_error(source: EstimatorError, data: &dyn RowSource, k: u64) -> Error {
     let cell = match &source {
         EstimatorError::InputOutsideBounds { index, .. } => 1 + index,
         // An outlier: at the cell of the output with the largest normalised innovation.

@@ -1,0 +1,238 @@
+//! ROS 2 bags (MCAP) as logs: the model file's `[log]` table maps each input and output to a
+//! topic's field, `--input run.mcap` runs the estimator over the rows the `ros-bag` crate makes of
+//! them, and `port-est inspect run.mcap` lists what a mapping can use.
+//!
+//! ```toml
+//! [log]
+//! ts = 0.01                  # one step every 10 ms (or `driving = "/imu"`: one per message)
+//! stamps = "header"          # `header.stamp` where the message has one (default: "log", the log time)
+//! reorder_window = 1.0       # seconds by which topics may lag one another in the file (default 1)
+//!
+//! [log.fields]
+//! steer = { topic = "/steering", field = "data" }
+//! gnss_x = { topic = "/gnss/odom", field = "pose.pose.position.x" }
+//! ```
+//!
+//! Every input and output of the model is mapped (a model of matrices names them `u1…`, `y1…`).
+//! An output without a message in a step's window is not measured there (a partial step). A
+//! position in a bag is `BAG:ROW:COLUMN` of the table of rows the mapping makes: row 1 is the
+//! first step, column 1 is `k`, then the inputs, then the outputs.
+
+use std::collections::BTreeMap;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use nalgebra::DVector;
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::data::{DataRow, RowSource};
+use crate::error::{Error, Location};
+use crate::model::Model;
+
+/// MCAP's magic bytes.
+const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+/// The `[log]` table as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LogTable {
+    ts: Option<Spanned<f64>>,
+    driving: Option<Spanned<String>>,
+    stamps: Option<Spanned<String>>,
+    reorder_window: Option<Spanned<f64>>,
+    fields: Option<Spanned<BTreeMap<String, Spanned<FieldSource>>>>,
+}
+
+/// One mapping: a topic and a field path in its messages.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FieldSource {
+    topic: String,
+    field: String,
+}
+
+type Span = std::ops::Range<usize>;
+
+impl LogTable {
+    /// The reading of a bag this table asks for, for a model with these input and output names;
+    /// an error at the span of the key it is about (`whole`: the table's).
+    pub(crate) fn spec(
+        &self,
+        whole: Span,
+        inputs: &[String],
+        outputs: &[String],
+    ) -> Result<ros_bag::LogSpec, (Span, String)> {
+        let mut spec = match (&self.ts, &self.driving) {
+            (Some(ts), None) => {
+                let v = *ts.get_ref();
+                if !(v.is_finite() && v > 0.0) {
+                    return Err((ts.span(), format!("`ts` = {v}: the step must be a positive number of seconds")));
+                }
+                ros_bag::LogSpec::fixed_step(v)
+            }
+            (None, Some(topic)) => ros_bag::LogSpec::per_message(topic.get_ref().clone()),
+            _ => {
+                return Err((
+                    whole,
+                    "[log]: give one of `ts` (a fixed step, seconds) or `driving` (a topic: one step per message)"
+                        .into(),
+                ));
+            }
+        };
+        if let Some(s) = &self.stamps {
+            spec = spec.stamps(match s.get_ref().as_str() {
+                "log" => ros_bag::Stamps::LogTime,
+                "header" => ros_bag::Stamps::Header,
+                other => {
+                    return Err((s.span(), format!("`stamps` = {other:?}: \"log\" (the log time) or \"header\"")));
+                }
+            });
+        }
+        if let Some(w) = &self.reorder_window {
+            let v = *w.get_ref();
+            if !(v.is_finite() && v >= 0.0) {
+                return Err((w.span(), format!("`reorder_window` = {v}: a number of seconds, at least 0")));
+            }
+            spec = spec.reorder_window(v);
+        }
+        let Some(fields) = &self.fields else {
+            return Err((
+                whole,
+                "[log]: a table `[log.fields]` maps each input and output to `{ topic, field }`".into(),
+            ));
+        };
+        let known: Vec<&str> = inputs.iter().chain(outputs).map(String::as_str).collect();
+        for (name, source) in fields.get_ref() {
+            if !known.contains(&name.as_str()) {
+                let message = format!(
+                    "[log.fields]: `{name}` is not an input or output of the model (they are: {})",
+                    known.join(", ")
+                );
+                return Err((source.span(), message));
+            }
+        }
+        let find = |name: &String| {
+            fields.get_ref().get(name).map(Spanned::get_ref).ok_or_else(|| {
+                let message = format!("[log.fields]: no topic for `{name}` (every input and output is mapped)");
+                (fields.span(), message)
+            })
+        };
+        for name in inputs {
+            let f = find(name)?;
+            spec = spec.input(name.clone(), f.topic.clone(), f.field.clone());
+        }
+        for name in outputs {
+            let f = find(name)?;
+            spec = spec.output(name.clone(), f.topic.clone(), f.field.clone());
+        }
+        Ok(spec)
+    }
+}
+
+/// Whether `path` is an MCAP file: its extension `.mcap`, or a regular file whose first bytes are
+/// MCAP's magic (a pipe is never peeked at: its bytes would be gone).
+#[must_use]
+pub fn is_bag(path: &Path) -> bool {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap")) {
+        return true;
+    }
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return false;
+    }
+    let mut head = [0u8; 8];
+    std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head)).is_ok() && head == MAGIC
+}
+
+fn bag_error(path: &Path, e: ros_bag::Error) -> Error {
+    Error::File { path: path.to_owned(), message: e.to_string() }
+}
+
+/// Opens the bag at `path` and runs `run` over the rows the model's `[log]` table makes of it.
+///
+/// # Errors
+/// A model without a `[log]` table, a bag that cannot be read or mapped (the `ros-bag` error:
+/// the record and byte offset, the topic or the mapping key), and `run`'s error.
+pub fn run_on_bag<T>(
+    model: &Model,
+    path: &Path,
+    run: impl FnOnce(&mut dyn RowSource) -> Result<T, Error>,
+) -> Result<T, Error> {
+    let Some(spec) = &model.log else {
+        return Err(Error::File {
+            path: model.path().to_owned(),
+            message: format!(
+                "{} is an MCAP bag: the model file needs a `[log]` table mapping its inputs and outputs to topics \
+                 (`port-est inspect {}` lists them; see crates/port-est/README.md)",
+                path.display(),
+                path.display()
+            ),
+        });
+    };
+    let bag = ros_bag::Bag::open(path).map_err(|e| bag_error(path, e))?;
+    let rows = bag.rows(spec).map_err(|e| bag_error(path, e))?;
+    let (p, m) = (spec.inputs().len(), spec.outputs().len());
+    let mut columns = vec!["k".to_owned()];
+    columns.extend(spec.input_keys().into_iter().chain(spec.output_keys()).map(str::to_owned));
+    let mut source = BagRows { rows, path: path.to_owned(), columns, p, m, read: 0 };
+    run(&mut source)
+}
+
+/// The rows of a bag as a [`RowSource`].
+pub struct BagRows<'b> {
+    rows: ros_bag::Rows<'b>,
+    path: PathBuf,
+    columns: Vec<String>,
+    p: usize,
+    m: usize,
+    /// Rows read so far.
+    read: u64,
+}
+
+impl RowSource for BagRows<'_> {
+    fn read_row(&mut self, row: &mut DataRow) -> Result<bool, Error> {
+        let Some(next) = self.rows.next() else { return Ok(false) };
+        let r = next.map_err(|e| bag_error(&self.path, e))?;
+        if r.u.len() != self.p || r.y.len() != self.m || row.u.len() != self.p || row.y.len() < self.m {
+            return Err(Error::File { path: self.path.clone(), message: "the bag's rows do not fit the model".into() });
+        }
+        self.read += 1;
+        row.k = r.k;
+        row.u.copy_from(&DVector::from_column_slice(&r.u));
+        for (i, (&v, &measured)) in r.y.iter().zip(&r.measured).enumerate() {
+            row.y[i] = if measured { v } else { 0.0 };
+            row.measured[i] = measured;
+        }
+        Ok(true)
+    }
+
+    fn locate(&self, column: Option<usize>) -> Location {
+        Location::new(&self.path, self.read, 1 + column.unwrap_or(0) as u64)
+    }
+
+    fn columns(&self) -> &[String] {
+        &self.columns
+    }
+
+    fn inputs(&self) -> usize {
+        self.p
+    }
+}
+
+/// `port-est inspect BAG.mcap`: each topic's type, encoding, message count, rate and the numeric
+/// field paths a `[log]` mapping can use.
+///
+/// # Errors
+/// A file that is not an MCAP bag; a damaged one after what could be read is listed.
+pub fn inspect(path: &Path, out: &mut dyn Write) -> Result<(), Error> {
+    let bag = ros_bag::Bag::open(path).map_err(|e| bag_error(path, e))?;
+    let inspection = bag.inspect();
+    // A closed pipe is not an error of ours.
+    let _ = write!(out, "{inspection}");
+    match &inspection.error {
+        Some(e) => {
+            Err(Error::File { path: path.to_owned(), message: format!("{e} (the topics above were read before it)") })
+        }
+        None => Ok(()),
+    }
+}
