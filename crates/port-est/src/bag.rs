@@ -174,7 +174,11 @@ pub fn run_on_bag<T>(
     let (p, m) = (spec.inputs().len(), spec.outputs().len());
     let mut columns = vec!["k".to_owned()];
     columns.extend(spec.input_keys().into_iter().chain(spec.output_keys()).map(str::to_owned));
-    let mut source = BagRows { rows, path: path.to_owned(), columns, p, m, read: 0 };
+    let ts_ns = match spec.time_base() {
+        ros_bag::TimeBase::FixedStep { ts, .. } => Some((ts * 1e9).round() as i64),
+        _ => None,
+    };
+    let mut source = BagRows { rows, path: path.to_owned(), columns, p, m, read: 0, ts_ns, last_ns: 0 };
     run(&mut source)
 }
 
@@ -187,6 +191,10 @@ pub struct BagRows<'b> {
     m: usize,
     /// Rows read so far.
     read: u64,
+    /// The fixed step (ns), if the bag is read at one.
+    ts_ns: Option<i64>,
+    /// The last row's time (ns).
+    last_ns: i64,
 }
 
 impl RowSource for BagRows<'_> {
@@ -197,6 +205,7 @@ impl RowSource for BagRows<'_> {
             return Err(Error::File { path: self.path.clone(), message: "the bag's rows do not fit the model".into() });
         }
         self.read += 1;
+        self.last_ns = r.t_ns;
         row.k = r.k;
         row.u.copy_from(&DVector::from_column_slice(&r.u));
         for (i, (&v, &measured)) in r.y.iter().zip(&r.measured).enumerate() {
@@ -217,6 +226,84 @@ impl RowSource for BagRows<'_> {
     fn inputs(&self) -> usize {
         self.p
     }
+
+    /// `x_{k+1}` is estimated from the measurements up to the end of the step's window,
+    /// `t_k + ts`.
+    fn estimate_time_ns(&self) -> Option<i64> {
+        self.ts_ns.map(|ts| self.last_ns.saturating_add(ts))
+    }
+}
+
+/// Whether `port-est filter` writes its estimates as a bag (`--output est.mcap`).
+#[must_use]
+pub fn writes_bag(output: &Path) -> bool {
+    output.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+}
+
+/// The topic of the estimates in a bag written by `port-est filter`.
+pub const ESTIMATE_TOPIC: &str = "/estimate";
+
+/// Estimates written as a bag: one JSON message per step on [`ESTIMATE_TOPIC`], stamped at the
+/// end of the step's window, with the centre, the bounds (guaranteed sets) or standard
+/// deviations (Gaussian estimates) per state, and the status.
+pub(crate) struct BagOutput {
+    writer: ros_bag::EstimateWriter,
+    path: PathBuf,
+    kind: estimators::EstimateKind,
+    x: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+}
+
+impl BagOutput {
+    /// Starts `path` (published by [`BagOutput::finish`] only) for the states of `model` and
+    /// estimates of `kind`.
+    pub(crate) fn create(path: &Path, model: &Model, kind: estimators::EstimateKind) -> Result<Self, Error> {
+        use estimators::EstimateKind as K;
+        let n = model.states();
+        let names: Vec<String> = match &model.dynamics {
+            crate::model::Dynamics::Equations(m) if m.state_names().len() == n => m.state_names().to_vec(),
+            _ => (1..=n).map(|i| format!("x{i}")).collect(),
+        };
+        let spread = match kind {
+            K::Gaussian => ros_bag::Spread::StdDev,
+            K::GuaranteedEllipsoid | K::GuaranteedConstrainedZonotope => ros_bag::Spread::Bounds,
+            _ => ros_bag::Spread::None,
+        };
+        let layout = ros_bag::EstimateLayout::new(ESTIMATE_TOPIC, names).spread(spread).status(true);
+        let writer = ros_bag::EstimateWriter::create(path, layout).map_err(|e| bag_error(path, e))?;
+        Ok(Self { writer, path: path.to_owned(), kind, x: vec![0.0; n], a: vec![0.0; n], b: vec![0.0; n] })
+    }
+
+    /// Writes the estimate of step `k` at `t_ns`.
+    pub(crate) fn write(&mut self, k: u64, t_ns: i64, e: &dyn estimators::Estimate) -> Result<(), Error> {
+        use estimators::EstimateKind as K;
+        let n = self.x.len();
+        for i in 0..n {
+            self.x[i] = e.center()[i];
+            match self.kind {
+                K::Gaussian => self.a[i] = e.shape()[(i, i)].max(0.0).sqrt(),
+                _ => (self.a[i], self.b[i]) = e.bounds(i).unwrap_or((f64::NAN, f64::NAN)),
+            }
+        }
+        let status = e.status().to_string();
+        let mut m = ros_bag::Estimate::new(k, t_ns, &self.x);
+        m.status = Some(&status);
+        match self.kind {
+            K::Gaussian => m.std_dev = Some(&self.a),
+            K::GuaranteedEllipsoid | K::GuaranteedConstrainedZonotope => {
+                m.lower = Some(&self.a);
+                m.upper = Some(&self.b);
+            }
+            _ => {}
+        }
+        self.writer.write(&m).map_err(|e| bag_error(&self.path, e))
+    }
+
+    /// Publishes the bag.
+    pub(crate) fn finish(self) -> Result<(), Error> {
+        self.writer.finish().map_err(|e| bag_error(&self.path, e))
+    }
 }
 
 /// `port-est inspect BAG.mcap`: each topic's type, encoding, message count, rate and the numeric
@@ -235,4 +322,57 @@ pub fn inspect(path: &Path, out: &mut dyn Write) -> Result<(), Error> {
         }
         None => Ok(()),
     }
+}
+
+/// `port-est filter --input run.mcap --output est.mcap`: the run of [`crate::filter()`], its
+/// estimates written as a bag ([`BagOutput`]), published only if every step succeeded.
+///
+/// # Errors
+/// As [`crate::filter()`]; an input that is not a bag read at a fixed step, an output that is
+/// the input or the model, `--on-error keep-partial` (a bag output keeps nothing).
+pub(crate) fn filter_to_bag(
+    options: &crate::FilterOptions,
+    entry: &'static estimators::registry::EstimatorEntry,
+    solver: Option<estimators::registry::SmfSolver>,
+) -> Result<crate::FilterSummary, Error> {
+    let refuse = |message: String| Error::Output { path: options.output.clone(), message };
+    if !is_bag(&options.input) {
+        return Err(refuse("estimates are written as a bag (.mcap) only from a bag input (their time stamps)".into()));
+    }
+    if options.on_error == crate::OnError::KeepPartial {
+        return Err(refuse(
+            "--on-error keep-partial keeps CSV rows; a bag output is written whole or not at all".into(),
+        ));
+    }
+    for (role, input) in [("input", &options.input), ("model", &options.model)] {
+        if crate::output::same_file(&options.output, input) {
+            return Err(refuse(format!("is the {role}")));
+        }
+    }
+    let model = crate::model::read_model_with(&options.model, &options.limits)?;
+    if !matches!(model.log.as_ref().map(ros_bag::LogSpec::time_base), Some(ros_bag::TimeBase::FixedStep { .. }) | None)
+    {
+        return Err(refuse(
+            "estimates are written as a bag only from a bag read at a fixed step (`ts` in [log])".into(),
+        ));
+    }
+    let mut out = BagOutput::create(&options.output, &model, entry.kind)?;
+    let mut tally = crate::StatusTally::default();
+    let policy = (options.status, options.checks);
+    run_on_bag(&model, &options.input, |data| {
+        let mut csv = std::io::sink();
+        crate::filter::run_filter_into(
+            &model,
+            data,
+            entry,
+            solver,
+            policy,
+            &mut csv,
+            &options.output,
+            &mut tally,
+            Some(&mut out),
+        )
+    })?;
+    out.finish()?;
+    Ok(crate::FilterSummary { estimator: entry.name, tally, ignored_columns: Vec::new() })
 }

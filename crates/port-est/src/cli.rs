@@ -304,7 +304,7 @@ pub struct FilterArgs {
     #[arg(short, long, value_name = "DATA.csv")]
     pub input: PathBuf,
     /// Where to write the estimates (CSV; replaced only if the run succeeds); `-` writes standard
-    /// output, row by row as they are computed
+    /// output, row by row as they are computed; `.mcap` writes them as a bag (from a bag input)
     #[arg(short, long, value_name = "OUT.csv")]
     pub output: PathBuf,
     /// The estimator

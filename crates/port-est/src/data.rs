@@ -113,6 +113,11 @@ pub trait RowSource {
     fn columns(&self) -> &[String];
     /// The number of inputs `p`.
     fn inputs(&self) -> usize;
+    /// The time (ns) of the estimate of the last row read (`x_{k+1}`), where the source has a
+    /// clock (a bag read at a fixed step); `None` for a CSV log.
+    fn estimate_time_ns(&self) -> Option<i64> {
+        None
+    }
 }
 
 impl<R: Read> RowSource for DataReader<R> {

@@ -127,6 +127,9 @@ pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static Estimat
 /// [`StatusPolicy::Error`] a step that does not end cleanly.
 pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (entry, solver) = select(&options.estimator, options.solver.as_deref())?;
+    if crate::bag::writes_bag(&options.output) {
+        return crate::bag::filter_to_bag(options, entry, solver);
+    }
     let stdin = options.input.as_os_str() == "-";
     let stdout = options.output.as_os_str() == "-";
     let inputs: [(&'static str, &Path); 2] = [("input", &options.input), ("model", &options.model)];
@@ -141,7 +144,7 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
             let policy = (options.status, options.checks);
             let mut out = out;
             crate::bag::run_on_bag(&model, &options.input, |data| {
-                run_filter_into(&model, data, entry, solver, policy, &mut out, &options.output, tally)
+                run_filter_into(&model, data, entry, solver, policy, &mut out, &options.output, tally, None)
             })?;
             return Ok(Vec::new());
         }
@@ -191,7 +194,7 @@ fn run_on<R: Read>(
     data.set_max_gap(options.limits.max_gap);
     data.set_allow_empty_outputs(true);
     let policy = (options.status, options.checks);
-    run_filter_into(model, data, entry, solver, policy, &mut out, &options.output, tally)?;
+    run_filter_into(model, data, entry, solver, policy, &mut out, &options.output, tally, None)?;
     Ok(ignored)
 }
 
@@ -306,7 +309,7 @@ pub fn run_filter<R: Read, W: Write>(
     let mut tally = StatusTally::default();
     // An empty output cell: that output was not measured at that row (a partial step).
     data.set_allow_empty_outputs(true);
-    run_filter_into(model, data, entry, solver, (status, checks), out, out_path, &mut tally)?;
+    run_filter_into(model, data, entry, solver, (status, checks), out, out_path, &mut tally, None)?;
     let ignored_columns = data.ignored_columns().into_iter().map(|(j, name)| format!("{name} (column {j})")).collect();
     Ok(FilterSummary { estimator: entry.name, tally, ignored_columns })
 }
@@ -322,6 +325,7 @@ pub(crate) fn run_filter_into<W: Write>(
     out: &mut W,
     out_path: &Path,
     tally: &mut StatusTally,
+    mut bag_out: Option<&mut crate::bag::BagOutput>,
 ) -> Result<(), Error> {
     let mut est = build(model, entry, solver)?;
     if let Some(checks) = checks {
@@ -383,6 +387,12 @@ pub(crate) fn run_filter_into<W: Write>(
             write!(out, "+measured:{}", used.join(";")).map_err(wio)?;
         }
         writeln!(out).map_err(wio)?;
+        if let Some(bag) = bag_out.as_deref_mut() {
+            let Some(t) = data.estimate_time_ns() else {
+                return Err(Error::Usage("estimates are written as a bag only from a bag read at a fixed step".into()));
+            };
+            bag.write(row.k, t, e)?;
+        }
         tally.record(e.status());
         largest.observe(&row, model.outputs(), data);
         match &mut last {

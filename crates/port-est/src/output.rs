@@ -54,7 +54,7 @@ fn canonical(path: &Path) -> Option<PathBuf> {
 
 /// Whether two existing paths are the same file (same canonical path, or on Unix the same
 /// device and inode: a hard link).
-fn same_file(a: &Path, b: &Path) -> bool {
+pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
     if canonical(a).is_some_and(|ca| canonical(b).is_some_and(|cb| ca == cb)) {
         return true;
     }

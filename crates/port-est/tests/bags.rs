@@ -139,3 +139,56 @@ fn inspect_lists_topics_and_fields() {
     let e = port_est::bag::inspect(&fixture("json.fixed_logtime.csv"), &mut Vec::new()).unwrap_err();
     assert!(e.to_string().contains("json.fixed_logtime.csv"), "{e}");
 }
+
+/// The messages of `topic` in the bag at `path`, as JSON.
+fn messages(path: &Path, topic: &str) -> Vec<(u64, serde_json::Value)> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == topic)
+        .map(|m| (m.log_time, serde_json::from_slice(&m.data).unwrap()))
+        .collect()
+}
+
+#[test]
+fn estimates_written_as_a_bag_hold_the_csv_numbers() {
+    let d = dir("bag-output");
+    std::fs::write(d.join("m.toml"), format!("{MODEL}{LOG}")).unwrap();
+    for (estimator, spread) in [("ekf", "std"), ("smf", "lower")] {
+        let csv = filter(&options(&d, fixture("json.mcap"), "out.csv", estimator)).unwrap();
+        let bag = filter(&options(&d, fixture("json.mcap"), "out.mcap", estimator)).unwrap();
+        assert_eq!(csv.tally, bag.tally);
+        let text = std::fs::read_to_string(d.join("out.csv")).unwrap();
+        let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+        let msgs = messages(&d.join("out.mcap"), port_est::bag::ESTIMATE_TOPIC);
+        assert_eq!(msgs.len(), rows.len(), "{estimator}");
+        let t0: u64 = 1_700_000_000_123_456_789;
+        for (i, ((t, m), row)) in msgs.iter().zip(&rows).enumerate() {
+            // Step k's estimate x_{k+1} at the end of its window, t0 + (k + 1) ts.
+            assert_eq!(*t, t0 + (i as u64 + 1) * 50_000_000, "{estimator}: row {i}");
+            assert_eq!(m["k"].as_u64(), Some(i as u64));
+            for (j, state) in ["px", "w"].iter().enumerate() {
+                let x: f64 = row[1 + j].parse().unwrap();
+                assert_eq!(m["x"][state].as_f64().unwrap().to_bits(), x.to_bits(), "{estimator}: row {i}");
+                let a: f64 = row[3 + j].parse().unwrap();
+                assert_eq!(m[spread][state].as_f64().unwrap().to_bits(), a.to_bits(), "{estimator}: row {i}");
+            }
+            assert!(row.last().unwrap().starts_with(m["status"].as_str().unwrap()), "{estimator}: row {i}");
+        }
+    }
+    // Refused: a CSV input, keep-partial, the input as output.
+    let e = filter(&options(&d, fixture("json.fixed_logtime.csv"), "o.mcap", "ekf")).unwrap_err();
+    assert!(e.to_string().contains("only from a bag input"), "{e}");
+    let mut keep = options(&d, fixture("json.mcap"), "o.mcap", "ekf");
+    keep.on_error = OnError::KeepPartial;
+    assert!(filter(&keep).unwrap_err().to_string().contains("keep-partial"));
+    std::fs::copy(fixture("json.mcap"), d.join("in.mcap")).unwrap();
+    let same = FilterOptions { output: d.join("in.mcap"), ..options(&d, d.join("in.mcap"), "x", "ekf") };
+    assert!(filter(&same).unwrap_err().to_string().contains("is the input"));
+    // A failing run publishes nothing.
+    std::fs::write(d.join("m.toml"), format!("{MODEL}{}", LOG.replace("field = \"x\"", "field = \"nope\""))).unwrap();
+    assert!(filter(&options(&d, fixture("json.mcap"), "failed.mcap", "ekf")).is_err());
+    assert!(!d.join("failed.mcap").exists());
+    assert!(!std::fs::read_dir(&d).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
+}
