@@ -192,3 +192,68 @@ fn estimates_written_as_a_bag_hold_the_csv_numbers() {
     assert!(!d.join("failed.mcap").exists());
     assert!(!std::fs::read_dir(&d).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
 }
+
+/// A model of the ROS 2 fixtures (standard messages: `sensor_msgs/Imu` at 100 Hz,
+/// `sensor_msgs/NavSatFix` at 10 Hz with a dropout, `nav_msgs/Odometry`, `geometry_msgs/TwistStamped`).
+const ROS2_MODEL: &str = r#"
+x0 = [0.0, 0.0, 0.0]
+p0 = [100.0, 100.0, 100.0]
+q = [1.0, 1.0, 1.0]
+r = [1.0, 10.0, 1.0, 1.0, 1.0]
+
+[model]
+states = ["lat", "v", "yaw_rate"]
+inputs = ["a", "delta"]
+outputs = ["gnss_lat", "gnss_status", "gyro", "wheel_speed", "gyro_var"]
+
+[f]
+lat = "lat"
+v = "v + 0.01 * a"
+yaw_rate = "yaw_rate + 0.01 * delta"
+
+[h]
+gnss_lat = "lat"
+gnss_status = "0 * lat"
+gyro = "yaw_rate"
+wheel_speed = "v"
+gyro_var = "0 * v"
+
+[log]
+ts = 0.01
+
+[log.fields]
+a = { topic = "/imu", field = "linear_acceleration.x" }
+delta = { topic = "/cmd_vel", field = "twist.angular.z" }
+gnss_lat = { topic = "/gnss/fix", field = "latitude" }
+gnss_status = { topic = "/gnss/fix", field = "status.status" }
+gyro = { topic = "/imu", field = "angular_velocity.z" }
+wheel_speed = { topic = "/odom", field = "twist.twist.linear.x" }
+gyro_var = { topic = "/imu", field = "angular_velocity_covariance[8]" }
+"#;
+
+#[test]
+fn ros2_bags_of_standard_messages_give_their_rows_output() {
+    let d = dir("ros2");
+    std::fs::write(d.join("m.toml"), ROS2_MODEL).unwrap();
+    let mut want = String::new();
+    for name in ["ros2_zstd", "ros2_lz4", "ros2_none"] {
+        let csv = filter(&options(&d, fixture(&format!("{name}.fixed_logtime.csv")), "csv.csv", "ekf")).unwrap();
+        want = std::fs::read_to_string(d.join("csv.csv")).unwrap();
+        assert!(want.lines().count() > 30 && csv.tally.predicted > 0, "{name}: the dropout is there");
+        let got = filter(&options(&d, fixture(&format!("{name}.mcap")), "bag.csv", "ekf")).unwrap();
+        assert_eq!(got.tally, csv.tally, "{name}");
+        assert_eq!(std::fs::read_to_string(d.join("bag.csv")).unwrap(), want, "{name}");
+    }
+    // A bag cut in the middle: with --on-error keep-partial the steps before the damage are kept,
+    // and they are the intact bag's first rows.
+    let bytes = std::fs::read(fixture("ros2_none.mcap")).unwrap();
+    std::fs::write(d.join("cut.mcap"), &bytes[..bytes.len() / 2]).unwrap();
+    let mut keep = options(&d, d.join("cut.mcap"), "cut.csv", "ekf");
+    keep.on_error = OnError::KeepPartial;
+    let e = filter(&keep).unwrap_err();
+    assert!(e.to_string().contains("cut.mcap"), "{e}");
+    let partial = std::fs::read_to_string(d.join("cut.partial.csv")).unwrap();
+    let kept = partial.lines().count();
+    assert!(kept > 1 && kept < want.lines().count(), "{kept} lines kept");
+    assert!(want.starts_with(&partial), "the kept steps are the intact bag's");
+}
