@@ -10,6 +10,9 @@
 //!   yaw-rate gyro, no compass): whether the heading's interval stays bounded.
 //! * **range-bearing** — `czf-nl` on examples/range-bearing (a yard tractor measured by range and
 //!   bearing to two landmarks, no GNSS, no compass), driving back and forth.
+//! * **range-bearing circling** — the same tractor driving full circles (3 m/s, steering 0.4 rad,
+//!   a turn every 18 s): both bearings cross ±π every turn, reported wrapped as a sensor does
+//!   (the model declares them angles).
 //! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank, order 8, 6 constraints).
 
 use std::path::Path;
@@ -128,7 +131,7 @@ fn radii(m: &DMatrix<f64>) -> Vec<f64> {
     (0..m.nrows()).map(|i| m[(i, i)]).collect()
 }
 
-/// The four scenarios at full (`quick = false`) or `--quick` sizes; `runs` overrides the runs
+/// The scenarios at full (`quick = false`) or `--quick` sizes; `runs` overrides the runs
 /// per model.
 fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenario>, String> {
     let d = carrier_dynamics::CarrierModel::new(carrier_dynamics::CarrierParams::paper_preset())
@@ -148,6 +151,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
     let (stacker, stacker_setup) = equations(root, "examples/reach-stacker/model.toml")?;
     let (tanks, tank_setup) = equations(root, "examples/six-tank/model.toml")?;
     let (tractor, tractor_setup) = equations(root, "examples/range-bearing/model.toml")?;
+    let (circling, circling_setup) = equations(root, "examples/range-bearing/model.toml")?;
     let size = |full: (usize, usize), small: (usize, usize)| {
         let (r, s) = if quick { small } else { full };
         (runs.unwrap_or(r), s)
@@ -191,6 +195,16 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
                 let t = k as f64 * 0.1;
                 DVector::from_column_slice(&[0.5 * (2.0 * (t / 40.0).sin() - x[3]), 0.1 * (0.2 * t).sin() - 0.3 * x[2]])
             },
+            (5, 10_000),
+            (2, 1000),
+        ),
+        // Full circles: speed held at 3 m/s, steering 0.4 rad.
+        scenario(
+            "range-bearing circling",
+            Plant::Equations(circling),
+            circling_setup,
+            6,
+            |_, x| DVector::from_column_slice(&[0.5 * (3.0 - x[3]), 0.4]),
             (5, 10_000),
             (2, 1000),
         ),
@@ -247,7 +261,11 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
         model.f(&x, &u, &mut next).map_err(|e| format!("{} truth: {e}", sc.name))?;
         x = &next + DVector::from_fn(n, |i, _| w[i] * sign());
         model.h(&x, &u, &mut y).map_err(|e| format!("{} truth: {e}", sc.name))?;
-        let y = &y + DVector::from_fn(m, |i, _| v[i] * sign());
+        let mut y = &y + DVector::from_fn(m, |i, _| v[i] * sign());
+        // Angle outputs as a sensor reports them (an angle already in (−π, π] is unchanged).
+        for &i in model.angles().outputs {
+            y[i] = models::wrap_angle(y[i]);
+        }
         let t0 = Instant::now();
         let est = match czf.step(model, &u, &y) {
             Ok(e) => e,

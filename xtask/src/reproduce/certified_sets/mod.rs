@@ -118,14 +118,19 @@ fn claims(t: &six_tank::SixTank, c: &[campaign::ScenarioResult]) -> Vec<Claim> {
             ),
         });
     }
-    if let Some(r) = c.iter().find(|s| s.name == "range-bearing") {
+    for (name, drive) in [
+        ("range-bearing", "driving back and forth"),
+        ("range-bearing circling", "circling, both bearings crossing ±π every turn"),
+    ] {
+        let Some(r) = c.iter().find(|s| s.name == name) else { continue };
         let worst = r.worst_growth.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let bounded = r.stopped.is_empty() && r.misses == 0 && worst <= 2.0;
         let per_run = r.steps / r.runs.max(1);
         out.push(Claim {
-            claim: "Range–bearing vehicle (no GNSS, no compass): no GuaranteeLost, every state's median width over \
-                    the last tenth at most twice that over the second tenth, in every run"
-                .into(),
+            claim: format!(
+                "Range–bearing vehicle (no GNSS, no compass), {drive}: no GuaranteeLost, every state's median \
+                 width over the last tenth at most twice that over the second tenth, in every run"
+            ),
             verdict: if bounded && per_run < 10_000 {
                 format!("not met at these sizes: bounded, but {per_run} steps per run (the full run takes 10 000)")
             } else if per_run < 10_000 {
