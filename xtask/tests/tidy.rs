@@ -65,6 +65,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "*-dynamics",
             "fuzzy-inference",
             "equation-models",
+            "ros-bag",
         ],
     ),
     // The README's examples as a user's crate: the facade only.

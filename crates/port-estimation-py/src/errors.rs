@@ -1,8 +1,9 @@
 //! What Python sees when something goes wrong: `ValueError` for bad input (dimensions, NaN,
 //! matrices that are not symmetric positive definite, unknown names, bad settings), the package's
 //! `EstimationError` and its subclasses `NumericalError` and `InconsistentDataError` for what the
-//! estimation itself runs into, and never a Rust panic (every call into the estimators runs under
-//! [`std::panic::catch_unwind`]; an estimator that panicked is refused from then on).
+//! estimation itself runs into, `BagError` (a `ValueError`) for a bag that cannot be read, and
+//! never a Rust panic (every call into the estimators runs under [`std::panic::catch_unwind`]; an
+//! estimator that panicked is refused from then on).
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -51,6 +52,19 @@ create_exception!(
      because the rows before were filtered.\n\n\
      Attributes\n----------\nrow : int\n    The row that failed; the estimator holds the estimate after \
      the row before it (a new ``run`` from this row continues the log)."
+);
+
+create_exception!(
+    port_estimation,
+    BagError,
+    PyValueError,
+    "A ROS 2 bag (MCAP) that cannot be read as asked: not MCAP, a damaged record, a schema or message \
+     that does not decode, a topic's stamps going back, an input topic without messages. A \
+     ``ValueError``; the message names the file and where (byte offset, topic, mapping key).\n\n\
+     Attributes\n----------\npath : str\n    The bag.\nrows_read : int\n    The rows read before \
+     the error (0 when it came before any).\noffset : int or None\n    The byte offset of the record \
+     (the chunk, for a record inside one).\ntopic, key : str or None\n    The topic and the mapping key \
+     the error is about."
 );
 
 /// [`RunError`] for `e` at `row` of a run.

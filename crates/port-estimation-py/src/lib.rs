@@ -9,13 +9,16 @@
 //!   ([`estimate`]); `run` filters a whole log in Rust with the GIL released ([`run`]).
 //! * [`classes`]: `KalmanFilter`, `SetMembershipFilter`, … — `Estimator` with the name from
 //!   `registry::names`.
+//! * [`bag`]: `read_bag` — a ROS 2 bag (MCAP) as the arrays `run` takes, by the `ros-bag` crate;
+//!   `inspect_bag` lists its topics and fields.
 //! * [`errors`]: `ValueError` for bad input, `EstimationError`, `NumericalError`,
-//!   `InconsistentDataError`, `RunError`; no panic reaches Python.
+//!   `InconsistentDataError`, `RunError`, `BagError`; no panic reaches Python.
 //!
 //! The binding knows no estimator by name: everything it offers comes from the registry's table,
 //! so a new row of the table is a new estimator in Python. The Python side
 //! (`python/port_estimation/`) adds the type stubs and the Dask fleet batch (`fleet.py`).
 
+pub mod bag;
 pub mod classes;
 pub mod convert;
 pub mod errors;
@@ -66,6 +69,8 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<estimate::Estimate>()?;
     m.add_class::<run::RunResult>()?;
     m.add_class::<estimator::Estimator>()?;
+    m.add_class::<bag::BagLog>()?;
+    m.add_class::<bag::BagInfo>()?;
     m.add_class::<classes::KalmanFilter>()?;
     m.add_class::<classes::ExtendedKalmanFilter>()?;
     m.add_class::<classes::UnscentedKalmanFilter>()?;
@@ -77,10 +82,13 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solvers, m)?)?;
     m.add_function(wrap_pyfunction!(file::read_model, m)?)?;
     m.add_function(wrap_pyfunction!(file::parse_model, m)?)?;
+    m.add_function(wrap_pyfunction!(bag::read_bag, m)?)?;
+    m.add_function(wrap_pyfunction!(bag::inspect_bag, m)?)?;
     m.add("EstimationError", py.get_type::<errors::EstimationError>())?;
     m.add("NumericalError", py.get_type::<errors::NumericalError>())?;
     m.add("InconsistentDataError", py.get_type::<errors::InconsistentDataError>())?;
     m.add("RunError", py.get_type::<errors::RunError>())?;
+    m.add("BagError", py.get_type::<errors::BagError>())?;
     m.add("MAX_RUN_VALUES", run::MAX_RUN_VALUES)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -17,18 +17,23 @@ attributes (``x0``, ``P0``, ``Q``, ``R``), ``predict`` and ``update``::
     log = smf.run(us, ys)          # a whole log in Rust: log.center (T, n), log.lower, log.upper
 
 ``estimators()`` lists every estimator with what it needs; ``Estimator(name, model, ...)`` builds
-any of them. ``read_model(path)`` reads a ``port-est`` model file. ``port_estimation.fleet``
-filters many vehicles' Parquet logs on a Dask cluster.
+any of them. ``read_model(path)`` reads a ``port-est`` model file. ``read_bag(path, inputs,
+outputs, ts=...)`` reads a ROS 2 bag (MCAP) into the arrays ``run`` takes, ``inspect_bag(path)``
+lists its topics and fields. ``port_estimation.fleet`` filters many vehicles' Parquet logs on a
+Dask cluster.
 
 Errors: ``ValueError`` for bad input, refused before anything is done; ``EstimationError`` and its
 subclasses ``NumericalError``, ``InconsistentDataError`` (with ``.step`` and ``.excess``) and
-``RunError`` for what the estimation runs into. After an exception from a single call the
-estimator's state is what it was before; after one from ``run`` (``.row``) it holds the estimate
-after the row before ``.row``.
+``RunError`` for what the estimation runs into; ``BagError`` (a ``ValueError``) for a bag that
+cannot be read. After an exception from a single call the estimator's state is what it was
+before; after one from ``run`` (``.row``) it holds the estimate after the row before ``.row``.
 """
 
 from ._native import (
     MAX_RUN_VALUES,
+    BagError,
+    BagInfo,
+    BagLog,
     EstimationError,
     Estimate,
     Estimator,
@@ -47,13 +52,18 @@ from ._native import (
     UnscentedKalmanFilter,
     __version__,
     estimators,
+    inspect_bag,
     parse_model,
+    read_bag,
     read_model,
     solvers,
 )
 
 __all__ = [
     "MAX_RUN_VALUES",
+    "BagError",
+    "BagInfo",
+    "BagLog",
     "EstimationError",
     "Estimate",
     "Estimator",
@@ -73,7 +83,9 @@ __all__ = [
     "__version__",
     "estimators",
     "fleet",
+    "inspect_bag",
     "parse_model",
+    "read_bag",
     "read_model",
     "solvers",
 ]

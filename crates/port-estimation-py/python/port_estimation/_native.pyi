@@ -6,7 +6,7 @@ The documentation is in the docstrings of the module itself: ``help(port_estimat
 from __future__ import annotations
 
 import os
-from typing import Any, Final, Literal, TypedDict, Union
+from typing import Any, Final, Literal, Mapping, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -14,6 +14,7 @@ import numpy.typing as npt
 ArrayLike = npt.ArrayLike
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
+IntArray = npt.NDArray[np.int64]
 PathLike = Union[str, os.PathLike[str]]
 Kind = Literal["gaussian", "guaranteed ellipsoid", "guaranteed constrained zonotope", "point"]
 Capability = Literal["linear", "second-order", "differentiable", "discrete"]
@@ -28,6 +29,13 @@ class NumericalError(EstimationError): ...
 
 class RunError(EstimationError):
     row: int
+
+class BagError(ValueError):
+    path: str
+    rows_read: int
+    offset: int | None
+    topic: str | None
+    key: str | None
 
 class InconsistentDataError(EstimationError):
     step: int
@@ -296,3 +304,67 @@ def estimators() -> list[EstimatorRow]: ...
 def solvers() -> list[str]: ...
 def read_model(path: PathLike) -> ModelFile: ...
 def parse_model(text: str, path: PathLike = "<string>") -> ModelFile: ...
+
+# A model input or output from a topic's field: "topic:field" or (topic, field).
+FieldSource = Union[str, Tuple[str, str]]
+
+class BagLog:
+    @property
+    def u(self) -> FloatArray: ...
+    @property
+    def y(self) -> FloatArray: ...
+    @property
+    def measured(self) -> BoolArray: ...
+    @property
+    def t(self) -> FloatArray: ...
+    @property
+    def t_ns(self) -> IntArray: ...
+    @property
+    def k(self) -> IntArray: ...
+    @property
+    def inputs(self) -> list[str]: ...
+    @property
+    def outputs(self) -> list[str]: ...
+    @property
+    def header_stamped(self) -> dict[str, bool]: ...
+    @property
+    def path(self) -> str: ...
+    def __len__(self) -> int: ...
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
+
+class TopicRow(TypedDict):
+    topic: str
+    type: str
+    message_encoding: str
+    schema_encoding: str
+    count: int
+    rate_hz: float | None
+    first: float | None
+    last: float | None
+    first_ns: int | None
+    last_ns: int | None
+    fields: list[str]
+    fields_error: str | None
+
+class BagInfo:
+    @property
+    def topics(self) -> list[TopicRow]: ...
+    @property
+    def error(self) -> str | None: ...
+    @property
+    def path(self) -> str: ...
+    def __len__(self) -> int: ...
+
+def read_bag(
+    path: PathLike,
+    inputs: Mapping[str, FieldSource] | None,
+    outputs: Mapping[str, FieldSource] | None,
+    *,
+    ts: float | None = None,
+    driving: str | None = None,
+    stamps: Literal["log", "header"] = "log",
+    start: float | None = None,
+    start_ns: int | None = None,
+    reorder_window: float | None = None,
+) -> BagLog: ...
+def inspect_bag(path: PathLike) -> BagInfo: ...
