@@ -204,6 +204,10 @@ fn contradicted_data_are_refused_or_published_marked() {
     assert!(matches!(e, EstimatorError::SetMissed { step: 1, .. }), "{e}");
     assert_eq!(f.estimate(), before.estimate());
     assert_eq!(f.steps(), 0);
+    // Data the ellipsoid's own proof refutes too: its error, with the excess.
+    let e = f.step(&model, &u, &dvector![1e4]).unwrap_err();
+    assert!(matches!(e, EstimatorError::InconsistentData { step: 1, excess } if excess > 1.0), "{e}");
+    assert_eq!(f.estimate(), before.estimate());
     // Consistent data are taken and narrow the interval to the noise box.
     let e = f.step(&model, &u, &dvector![0.5]).unwrap();
     assert!(e.lower[0] >= 0.4 - 1e-12 && e.upper[0] <= 0.6 + 1e-12);

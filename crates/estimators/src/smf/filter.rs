@@ -711,6 +711,26 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
 }
 
 impl<S: UpdateSolver> SetMembershipFilter<S> {
+    /// The filter's own proof ([`consistency`]) that `y` contradicts the set predicted with
+    /// `model` and `u` and the noise bounds: `Some(excess)` when it finds one. Only workspaces
+    /// change; allocation-free.
+    pub(crate) fn proves_inconsistent(
+        &mut self,
+        model: &StepModel<'_>,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+    ) -> Option<f64> {
+        let Self { q, r, input, est, ws, .. } = self;
+        let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
+        dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
+        dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
+        let q_used = if bounded { &ws.q_eff } else { &*q };
+        match consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, est.report.tau) {
+            Consistency::Inconsistent { excess } => Some(excess),
+            _ => None,
+        }
+    }
+
     /// For a partial step: the measured angle outputs (those of `angle_outputs` in `rows`) of
     /// `y` on their branch over the set predicted with `model` and `u`, and `R` inflated by the
     /// shifts' rounding, into `self.angles` (module `angles`). Whether one was off every branch

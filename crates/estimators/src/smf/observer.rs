@@ -16,8 +16,9 @@
 //! (`|w_i| ≤ √Q_ii` for every `w ∈ 𝓔(0, Q)`: the projection of the ellipsoid.) The ellipsoid itself
 //! is not cut: the filter's set and centre are the paper's, only the published interval is
 //! narrowed — so `x̂_i` may lie outside it. An empty range in (O3) proves the data inconsistent
-//! with the box and the noise bounds ([`EstimatorError::SetMissed`] under the default policy, the
-//! filter unchanged; under another policy the step is published marked inconsistent, cut by the
+//! with the box and the noise bounds (under the default policy an error, the filter unchanged:
+//! for a full step the filter's own [`EstimatorError::InconsistentData`] when its proof finds it
+//! too, else [`EstimatorError::SetMissed`]; under another policy the step is published marked inconsistent, cut by the
 //! bounds only). A predicted box wholly outside the bounds is
 //! [`EstimatorError::OutsideStateBounds`]. Angle outputs are put on their branch over `C_i O⁺`
 //! widened by `V`'s box; a row whose enclosure spans 2π is left out of (O3) (the filter decides
@@ -217,6 +218,9 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
         self.ws.rows.clear();
         self.ws.rows.extend(0..m);
         let contradicted = self.contract(model, y)?;
+        if self.refuses(contradicted) {
+            return Err(self.refuse(Some((model, u, y))));
+        }
         self.inner.step(model, u, y)?;
         Ok(self.publish(contradicted))
     }
@@ -258,6 +262,9 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
         self.ws.rows.clear();
         self.ws.rows.extend(0..m);
         let contradicted = self.contract(model, y)?;
+        if self.refuses(contradicted) {
+            return Err(self.refuse::<M>(None));
+        }
         self.inner.update(model, y)?;
         Ok(self.publish(contradicted))
     }
@@ -283,6 +290,9 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
         }
         self.predict_box(model, u)?;
         let contradicted = self.contract(model, y)?;
+        if self.refuses(contradicted) {
+            return Err(self.refuse::<M>(None));
+        }
         self.inner.step_partial(model, u, y, measured)?;
         Ok(self.publish(contradicted))
     }
@@ -324,8 +334,7 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
     }
 
     /// (O3): `ws.next` contracted by the rows `ws.rows` of `C` and `y`, two sweeps. Returns
-    /// whether the data contradict the box (then `ws.next` is left as predicted); with the
-    /// default policy that is [`EstimatorError::SetMissed`].
+    /// whether the data contradict the box (then `ws.next` is left as predicted).
     fn contract<M: LinearModel + ?Sized>(&mut self, model: &M, y: &DVector<f64>) -> Result<bool, EstimatorError> {
         let c = model.c();
         let angles = LinearModel::angles(model).outputs;
@@ -345,7 +354,7 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
                         y_err[i] = shift_error(y[i], shifted);
                         y_used[i] = shifted;
                     }
-                    Ok(None) => return self.contradicted(),
+                    Ok(None) => return Ok(true),
                     // 2π wide: this row says nothing the box can use.
                     Err(_) => usable[i] = false,
                 }
@@ -375,7 +384,7 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
                     }
                     match contracted[j].meet(implied) {
                         Some(narrowed) => contracted[j] = narrowed,
-                        None => return self.contradicted(),
+                        None => return Ok(true),
                     }
                 }
             }
@@ -384,13 +393,25 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
         Ok(false)
     }
 
-    /// A contradiction found by (O3): an error with the default policy, otherwise `true` with the
-    /// box left as predicted.
-    fn contradicted(&self) -> Result<bool, EstimatorError> {
-        if self.inner.inconsistency_policy() == InconsistencyPolicy::Error {
-            return Err(EstimatorError::SetMissed { step: self.inner.steps() + 1, reason: OBSERVER_MISSED });
+    /// A contradiction found by (O3) under the default policy, as an error (the filter
+    /// unchanged): for a full step on a model without angle outputs, the filter's own
+    /// [`EstimatorError::InconsistentData`] with its excess when its proof finds the data
+    /// inconsistent too; otherwise [`EstimatorError::SetMissed`].
+    fn refuse<M: LinearModel + ?Sized>(&mut self, full: Option<(&M, &DVector<f64>, &DVector<f64>)>) -> EstimatorError {
+        let step = self.inner.steps() + 1;
+        if let Some((model, u, y)) = full
+            && LinearModel::angles(model).outputs.is_empty()
+            && let Some(excess) =
+                self.inner.proves_inconsistent(&models::StepModel::new(model.a(), model.b(), model.c()), u, y)
+        {
+            return EstimatorError::InconsistentData { step, excess };
         }
-        Ok(true)
+        EstimatorError::SetMissed { step, reason: OBSERVER_MISSED }
+    }
+
+    /// Whether a contradiction must be refused (the default policy).
+    fn refuses(&self, contradicted: bool) -> bool {
+        contradicted && self.inner.inconsistency_policy() == InconsistencyPolicy::Error
     }
 
     /// (O4) after the filter's step: its interval cut by the bounds and (unless the data
