@@ -144,8 +144,20 @@ pub fn is_bag(path: &Path) -> bool {
     std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head)).is_ok() && head == MAGIC
 }
 
+/// A `ros-bag` error as this crate's, the path said once (some of its messages start with it).
 fn bag_error(path: &Path, e: ros_bag::Error) -> Error {
-    Error::File { path: path.to_owned(), message: e.to_string() }
+    let text = e.to_string();
+    let prefix = format!("{}: ", path.display());
+    let message = text.strip_prefix(&prefix).map_or(text.clone(), str::to_owned);
+    Error::File { path: path.to_owned(), message }
+}
+
+/// Opens a bag, a directory refused by name (memory-mapping one fails obscurely).
+fn open(path: &Path) -> Result<ros_bag::Bag, Error> {
+    if path.is_dir() {
+        return Err(Error::File { path: path.to_owned(), message: "is a directory, not an MCAP bag".into() });
+    }
+    ros_bag::Bag::open(path).map_err(|e| bag_error(path, e))
 }
 
 /// Opens the bag at `path` and runs `run` over the rows the model's `[log]` table makes of it.
@@ -169,7 +181,7 @@ pub fn run_on_bag<T>(
             ),
         });
     };
-    let bag = ros_bag::Bag::open(path).map_err(|e| bag_error(path, e))?;
+    let bag = open(path)?;
     let rows = bag.rows(spec).map_err(|e| bag_error(path, e))?;
     let (p, m) = (spec.inputs().len(), spec.outputs().len());
     let mut columns = vec!["k".to_owned()];
@@ -312,14 +324,18 @@ impl BagOutput {
 /// # Errors
 /// A file that is not an MCAP bag; a damaged one after what could be read is listed.
 pub fn inspect(path: &Path, out: &mut dyn Write) -> Result<(), Error> {
-    let bag = ros_bag::Bag::open(path).map_err(|e| bag_error(path, e))?;
+    let bag = open(path)?;
     let inspection = bag.inspect();
     // A closed pipe is not an error of ours.
-    let _ = write!(out, "{inspection}");
-    match &inspection.error {
-        Some(e) => {
-            Err(Error::File { path: path.to_owned(), message: format!("{e} (the topics above were read before it)") })
-        }
+    let text = inspection.to_string();
+    let _ = write!(out, "{text}{}", if text.ends_with('\n') { "" } else { "\n" });
+    match inspection.error {
+        Some(e) => match bag_error(path, e) {
+            Error::File { path, message } => {
+                Err(Error::File { path, message: format!("{message} (the topics above were read before it)") })
+            }
+            other => Err(other),
+        },
         None => Ok(()),
     }
 }

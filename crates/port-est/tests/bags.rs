@@ -138,6 +138,12 @@ fn inspect_lists_topics_and_fields() {
     }
     let e = port_est::bag::inspect(&fixture("json.fixed_logtime.csv"), &mut Vec::new()).unwrap_err();
     assert!(e.to_string().contains("json.fixed_logtime.csv"), "{e}");
+    let dir = fixture("");
+    let e = port_est::bag::inspect(&dir, &mut Vec::new()).unwrap_err().to_string();
+    assert!(e.contains("is a directory"), "{e}");
+    // The path is said once.
+    let e = port_est::bag::inspect(Path::new("/nonexistent.mcap"), &mut Vec::new()).unwrap_err().to_string();
+    assert_eq!(e.matches("/nonexistent.mcap").count(), 1, "{e}");
 }
 
 /// The messages of `topic` in the bag at `path`, as JSON.
