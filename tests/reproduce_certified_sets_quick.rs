@@ -41,7 +41,9 @@ fn quick_certified_sets_run_judges_every_target() {
     assert!(e.observer_width_ratio.iter().all(|r| *r <= 1.0), "{:?}", e.observer_width_ratio);
     assert!(e.median_width_ratio.iter().all(|r| *r <= 1.0), "{:?}", e.median_width_ratio);
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
-    for needle in ["## Targets", "CORA FRad-A (published)", "## Boundary noise", "`smf` beside `czf`", "range-bearing circling"] {
+    for needle in
+        ["## Targets", "CORA FRad-A (published)", "## Boundary noise", "`smf` beside `czf`", "range-bearing circling"]
+    {
         assert!(report.contains(needle), "report.md lacks {needle:?}");
     }
 }
