@@ -247,3 +247,36 @@ def test_an_output_never_replaces_a_log(tmp_path, carrier):
         with pytest.raises(ValueError, match="chunk_rows must be a positive integer"):
             fleet.filter_log(path, tmp_path / "o.parquet", chunk_rows=bad, **kwargs)
     assert not (tmp_path / "o.parquet").exists()
+
+
+BAGS = Path(__file__).resolve().parents[2] / "ros-bag" / "tests" / "fixtures"
+
+
+def test_ros2_bags_are_logs_too(tmp_path):
+    # The JSON fixture bag: input v, outputs x, valid, wz (a pose at 10 Hz with a dropout, a speed
+    # and gyro at 25 Hz), read at 50 ms; its estimates equal a run on read_bag's arrays.
+    model = pe.Model(np.eye(2), np.array([[0.05], [0.0]]), np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]))
+    kw = dict(x0=np.zeros(2), P0=np.eye(2) * 100.0, Q=np.eye(2), R=np.eye(3) * 1e6)
+    mapping = dict(
+        inputs={"v": "/speed_json:v"},
+        outputs={"x": "/pose_json:x", "valid": "/pose_json:valid", "wz": "/speed_json:gyro[2]"},
+        ts=0.05,
+    )
+    bag = str(BAGS / "json.mcap")
+    [summary] = fleet.filter_logs([bag], tmp_path / "out", model=model, estimator="kf", bag=mapping, chunk_rows=7, **kw)
+    assert summary["status"] == "ok" and summary["output"].endswith("json.parquet"), summary
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(summary["output"])
+    log = pe.read_bag(bag, **mapping)
+    want = pe.Estimator("kf", model, **kw).run(log.u, log.y, measured=log.measured)
+    assert summary["steps"] == len(log) and not np.all(log.measured)
+    np.testing.assert_array_equal(table.column("k").to_numpy(), log.k + 1)
+    for i in range(2):
+        np.testing.assert_array_equal(table.column(f"xhat{i + 1}").to_numpy(), want.center[:, i])
+    # Without the mapping, or with one that does not fit the estimator: the log's error, named.
+    [no_map] = fleet.filter_logs([bag], tmp_path / "x", model=model, estimator="kf", **kw)
+    assert no_map["status"] == "error" and "bag=dict" in no_map["error"] and bag in no_map["error"]
+    short = dict(mapping, outputs={"x": "/pose_json:x"})
+    [wrong] = fleet.filter_logs([bag], tmp_path / "y", model=model, estimator="kf", bag=short, **kw)
+    assert wrong["status"] == "error" and "1 outputs" in wrong["error"], wrong

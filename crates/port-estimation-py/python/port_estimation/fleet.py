@@ -16,6 +16,11 @@ the estimator's own numbers
 ``status``, ``clean``
     How each step ended.
 
+A log may also be a ROS 2 bag (a ``.mcap`` file): give ``bag=dict(inputs=..., outputs=..., ts=...)``, the
+mapping ``read_bag`` takes, and the bag's rows are filtered as a Parquet log's would be (its estimates go to
+``<name>.parquet``). A bag is read whole into its arrays (``T × (p + 2m)`` numbers) before it is filtered in
+pieces; the bag itself is memory-mapped, not read into memory.
+
 Each output is written to a temporary file beside it and renamed, so a reader never sees half a
 file. A log is read, filtered and written in consecutive pieces (``DEFAULT_CHUNK_ROWS`` rows at a
 time, the same numbers as one run), so a task's memory stays bounded whatever the length of its
@@ -51,7 +56,7 @@ from typing import Any, Iterable, Mapping, Sequence, Union
 
 import numpy as np
 
-from ._native import MAX_RUN_VALUES, Estimator, Model, ModelFile
+from ._native import MAX_RUN_VALUES, Estimator, Model, ModelFile, read_bag
 
 __all__ = [
     "DEFAULT_CHUNK_ROWS",
@@ -216,15 +221,22 @@ def _filter_one(path: str, out_path: str, spec: Mapping[str, Any]) -> dict[str, 
     counts = {"steps": 0, "unclean": 0}
     try:
         est = _build(spec)
-        reader = pq.ParquetFile(path, pre_buffer=False)
-        want = _checked_columns(path, reader.schema_arrow.names, est.dim_u, est.dim_z)
         chunk = spec["chunk_rows"] or max(1, min(DEFAULT_CHUNK_ROWS, MAX_RUN_VALUES // est.dim_x))
+        if _is_bag(path):
+            batches = _bag_pieces(path, spec, est, chunk)
+        else:
+            reader = pq.ParquetFile(path, pre_buffer=False)
+            want = _checked_columns(path, reader.schema_arrow.names, est.dim_u, est.dim_z)
+            batches = reader.iter_batches(batch_size=chunk, columns=want)
 
         def pieces():
             k_before = None
-            for batch in reader.iter_batches(batch_size=chunk, columns=want):
+            for batch in batches:
                 first = counts["steps"]
-                k, us, ys = _piece(path, batch, est.dim_u, est.dim_z, first, k_before)
+                if isinstance(batch, tuple):
+                    k, us, ys = batch
+                else:
+                    k, us, ys = _piece(path, batch, est.dim_u, est.dim_z, first, k_before)
                 try:
                     log = est.run(us, ys)
                 except Exception as e:
@@ -258,6 +270,33 @@ def _filter_one(path: str, out_path: str, spec: Mapping[str, Any]) -> dict[str, 
         "unclean": counts["unclean"],
         "seconds": time.perf_counter() - start,
     }
+
+
+def _is_bag(path: PathLike) -> bool:
+    return os.fspath(path).lower().endswith(".mcap")
+
+
+def _output_name(path: PathLike) -> str:
+    """A log's output file name: the log's, a bag's with ``.parquet`` for ``.mcap``."""
+    p = Path(path)
+    return p.stem + ".parquet" if _is_bag(p) else p.name
+
+
+def _bag_pieces(path: str, spec: Mapping[str, Any], est: Estimator, chunk: int):
+    """``k``, ``us``, ``ys`` (masked where not measured) of a bag read through ``spec["bag"]``, in
+    pieces of ``chunk`` rows."""
+    if not spec["bag"]:
+        raise ValueError(f"{path}: a ROS 2 bag needs bag=dict(inputs=..., outputs=..., ts=... or driving=...)")
+    log = read_bag(path, **spec["bag"])
+    if len(log.inputs) != est.dim_u or len(log.outputs) != est.dim_z:
+        raise ValueError(
+            f"{path}: bag= maps {len(log.inputs)} inputs and {len(log.outputs)} outputs; "
+            f"the estimator takes {est.dim_u} and {est.dim_z}"
+        )
+    for i in range(0, len(log), chunk):
+        j = min(i + chunk, len(log))
+        mask = ~log.measured[i:j]
+        yield log.k[i:j], log.u[i:j], np.ma.masked_array(np.where(mask, 0.0, log.y[i:j]), mask=mask)
 
 
 def _name_the_log(e: BaseException, path: str) -> None:
@@ -301,12 +340,13 @@ def filter_log(
     R: Any = None,
     settings: Mapping[str, Any] | None = None,
     chunk_rows: int | None = None,
+    bag: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Filters one log into ``out_path`` (see the module); returns its summary
     (``log``, ``output``, ``status``, ``steps``, ``unclean``, ``seconds``). A log that cannot be
     filtered raises (ValueError for a malformed log, the estimator's exceptions for a step), with
     ``.log`` and ``.row`` (the log's row) set, and leaves nothing at ``out_path``."""
-    spec = _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows)
+    spec = _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows, bag)
     path, out_path = os.path.abspath(os.fspath(path)), os.path.abspath(os.fspath(out_path))
     _refuse_overwriting_inputs([path], [out_path])
     return _filter_one(path, out_path, spec)
@@ -324,7 +364,7 @@ def _refuse_overwriting_inputs(paths: Sequence[str], outs: Sequence[str]) -> Non
             raise ValueError(f"the output {out} would overwrite the log {same}: choose another out_dir")
 
 
-def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows) -> dict[str, Any]:
+def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows, bag=None) -> dict[str, Any]:
     if isinstance(model, (str, os.PathLike)):
         from ._native import read_model
 
@@ -342,6 +382,7 @@ def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows) -> dict[str, Any
         "initial": initial,
         "settings": dict(settings or {}),
         "chunk_rows": chunk_rows,
+        "bag": dict(bag or {}),
     }
 
 
@@ -358,6 +399,7 @@ def filter_logs(
     settings: Mapping[str, Any] | None = None,
     client: Any = None,
     chunk_rows: int | None = None,
+    bag: Mapping[str, Any] | None = None,
 ) -> list[dict[str, Any]]:
     """Filters every log of ``paths`` with the registry estimator ``estimator`` on ``model``, one
     task per log, writing ``out_dir/<log name>`` (Parquet; see the module for the columns).
@@ -365,7 +407,8 @@ def filter_logs(
     Parameters
     ----------
     paths : sequence of paths
-        The logs (Parquet, columns ``k, u1..up, y1..ym``); their file names must differ.
+        The logs (Parquet, columns ``k, u1..up, y1..ym``, or ROS 2 bags with ``bag``); their output
+        names must differ.
     out_dir : path
         Where the estimates go (created if needed).
     model : Model, ModelFile or path
@@ -382,6 +425,9 @@ def filter_logs(
     chunk_rows : int, optional
         Rows per ``run`` call and per written piece (default ``DEFAULT_CHUNK_ROWS``, fewer if
         ``MAX_RUN_VALUES`` demands).
+    bag : dict, optional
+        For logs that are ROS 2 bags (``.mcap``): ``read_bag``'s keywords (``inputs``, ``outputs``,
+        ``ts`` or ``driving``, ...); their estimates go to ``<name>.parquet``.
 
     Returns
     -------
@@ -398,10 +444,10 @@ def filter_logs(
         Bad settings or paths (an output that would replace a log, file names that repeat), before
         any log is read.
     """
-    spec = _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows)
+    spec = _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows, bag)
     # Absolute paths, resolved here on the client (a worker may run in another directory).
     paths = [os.path.abspath(os.fspath(p)) for p in paths]
-    names = [Path(p).name for p in paths]
+    names = [_output_name(p) for p in paths]
     if len(set(names)) != len(names):
         raise ValueError("the logs' file names must differ (each names its output in out_dir)")
     outs = [os.path.abspath(os.fspath(Path(out_dir) / name)) for name in names]
