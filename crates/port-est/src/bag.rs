@@ -22,7 +22,6 @@ use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use nalgebra::DVector;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -219,7 +218,7 @@ impl RowSource for BagRows<'_> {
         self.read += 1;
         self.last_ns = r.t_ns;
         row.k = r.k;
-        row.u.copy_from(&DVector::from_column_slice(&r.u));
+        row.u.as_mut_slice().copy_from_slice(&r.u);
         for (i, (&v, &measured)) in r.y.iter().zip(&r.measured).enumerate() {
             row.y[i] = if measured { v } else { 0.0 };
             row.measured[i] = measured;

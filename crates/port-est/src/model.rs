@@ -593,31 +593,21 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
     if let (Some(params), Some(t)) = (&ukf, &f.ukf) {
         params.weights(n).map_err(|e| Error::at(cx.at(t.span()), format!("`ukf`: {e}")))?;
     }
-    let log = match &f.log {
-        Some(t) => {
-            let named = |given: Option<&[String]>, prefix: &str, len: usize| -> Vec<String> {
-                match given {
-                    Some(names) if names.len() == len => names.to_vec(),
-                    _ => (1..=len).map(|i| format!("{prefix}{i}")).collect(),
-                }
-            };
-            let names = match &dynamics {
-                Dynamics::Matrices(_) => None,
-                Dynamics::Equations(m) => Some((m.input_names(), m.output_names())),
-                Dynamics::Builtin { names, .. } => Some((&names.0[..], &names.1[..])),
-            };
-            let inputs = named(names.map(|n| n.0), "u", p);
-            let outputs = named(names.map(|n| n.1), "y", m);
-            let spec = t
-                .get_ref()
-                .spec(t.span(), &inputs, &outputs)
-                .map_err(|(span, message)| Error::at(cx.at(span), message))?;
-            Some(spec)
-        }
-        None => None,
-    };
     let source = Source { path: path.to_owned(), keys };
-    Ok(Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, log, source })
+    let mut model = Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, log: None, source };
+    if let Some(t) = &f.log {
+        let named = |given: Option<&[String]>, prefix: &str, len: usize| -> Vec<String> {
+            match given {
+                Some(names) if names.len() == len => names.to_vec(),
+                _ => (1..=len).map(|i| format!("{prefix}{i}")).collect(),
+            }
+        };
+        let names = model.column_names();
+        let (inputs, outputs) = (named(names.map(|n| n.0), "u", p), named(names.map(|n| n.1), "y", m));
+        let spec = t.get_ref().spec(t.span(), &inputs, &outputs);
+        model.log = Some(spec.map_err(|(span, message)| Error::at(cx.at(span), message))?);
+    }
+    Ok(model)
 }
 
 /// The zonotopes `X₀`, `W`, `V`: for each, a box `NAME_radius` (finite, non-negative half-widths)

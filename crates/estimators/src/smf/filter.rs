@@ -575,13 +575,10 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         };
         let warm = est.report.tau;
         // Consistency of y with the predicted set and the noise bounds, before anything changes.
-        dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
-        dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
         let consistency = if *policy == InconsistencyPolicy::Off {
             Consistency::NotChecked
         } else {
-            let q_used = if bounded { &ws.q_eff } else { &*q };
-            consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm)
+            consistency_of(ws, model, (&est.center, warm), (u_used, q, bounded), r, y)
         };
         let mut restarted = false;
         if let Consistency::Inconsistent { excess } = consistency {
@@ -722,10 +719,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
     ) -> Option<f64> {
         let Self { q, r, input, est, ws, .. } = self;
         let (bounded, u_used) = predictor(model, &est.shape, q, input, u, ws);
-        dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut ws.cons.z);
-        dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
-        let q_used = if bounded { &ws.q_eff } else { &*q };
-        match consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, est.report.tau) {
+        match consistency_of(ws, model, (&est.center, est.report.tau), (u_used, q, bounded), r, y) {
             Consistency::Inconsistent { excess } => Some(excess),
             _ => None,
         }
@@ -766,6 +760,23 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         }
         Ok(false)
     }
+}
+
+/// The consistency check ([`consistency`]) of `y` with the set `(centre, P_k)` predicted by
+/// [`predictor`] (its `X₁` in `ws.x1`; `Q_eff` in `ws.q_eff` when `bounded`) with `u_used`, from the
+/// multipliers `warm`. Allocation-free.
+fn consistency_of(
+    ws: &mut Workspace,
+    model: &StepModel<'_>,
+    (center, warm): (&DVector<f64>, [f64; 3]),
+    (u_used, q, bounded): (&DVector<f64>, &DMatrix<f64>, bool),
+    r: &DMatrix<f64>,
+    y: &DVector<f64>,
+) -> Consistency {
+    dense_kernels::gemv(1.0, model.a, center, 0.0, &mut ws.cons.z);
+    dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
+    let q_used = if bounded { &ws.q_eff } else { q };
+    consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm)
 }
 
 /// The prediction shared by a step and a prediction-only step: `X₁ = A P_k Aᵀ` into `ws.x1`, and

@@ -332,10 +332,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             angle_rows: Vec::with_capacity(m),
             y_partial: DVector::zeros(m),
         };
-        let half = |m: &DMatrix<f64>| -> Vec<f64> {
-            (0..m.nrows()).map(|i| Interval::point(m[(i, i)].max(0.0)).sqrt().hi()).collect()
-        };
-        let (w_half, v_half) = (half(&q), half(&r));
+        let (w_half, v_half) = (super::observer::half_widths(&q), super::observer::half_widths(&r));
         let est = inner.estimate();
         let observer = (0..n).map(|i| Interval::new(est.lower[i], est.upper[i])).collect();
         Ok(Self {

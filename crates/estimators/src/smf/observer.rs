@@ -103,8 +103,9 @@ pub(crate) fn state_bounds(n: usize, lower: &[f64], upper: &[f64]) -> Result<Vec
     Ok(lower.iter().zip(upper).map(|(&lo, &hi)| Interval::new(lo, hi)).collect())
 }
 
-/// `√M_ii` rounded up, per row of a validated noise shape.
-fn half_widths(m: &nalgebra::DMatrix<f64>) -> Vec<f64> {
+/// `√M_ii` rounded up, per row of a validated noise shape: the half-widths of its ellipsoid's
+/// bounding box.
+pub(super) fn half_widths(m: &nalgebra::DMatrix<f64>) -> Vec<f64> {
     (0..m.nrows()).map(|i| Interval::point(m[(i, i)].max(0.0)).sqrt().hi()).collect()
 }
 
@@ -221,7 +222,9 @@ impl<S: UpdateSolver> ObservedSetMembershipFilter<S> {
         if self.refuses(contradicted) {
             return Err(self.refuse(Some((model, u, y))));
         }
-        self.inner.step(model, u, y)?;
+        // The model and data are checked above: the filter's step without checking them again.
+        let angles = LinearModel::angles(model).outputs;
+        self.inner.step_model(&models::StepModel::new(model.a(), model.b(), model.c()), angles, u, y)?;
         Ok(self.publish(contradicted))
     }
 
