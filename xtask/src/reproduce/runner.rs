@@ -149,9 +149,21 @@ pub struct Metrics {
 
 /// The median (the upper one for an even count), NaN for no values.
 #[must_use]
-pub fn median(mut v: Vec<f64>) -> f64 {
+pub fn median(v: Vec<f64>) -> f64 {
+    quantile(v, 0.5)
+}
+
+/// The `q`-quantile as the value of rank `⌊q · len⌋` (`q` in `[0, 1]`), NaN for no values.
+#[must_use]
+pub fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
     v.sort_by(f64::total_cmp);
-    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    // In range for q in [0, 1]: the rank is at most len − 1.
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_precision_loss)]
+    let rank = ((q.clamp(0.0, 1.0) * v.len() as f64) as usize).min(v.len() - 1);
+    v[rank]
 }
 
 /// The constrained-zonotope filters' sets for a set-membership `setup` of diagonal ellipsoids:

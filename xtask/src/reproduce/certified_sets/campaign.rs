@@ -29,7 +29,7 @@ use models::{ConstantModel, DiscreteModel, SecondOrderModel, Xoshiro256StarStar}
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-use crate::reproduce::runner::{StepTiming, median};
+use crate::reproduce::runner::{StepTiming, median, quantile};
 
 /// One model's runs.
 struct Scenario {
@@ -71,6 +71,11 @@ pub struct ScenarioResult {
     /// Per state, the largest ratio over runs of the last tenth's median width to the second
     /// tenth's (the growth rule: at most 2).
     pub worst_growth: Vec<f64>,
+    /// Per state, the largest ratio over runs of the last tenth's 90th-percentile width to the
+    /// second tenth's: the wide mode of a width that is bimodal (see `widest`).
+    pub worst_growth_p90: Vec<f64>,
+    /// Per state, the largest published width after the first tenth of any run.
+    pub widest: Vec<f64>,
     /// The step time of the constrained-zonotope filter.
     pub step_time: StepTiming,
     /// The ellipsoidal filter beside it (carrier only).
@@ -107,6 +112,9 @@ struct RunTally {
     diverging: usize,
     early: Vec<f64>,
     late: Vec<f64>,
+    early_p90: Vec<f64>,
+    late_p90: Vec<f64>,
+    widest: Vec<f64>,
     ns: Vec<u64>,
     smf_ns: Vec<u64>,
     smf_misses: usize,
@@ -314,6 +322,9 @@ fn drive<M: DiscreteModel + SecondOrderModel>(
     let s = widths[0].len();
     t.early = widths.iter().map(|w| median(w[s / 10..s / 5].to_vec())).collect();
     t.late = widths.iter().map(|w| median(w[s * 9 / 10..].to_vec())).collect();
+    t.early_p90 = widths.iter().map(|w| quantile(w[s / 10..s / 5].to_vec(), 0.9)).collect();
+    t.late_p90 = widths.iter().map(|w| quantile(w[s * 9 / 10..].to_vec(), 0.9)).collect();
+    t.widest = widths.iter().map(|w| w[s / 10..].iter().copied().fold(0.0, f64::max)).collect();
     Ok(t)
 }
 
@@ -366,6 +377,10 @@ fn summarise(sc: &Scenario, tallies: Vec<RunTally>) -> ScenarioResult {
     let early = per_state(&|t, i| t.early[i]);
     let late = per_state(&|t, i| t.late[i]);
     let growth = per_state(&|t, i| t.late[i] / t.early[i]);
+    let growth_p90 = per_state(&|t, i| t.late_p90[i] / t.early_p90[i]);
+    let worst = |g: Vec<Vec<f64>>| -> Vec<f64> {
+        g.into_iter().map(|g| g.into_iter().fold(f64::NEG_INFINITY, f64::max)).collect()
+    };
     let ellipsoid = (!tallies.iter().all(|t| t.smf_ns.is_empty())).then(|| EllipsoidComparison {
         czf_wider_steps: tallies.iter().map(|t| t.czf_wider).sum(),
         steps_compared: tallies.iter().map(|t| t.compared).sum(),
@@ -388,7 +403,9 @@ fn summarise(sc: &Scenario, tallies: Vec<RunTally>) -> ScenarioResult {
         diverging_steps: tallies.iter().map(|t| t.diverging).sum(),
         width_early: early.into_iter().map(median).collect(),
         width_late: late.into_iter().map(median).collect(),
-        worst_growth: growth.into_iter().map(|g| g.into_iter().fold(f64::NEG_INFINITY, f64::max)).collect(),
+        worst_growth: worst(growth),
+        worst_growth_p90: worst(growth_p90),
+        widest: worst(per_state(&|t, i| t.widest[i])),
         step_time: StepTiming::of(tallies.iter().flat_map(|t| t.ns.clone()).collect()),
         ellipsoid,
     }

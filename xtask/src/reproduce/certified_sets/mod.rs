@@ -140,8 +140,9 @@ fn claims(t: &six_tank::SixTank, c: &[campaign::ScenarioResult]) -> Vec<Claim> {
             },
             evidence: format!(
                 "{} runs × {} steps; widths (second tenth → last tenth, medians over runs) {:.4?} → {:.4?}; worst \
-                 ratio {:.3}",
-                r.runs, per_run, r.width_early, r.width_late, worst
+                 ratio {:.3} (per state {:.2?}); the same rule on the 90th percentile instead of the median: worst \
+                 ratio per state {:.2?}; widest after the first tenth, any run: {:.4?}",
+                r.runs, per_run, r.width_early, r.width_late, worst, r.worst_growth, r.worst_growth_p90, r.widest
             ),
         });
     }
