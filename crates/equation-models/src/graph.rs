@@ -70,7 +70,7 @@ impl Fun {
         })
     }
 
-    fn apply(self, a: f64) -> f64 {
+    pub(crate) fn apply(self, a: f64) -> f64 {
         match self {
             Self::Abs => a.abs(),
             Self::Signum => a.signum(),
@@ -103,7 +103,7 @@ impl Fun {
     /// The derivative at `a`, given the value `v = self(a)`. `abs` has derivative 0 at 0; the
     /// step functions (`signum floor ceil round trunc`) 0 and `fract` 1, their derivatives
     /// wherever they exist (everywhere but at their jumps).
-    fn derivative(self, a: f64, v: f64) -> f64 {
+    pub(crate) fn derivative(self, a: f64, v: f64) -> f64 {
         match self {
             Self::Abs => {
                 if a > 0.0 {
@@ -152,7 +152,7 @@ pub(crate) enum Bin {
 }
 
 impl Bin {
-    fn apply(self, a: f64, b: f64) -> f64 {
+    pub(crate) fn apply(self, a: f64, b: f64) -> f64 {
         match self {
             Self::Add => a + b,
             Self::Sub => a - b,
@@ -167,7 +167,7 @@ impl Bin {
 
     /// `(∂/∂a, ∂/∂b)` at `(a, b)` with value `v`; `need_a`, `need_b` say which are used (the
     /// other may be anything). Ties of `min`/`max` take the first argument's derivative.
-    fn partials(self, a: f64, b: f64, v: f64, need_a: bool, need_b: bool) -> (f64, f64) {
+    pub(crate) fn partials(self, a: f64, b: f64, v: f64, need_a: bool, need_b: bool) -> (f64, f64) {
         match self {
             Self::Add => (1.0, 1.0),
             Self::Sub => (1.0, -1.0),
@@ -241,7 +241,6 @@ impl Graph {
     }
 
     /// The operation of node `i`.
-    #[cfg(test)]
     pub(crate) fn op(&self, i: u32) -> Op {
         self.ops[i as usize]
     }

@@ -63,6 +63,7 @@ pub mod limits;
 mod model;
 mod parse;
 mod scratch;
+mod tape;
 
 pub use error::{EquationError, Location};
 pub use file::{Discretization, TimeModel};

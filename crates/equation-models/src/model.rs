@@ -12,6 +12,7 @@ use crate::file::{Discretization, Equation, Spec, TimeModel, read};
 use crate::graph::{Graph, Seeds};
 use crate::limits::{COMPILE_STACK_BYTES, MAX_COMPILE_SECONDS, MAX_FILE_BYTES};
 use crate::scratch::with_scratch;
+use crate::tape::Tape;
 
 /// The equations of one section (`[f]`/`[dxdt]`, or `[h]`): their labels, the nodes of their
 /// values and the nodes they need, in evaluation order.
@@ -20,12 +21,16 @@ pub(crate) struct Rows {
     pub(crate) labels: Vec<String>,
     pub(crate) roots: Vec<u32>,
     pub(crate) schedule: Vec<u32>,
+    /// The schedule compiled for the filters' evaluations.
+    pub(crate) tape: Tape,
 }
 
 impl Rows {
-    fn new(graph: &Graph, equations: &[Equation]) -> Self {
+    fn new(graph: &Graph, equations: &[Equation], varies: &[bool]) -> Self {
         let roots: Vec<u32> = equations.iter().map(|e| e.root).collect();
-        Self { labels: equations.iter().map(|e| e.label.clone()).collect(), schedule: graph.schedule(&roots), roots }
+        let schedule = graph.schedule(&roots);
+        let tape = Tape::new(graph, &schedule, varies);
+        Self { labels: equations.iter().map(|e| e.label.clone()).collect(), schedule, roots, tape }
     }
 }
 
@@ -38,8 +43,8 @@ impl Rows {
 /// ([`AnyModel::linear`]).
 #[derive(Debug, Clone)]
 pub struct EquationModel {
-    states: Vec<String>,
-    inputs: Vec<String>,
+    pub(crate) states: Vec<String>,
+    pub(crate) inputs: Vec<String>,
     outputs: Vec<String>,
     parameters: Vec<(String, f64)>,
     pub(crate) time: TimeModel,
@@ -151,8 +156,9 @@ impl EquationModel {
                 return Err(EquationError::Unobservable { location: eq.location.clone(), output: name.clone() });
             }
         }
-        let varies = (0..graph.len() as u32).map(|i| (0..n).any(|s| Deps::has(&deps.dep, words, i, s))).collect();
-        let (rhs, out) = (Rows::new(&graph, &spec.rhs), Rows::new(&graph, &spec.out));
+        let varies: Vec<bool> =
+            (0..graph.len() as u32).map(|i| (0..n).any(|s| Deps::has(&deps.dep, words, i, s))).collect();
+        let (rhs, out) = (Rows::new(&graph, &spec.rhs, &varies), Rows::new(&graph, &spec.out, &varies));
         let mut model = Self {
             states: spec.states,
             inputs: spec.inputs,
@@ -274,8 +280,11 @@ impl EquationModel {
         let n = x.len();
         values[..n].copy_from_slice(x);
         values[n..n + u.len()].copy_from_slice(u);
-        let seeds = Seeds { lo: 0, width: n, varies: &self.varies };
-        self.graph.run(&rows.schedule, values, jac.is_some().then_some((&mut *grads, &seeds)));
+        if jac.is_some() {
+            rows.tape.run_derivatives(n, values, grads);
+        } else {
+            rows.tape.run_values(values);
+        }
         for (k, (o, &r)) in out.iter_mut().zip(&rows.roots).enumerate() {
             let v = values[r as usize];
             if !v.is_finite() {
