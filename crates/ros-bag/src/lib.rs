@@ -77,8 +77,10 @@
 //! [`EstimateWriter`] writes one JSON message per step on a topic, with a JSON schema of plain
 //! numbers named after the states (`{"k": 3, "t": 0.03, "x": {"px": 1.0}, "lower": {…},
 //! "upper": {…}, "status": "converged"}`), log and publish time the step's time, so that
-//! `/estimate.x.px` plots as it is; it can copy input topics from the bag into the same file.
-//! Messages stream to a temporary file published on [`EstimateWriter::finish`].
+//! `/estimate.x.px` plots as it is. [`TopicCopy`] copies the input bag's topics into the same
+//! file (schemas, channels and messages unchanged), interleaved with the estimates by log time, so
+//! that one file holds data and estimates. Messages stream to a temporary file published on
+//! [`EstimateWriter::finish`].
 //!
 //! ```no_run
 //! use ros_bag::{Bag, Estimate, EstimateLayout, EstimateWriter, Spread};
@@ -95,6 +97,7 @@
 mod bag;
 mod cdr;
 mod container;
+mod copy;
 mod decoder;
 mod error;
 mod inspect;
@@ -105,6 +108,7 @@ mod rows;
 mod writer;
 
 pub use bag::{Bag, DEFAULT_MAX_CHUNK_BYTES};
+pub use copy::TopicCopy;
 pub use error::{Error, Location, Result};
 pub use inspect::{Inspection, TopicInfo};
 pub use rows::{DEFAULT_MAX_BACKLOG, DEFAULT_REORDER_WINDOW, LogSpec, Mapping, Row, Rows, Stamps, TimeBase};

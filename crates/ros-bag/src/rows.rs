@@ -174,6 +174,10 @@ pub struct Row {
     pub t_ns: i64,
     /// The step's time in seconds (`t_ns as f64 / 1e9`).
     pub t: f64,
+    /// The end of the step's window (ns): `t_ns + ts` at a fixed step, the next driving message's
+    /// stamp per message. The outputs `y` were taken in `(t_ns, end_ns]`, so the estimate
+    /// `x_{k+1}` made from them is the state at `end_ns`.
+    pub end_ns: i64,
     /// The inputs, in the spec's order: each from its topic's latest message at or before `t`.
     pub u: Vec<f64>,
     /// The outputs, in the spec's order: from the latest message in the step's window; NaN
@@ -559,7 +563,7 @@ impl Rows<'_> {
         }
         let k = self.emitted;
         self.emitted += 1;
-        Some(Row { k, t_ns: tk, t: tk as f64 / 1e9, u, y, measured })
+        Some(Row { k, t_ns: tk, t: tk as f64 / 1e9, end_ns: end, u, y, measured })
     }
 
     fn stopped(&self) -> bool {

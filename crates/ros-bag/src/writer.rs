@@ -3,7 +3,7 @@
 //! `/estimate.x.px` without plugins. Written through [`atomic_output::AtomicFile`]: the output
 //! appears whole on [`EstimateWriter::finish`], or not at all.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use atomic_output::AtomicFile;
@@ -11,7 +11,8 @@ use mcap::records::MessageHeader;
 use mcap::write::NoSeek;
 
 use crate::bag::Bag;
-use crate::container::{Item, chain};
+use crate::container::chain;
+use crate::copy::TopicCopy;
 use crate::error::{Error, Result};
 
 /// The schema name of the estimate messages.
@@ -124,9 +125,6 @@ pub struct EstimateWriter {
     channel: u16,
     sequence: u32,
     buf: Vec<u8>,
-    /// Copied channels: source channel id → output channel id.
-    copied: HashMap<u16, u16>,
-    copied_schemas: HashMap<u16, u16>,
     /// JSON-quoted state names.
     names: Vec<String>,
 }
@@ -172,17 +170,7 @@ impl EstimateWriter {
         let schema = out.add_schema(ESTIMATE_SCHEMA, "jsonschema", layout.json_schema().as_bytes()).map_err(w)?;
         let channel = out.add_channel(schema, &layout.topic, "json", &BTreeMap::new()).map_err(w)?;
         let names = layout.states.iter().map(|s| serde_json::Value::from(s.as_str()).to_string()).collect();
-        Ok(Self {
-            out: Some(out),
-            path,
-            layout,
-            channel,
-            sequence: 0,
-            buf: Vec::new(),
-            copied: HashMap::new(),
-            copied_schemas: HashMap::new(),
-            names,
-        })
+        Ok(Self { out: Some(out), path, layout, channel, sequence: 0, buf: Vec::new(), names })
     }
 
     fn writer(&mut self) -> Result<&mut mcap::Writer<NoSeek<AtomicFile>>> {
@@ -248,67 +236,28 @@ impl EstimateWriter {
     }
 
     /// Copies every message of `topics` from `bag` (their channels and schemas too), in file
-    /// order; returns the number of messages copied. The copied messages come in the file where
-    /// this is called (before or after the estimates): readers that use the file's index, as
-    /// Foxglove and PlotJuggler do, show them in time order; [`Bag::rows`] needs a reorder
-    /// window spanning the run to align them with the estimates.
+    /// order, all at once; returns the number of messages copied. [`TopicCopy`] interleaves them
+    /// with the estimates by log time instead.
     ///
     /// # Errors
-    /// [`Error::UnknownTopic`] for a topic the bag does not have; the bag's read errors;
-    /// [`Error::Write`] from the writer.
+    /// As [`TopicCopy::only`] and [`TopicCopy::rest`].
     pub fn copy_topics(&mut self, bag: &Bag, topics: &[&str]) -> Result<u64> {
-        let available = bag.topics();
-        if let Some(t) = topics.iter().find(|t| !available.iter().any(|a| a == *t)) {
-            return Err(Error::UnknownTopic { key: "copy".into(), topic: (*t).to_owned(), available });
-        }
-        let path = self.path.clone();
-        let w = |e: mcap::McapError| Error::Write { path: path.clone(), detail: chain(&e) };
-        let mut channels = bag.channels.clone();
-        let mut schemas = bag.schemas.clone();
-        let mut n = 0;
-        for it in bag.walker() {
-            let m = match it? {
-                Item::Message(m) => m,
-                Item::Channel(c) => {
-                    channels.entry(c.id).or_insert(c);
-                    continue;
-                }
-                Item::Schema(s) => {
-                    schemas.entry(s.id).or_insert(s);
-                    continue;
-                }
-            };
-            let Some(c) = channels.get(&m.channel_id).filter(|c| topics.contains(&c.topic.as_str())) else { continue };
-            let id = match self.copied.get(&c.id) {
-                Some(&id) => id,
-                None => {
-                    let schema_id = match schemas.get(&c.schema_id).filter(|_| c.schema_id != 0) {
-                        None => 0,
-                        Some(s) => match self.copied_schemas.get(&s.id) {
-                            Some(&id) => id,
-                            None => {
-                                let id = self.writer()?.add_schema(&s.name, &s.encoding, &s.data).map_err(w)?;
-                                self.copied_schemas.insert(s.id, id);
-                                id
-                            }
-                        },
-                    };
-                    let id =
-                        self.writer()?.add_channel(schema_id, &c.topic, &c.message_encoding, &c.metadata).map_err(w)?;
-                    self.copied.insert(c.id, id);
-                    id
-                }
-            };
-            let header = MessageHeader {
-                channel_id: id,
-                sequence: m.sequence,
-                log_time: m.log_time,
-                publish_time: m.publish_time,
-            };
-            self.writer()?.write_to_known_channel(&header, &m.data).map_err(w)?;
-            n += 1;
-        }
-        Ok(n)
+        TopicCopy::only(bag, topics, self)?.rest(self)
+    }
+
+    /// The topic of the estimates.
+    pub fn topic(&self) -> &str {
+        &self.layout.topic
+    }
+
+    /// The path the file is published at.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The MCAP writer, for [`TopicCopy`].
+    pub(crate) fn raw(&mut self) -> Result<&mut mcap::Writer<NoSeek<AtomicFile>>> {
+        self.writer()
     }
 
     /// Finishes the file (summary, footer) and publishes it at its path.

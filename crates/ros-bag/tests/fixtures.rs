@@ -4,7 +4,7 @@
 mod common;
 
 use common::{T0, assert_rows_equal, json_mapping, read_csv, ros2_mapping};
-use ros_bag::{Bag, LogSpec, Stamps};
+use ros_bag::{Bag, LogSpec, Stamps, TimeBase};
 
 fn check(bag: &str, csv: &str, spec: LogSpec) {
     let bag = Bag::open(common::fixture(bag)).unwrap();
@@ -14,6 +14,16 @@ fn check(bag: &str, csv: &str, spec: LogSpec) {
     let got = bag.read_rows(&spec).unwrap_or_else(|e| panic!("{csv}: {e}"));
     assert!(!want.is_empty());
     assert_rows_equal(&got, &want, csv);
+    // Each window ends a step later, or at the next driving message (the next row's time).
+    for (i, r) in got.iter().enumerate() {
+        match spec.time_base() {
+            TimeBase::FixedStep { ts, .. } => assert_eq!(r.end_ns, r.t_ns + (ts * 1e9).round() as i64, "{csv}"),
+            _ => match got.get(i + 1) {
+                Some(next) => assert_eq!(r.end_ns, next.t_ns, "{csv}: row {i}"),
+                None => assert!(r.end_ns > r.t_ns, "{csv}: the last row"),
+            },
+        }
+    }
 }
 
 #[test]

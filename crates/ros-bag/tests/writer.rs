@@ -198,3 +198,63 @@ with open(sys.argv[1], "rb") as f:
         assert_eq!([f(c[4]), f(c[5]), f(c[6])], [x[0].to_bits(), x[2].to_bits(), hi[1].to_bits()], "{line}");
     }
 }
+
+/// The messages of a bag in file order: (topic, sequence, log time, publish time, bytes).
+fn stream(path: &std::path::Path) -> Vec<(String, u32, u64, u64, Vec<u8>)> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .map(|m| (m.channel.topic.clone(), m.sequence, m.log_time, m.publish_time, m.data.into_owned()))
+        .collect()
+}
+
+#[test]
+fn topics_copied_beside_the_estimates_are_the_sources_interleaved_by_log_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = fixture("ros2_zstd.mcap");
+    let want = stream(&source);
+    let bag = Bag::open(&source).unwrap();
+    let path = dir.path().join("est.mcap");
+    let mut out = EstimateWriter::create(&path, EstimateLayout::new("/estimate", STATES)).unwrap();
+    let mut copy = ros_bag::TopicCopy::all(&bag, &out);
+    for k in 0..150 {
+        let (t, x, _, _) = step(k);
+        copy.until(&mut out, t as u64).unwrap();
+        out.write(&Estimate::new(k, t, &x)).unwrap();
+    }
+    copy.rest(&mut out).unwrap();
+    assert_eq!(copy.copied(), want.len() as u64);
+    out.finish().unwrap();
+    let got = stream(&path);
+    // Every topic, message for message (bytes, sequence, both times), in the source's order.
+    let copied: Vec<_> = got.iter().filter(|m| m.0 != "/estimate").cloned().collect();
+    assert_eq!(copied, want);
+    // Before each estimate at t: the source's messages up to the first one after t.
+    let mut before = 0;
+    for m in &got {
+        if m.0 == "/estimate" {
+            let t = m.2;
+            assert_eq!(before, want.iter().position(|w| w.2 > t).unwrap_or(want.len()), "estimate at {t}");
+        } else {
+            before += 1;
+        }
+    }
+    // The copied schemas and channels are the source's.
+    let info = Bag::open(&path).unwrap().inspect();
+    let imu = info.topics.iter().find(|t| t.topic == "/imu").unwrap();
+    assert_eq!((imu.message_type.as_str(), imu.message_encoding.as_str()), ("sensor_msgs/msg/Imu", "cdr"));
+
+    // A bag with estimates of its own: copying all of it leaves them out; naming them is refused.
+    let again = dir.path().join("again.mcap");
+    let first = Bag::open(&path).unwrap();
+    let mut out = EstimateWriter::create(&again, EstimateLayout::new("/estimate", ["a"])).unwrap();
+    let e = ros_bag::TopicCopy::only(&first, &["/imu", "/estimate"], &out).unwrap_err();
+    assert!(matches!(&e, Error::Config(m) if m.contains("`/estimate`")), "{e}");
+    let e = ros_bag::TopicCopy::only(&first, &["/nope"], &out).unwrap_err();
+    assert!(matches!(&e, Error::UnknownTopic { available, .. } if available.contains(&"/imu".to_owned())), "{e}");
+    assert_eq!(ros_bag::TopicCopy::all(&first, &out).rest(&mut out).unwrap(), want.len() as u64);
+    let mut only = ros_bag::TopicCopy::only(&first, &["/gnss/fix"], &out).unwrap();
+    let gnss = want.iter().filter(|m| m.0 == "/gnss/fix").count() as u64;
+    assert_eq!(only.rest(&mut out).unwrap(), gnss);
+}

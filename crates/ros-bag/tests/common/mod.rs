@@ -25,6 +25,8 @@ pub fn read_csv(name: &str, n_inputs: usize) -> (Vec<String>, Vec<Row>) {
                 k: c[0].parse().unwrap(),
                 t_ns: c[1].parse().unwrap(),
                 t: num(c[2]),
+                // Not in the CSV: `check` tests it from the time base.
+                end_ns: -1,
                 u: c[3..3 + n_inputs].iter().map(|s| num(s)).collect(),
                 y: outs.iter().map(|s| if s.is_empty() { f64::NAN } else { num(s) }).collect(),
                 measured: outs.iter().map(|s| !s.is_empty()).collect(),
