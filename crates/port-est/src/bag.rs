@@ -17,6 +17,11 @@
 //! An output without a message in a step's window is not measured there (a partial step). A
 //! position in a bag is `BAG:ROW:COLUMN` of the table of rows the mapping makes: row 1 is the
 //! first step, column 1 is `k`, then the inputs, then the outputs.
+//!
+//! `--output est.mcap` writes the estimates as a bag ([`BagOutput`]): the estimate `x_{k+1}` of
+//! row `k` is stamped at the end of the row's window (`ros_bag::Row::end_ns`: `t_k + ts` at a
+//! fixed step, the next driving message's stamp per message), the time of the last measurement it
+//! could use. `--copy-topics` copies the input's topics beside it, interleaved by log time.
 
 use std::collections::BTreeMap;
 use std::io::{Read, Write};
@@ -159,6 +164,28 @@ fn open(path: &Path) -> Result<ros_bag::Bag, Error> {
     ros_bag::Bag::open(path).map_err(|e| bag_error(path, e))
 }
 
+/// The model's `[log]` mapping, or an error saying that a bag needs one.
+fn log_spec<'m>(model: &'m Model, path: &Path) -> Result<&'m ros_bag::LogSpec, Error> {
+    model.log.as_ref().ok_or_else(|| Error::File {
+        path: model.path().to_owned(),
+        message: format!(
+            "{} is an MCAP bag: the model file needs a `[log]` table mapping its inputs and outputs to topics \
+             (`port-est inspect {}` lists them; see crates/port-est/README.md)",
+            path.display(),
+            path.display()
+        ),
+    })
+}
+
+/// The rows `spec` makes of `bag` (read from `path`), as a [`RowSource`].
+fn bag_rows<'b>(bag: &'b ros_bag::Bag, spec: &ros_bag::LogSpec, path: &Path) -> Result<BagRows<'b>, Error> {
+    let rows = bag.rows(spec).map_err(|e| bag_error(path, e))?;
+    let mut columns = vec!["k".to_owned()];
+    columns.extend(spec.input_keys().into_iter().chain(spec.output_keys()).map(str::to_owned));
+    let (p, m) = (spec.inputs().len(), spec.outputs().len());
+    Ok(BagRows { rows, path: path.to_owned(), columns, p, m, read: 0, end_ns: 0 })
+}
+
 /// Opens the bag at `path` and runs `run` over the rows the model's `[log]` table makes of it.
 ///
 /// # Errors
@@ -169,28 +196,9 @@ pub fn run_on_bag<T>(
     path: &Path,
     run: impl FnOnce(&mut dyn RowSource) -> Result<T, Error>,
 ) -> Result<T, Error> {
-    let Some(spec) = &model.log else {
-        return Err(Error::File {
-            path: model.path().to_owned(),
-            message: format!(
-                "{} is an MCAP bag: the model file needs a `[log]` table mapping its inputs and outputs to topics \
-                 (`port-est inspect {}` lists them; see crates/port-est/README.md)",
-                path.display(),
-                path.display()
-            ),
-        });
-    };
+    let spec = log_spec(model, path)?;
     let bag = open(path)?;
-    let rows = bag.rows(spec).map_err(|e| bag_error(path, e))?;
-    let (p, m) = (spec.inputs().len(), spec.outputs().len());
-    let mut columns = vec!["k".to_owned()];
-    columns.extend(spec.input_keys().into_iter().chain(spec.output_keys()).map(str::to_owned));
-    let ts_ns = match spec.time_base() {
-        ros_bag::TimeBase::FixedStep { ts, .. } => Some((ts * 1e9).round() as i64),
-        _ => None,
-    };
-    let mut source = BagRows { rows, path: path.to_owned(), columns, p, m, read: 0, ts_ns, last_ns: 0 };
-    run(&mut source)
+    run(&mut bag_rows(&bag, spec, path)?)
 }
 
 /// The rows of a bag as a [`RowSource`].
@@ -202,10 +210,8 @@ pub struct BagRows<'b> {
     m: usize,
     /// Rows read so far.
     read: u64,
-    /// The fixed step (ns), if the bag is read at one.
-    ts_ns: Option<i64>,
-    /// The last row's time (ns).
-    last_ns: i64,
+    /// The end of the last row's window (ns).
+    end_ns: i64,
 }
 
 impl RowSource for BagRows<'_> {
@@ -216,7 +222,7 @@ impl RowSource for BagRows<'_> {
             return Err(Error::File { path: self.path.clone(), message: "the bag's rows do not fit the model".into() });
         }
         self.read += 1;
-        self.last_ns = r.t_ns;
+        self.end_ns = r.end_ns;
         row.k = r.k;
         row.u.as_mut_slice().copy_from_slice(&r.u);
         for (i, (&v, &measured)) in r.y.iter().zip(&r.measured).enumerate() {
@@ -238,10 +244,10 @@ impl RowSource for BagRows<'_> {
         self.p
     }
 
-    /// `x_{k+1}` is estimated from the measurements up to the end of the step's window,
-    /// `t_k + ts`.
+    /// `x_{k+1}` is estimated from the measurements up to the end of the step's window: `t_k +
+    /// ts` at a fixed step, the next driving message's stamp per message.
     fn estimate_time_ns(&self) -> Option<i64> {
-        self.ts_ns.map(|ts| self.last_ns.saturating_add(ts))
+        Some(self.end_ns)
     }
 }
 
@@ -254,22 +260,41 @@ pub fn writes_bag(output: &Path) -> bool {
 /// The topic of the estimates in a bag written by `port-est filter`.
 pub const ESTIMATE_TOPIC: &str = "/estimate";
 
+/// An error copying topics: the output's when writing failed, else the input's.
+fn copy_error(input: &Path, output: &Path, e: ros_bag::Error) -> Error {
+    match e {
+        ros_bag::Error::Write { .. } | ros_bag::Error::Io { .. } => bag_error(output, e),
+        other => bag_error(input, other),
+    }
+}
+
 /// Estimates written as a bag: one JSON message per step on [`ESTIMATE_TOPIC`], stamped at the
 /// end of the step's window, with the centre, the bounds (guaranteed sets) or standard
-/// deviations (Gaussian estimates) per state, and the status.
-pub(crate) struct BagOutput {
+/// deviations (Gaussian estimates) per state, and the status; with the input bag's topics copied
+/// beside them when asked, interleaved by log time.
+pub(crate) struct BagOutput<'b> {
     writer: ros_bag::EstimateWriter,
+    copy: Option<ros_bag::TopicCopy<'b>>,
     path: PathBuf,
+    /// The input bag's path.
+    input: PathBuf,
     kind: estimators::EstimateKind,
     x: Vec<f64>,
     a: Vec<f64>,
     b: Vec<f64>,
+    status: String,
 }
 
-impl BagOutput {
+impl<'b> BagOutput<'b> {
     /// Starts `path` (published by [`BagOutput::finish`] only) for the states of `model` and
-    /// estimates of `kind`.
-    pub(crate) fn create(path: &Path, model: &Model, kind: estimators::EstimateKind) -> Result<Self, Error> {
+    /// estimates of `kind`, copying `copy` topics of `input` beside them.
+    pub(crate) fn create(
+        path: &Path,
+        model: &Model,
+        kind: estimators::EstimateKind,
+        input: &'b ros_bag::Bag,
+        copy: &crate::CopyTopics,
+    ) -> Result<Self, Error> {
         use estimators::EstimateKind as K;
         let n = model.states();
         let names: Vec<String> = match &model.dynamics {
@@ -283,12 +308,44 @@ impl BagOutput {
         };
         let layout = ros_bag::EstimateLayout::new(ESTIMATE_TOPIC, names).spread(spread).status(true);
         let writer = ros_bag::EstimateWriter::create(path, layout).map_err(|e| bag_error(path, e))?;
-        Ok(Self { writer, path: path.to_owned(), kind, x: vec![0.0; n], a: vec![0.0; n], b: vec![0.0; n] })
+        let copy = match copy {
+            crate::CopyTopics::None => None,
+            crate::CopyTopics::All => Some(ros_bag::TopicCopy::all(input, &writer)),
+            crate::CopyTopics::Only(topics) => {
+                let topics: Vec<&str> = topics.iter().map(String::as_str).collect();
+                let copy = ros_bag::TopicCopy::only(input, &topics, &writer)
+                    .map_err(|e| Error::Usage(format!("--copy-topics: {}", bag_error(input.path(), e))))?;
+                Some(copy)
+            }
+        };
+        Ok(Self {
+            writer,
+            copy,
+            path: path.to_owned(),
+            input: input.path().to_owned(),
+            kind,
+            x: vec![0.0; n],
+            a: vec![0.0; n],
+            b: vec![0.0; n],
+            status: String::new(),
+        })
     }
 
-    /// Writes the estimate of step `k` at `t_ns`.
-    pub(crate) fn write(&mut self, k: u64, t_ns: i64, e: &dyn estimators::Estimate) -> Result<(), Error> {
+    /// Writes the estimate of step `k` at `t_ns` (after the copied messages up to `t_ns`), its
+    /// status followed by `measured` (`+measured:…`, as in the CSV output).
+    pub(crate) fn write(
+        &mut self,
+        k: u64,
+        t_ns: i64,
+        e: &dyn estimators::Estimate,
+        measured: Option<&str>,
+    ) -> Result<(), Error> {
         use estimators::EstimateKind as K;
+        use std::fmt::Write as _;
+        if let Some(copy) = &mut self.copy {
+            let at = u64::try_from(t_ns).unwrap_or(0);
+            copy.until(&mut self.writer, at).map_err(|e| copy_error(&self.input, &self.path, e))?;
+        }
         let n = self.x.len();
         for i in 0..n {
             self.x[i] = e.center()[i];
@@ -297,9 +354,10 @@ impl BagOutput {
                 _ => (self.a[i], self.b[i]) = e.bounds(i).unwrap_or((f64::NAN, f64::NAN)),
             }
         }
-        let status = e.status().to_string();
+        self.status.clear();
+        let _ = write!(self.status, "{}{}", e.status(), measured.unwrap_or(""));
         let mut m = ros_bag::Estimate::new(k, t_ns, &self.x);
-        m.status = Some(&status);
+        m.status = Some(&self.status);
         match self.kind {
             K::Gaussian => m.std_dev = Some(&self.a),
             K::GuaranteedEllipsoid | K::GuaranteedConstrainedZonotope => {
@@ -311,8 +369,11 @@ impl BagOutput {
         self.writer.write(&m).map_err(|e| bag_error(&self.path, e))
     }
 
-    /// Publishes the bag.
-    pub(crate) fn finish(self) -> Result<(), Error> {
+    /// Copies the rest of the input's topics and publishes the bag.
+    pub(crate) fn finish(mut self) -> Result<(), Error> {
+        if let Some(copy) = &mut self.copy {
+            copy.rest(&mut self.writer).map_err(|e| copy_error(&self.input, &self.path, e))?;
+        }
         self.writer.finish().map_err(|e| bag_error(&self.path, e))
     }
 }
@@ -340,11 +401,13 @@ pub fn inspect(path: &Path, out: &mut dyn Write) -> Result<(), Error> {
 }
 
 /// `port-est filter --input run.mcap --output est.mcap`: the run of [`crate::filter()`], its
-/// estimates written as a bag ([`BagOutput`]), published only if every step succeeded.
+/// estimates written as a bag ([`BagOutput`]) with the input's topics copied beside them as
+/// `--copy-topics` asks, published only if every step succeeded.
 ///
 /// # Errors
-/// As [`crate::filter()`]; an input that is not a bag read at a fixed step, an output that is
-/// the input or the model, `--on-error keep-partial` (a bag output keeps nothing).
+/// As [`crate::filter()`]; an input that is not a bag, an output that is the input or the
+/// model, `--on-error keep-partial` (a bag output keeps nothing), a topic to copy that the input
+/// does not have.
 pub(crate) fn filter_to_bag(
     options: &crate::FilterOptions,
     entry: &'static estimators::registry::EstimatorEntry,
@@ -365,29 +428,24 @@ pub(crate) fn filter_to_bag(
         }
     }
     let model = crate::model::read_model_with(&options.model, &options.limits)?;
-    if !matches!(model.log.as_ref().map(ros_bag::LogSpec::time_base), Some(ros_bag::TimeBase::FixedStep { .. }) | None)
-    {
-        return Err(refuse(
-            "estimates are written as a bag only from a bag read at a fixed step (`ts` in [log])".into(),
-        ));
-    }
-    let mut out = BagOutput::create(&options.output, &model, entry.kind)?;
+    let spec = log_spec(&model, &options.input)?;
+    let bag = open(&options.input)?;
+    let mut out = BagOutput::create(&options.output, &model, entry.kind, &bag, &options.copy_topics)?;
     let mut tally = crate::StatusTally::default();
     let policy = (options.status, options.checks);
-    run_on_bag(&model, &options.input, |data| {
-        let mut csv = std::io::sink();
-        crate::filter::run_filter_into(
-            &model,
-            data,
-            entry,
-            solver,
-            policy,
-            &mut csv,
-            &options.output,
-            &mut tally,
-            Some(&mut out),
-        )
-    })?;
+    let mut rows = bag_rows(&bag, spec, &options.input)?;
+    let mut csv = std::io::sink();
+    crate::filter::run_filter_into(
+        &model,
+        &mut rows,
+        entry,
+        solver,
+        policy,
+        &mut csv,
+        &options.output,
+        &mut tally,
+        Some(&mut out),
+    )?;
     out.finish()?;
     Ok(crate::FilterSummary { estimator: entry.name, tally, ignored_columns: Vec::new() })
 }

@@ -307,6 +307,11 @@ pub struct FilterArgs {
     /// output, row by row as they are computed; `.mcap` writes them as a bag (from a bag input)
     #[arg(short, long, value_name = "OUT.csv")]
     pub output: PathBuf,
+    /// With a bag input and `--output OUT.mcap`: copy the input's topics into the output beside
+    /// `/estimate` (schemas, channels and messages unchanged), so one file holds data and
+    /// estimates; alone every topic (but an old `/estimate`), or the topics listed
+    #[arg(long, value_name = "TOPIC,...", num_args = 0.., value_delimiter = ',')]
+    pub copy_topics: Option<Vec<String>>,
     /// The estimator
     #[arg(short, long, value_name = "NAME", default_value = registry::names::SMF, value_parser = estimator_names())]
     pub estimator: String,
@@ -384,6 +389,11 @@ impl From<FilterArgs> for crate::FilterOptions {
                 max_gap: a.max_gap,
                 ..crate::Limits::default()
             },
+            copy_topics: match a.copy_topics {
+                None => crate::CopyTopics::None,
+                Some(t) if t.is_empty() => crate::CopyTopics::All,
+                Some(t) => crate::CopyTopics::Only(t),
+            },
         }
     }
 }
@@ -408,6 +418,19 @@ mod tests {
         assert_eq!(e.kind(), clap::error::ErrorKind::InvalidValue);
         let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d"]).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::MissingRequiredArgument);
+        // --copy-topics: absent, alone (every topic), or a list.
+        let copy = |extra: &[&str]| {
+            let base = ["port-est", "filter", "-m", "m", "-i", "d.mcap", "-o", "o.mcap"];
+            let cli = Cli::try_parse_from(base.iter().chain(extra)).unwrap();
+            let Command::Filter(a) = cli.command else { panic!("not filter") };
+            crate::FilterOptions::from(a).copy_topics
+        };
+        assert_eq!(copy(&[]), crate::CopyTopics::None);
+        assert_eq!(copy(&["--copy-topics"]), crate::CopyTopics::All);
+        assert_eq!(copy(&["--copy-topics", "-e", "ekf"]), crate::CopyTopics::All);
+        let two = crate::CopyTopics::Only(vec!["/imu".into(), "/gnss/fix".into()]);
+        assert_eq!(copy(&["--copy-topics", "/imu,/gnss/fix"]), two);
+        assert_eq!(copy(&["--copy-topics", "/imu", "/gnss/fix"]), two);
     }
 
     #[cfg(unix)]

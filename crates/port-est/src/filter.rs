@@ -51,6 +51,23 @@ pub struct FilterOptions {
     pub on_error: OnError,
     /// The resource limits (`--max-file-size`, `--mhe-memory-limit`, `--max-gap`).
     pub limits: Limits,
+    /// Which topics of the input bag are copied into a bag output beside the estimates
+    /// (`--copy-topics`).
+    pub copy_topics: CopyTopics,
+}
+
+/// Which topics of the input bag `port-est filter` copies into its bag output (`--output
+/// est.mcap --copy-topics`), so that one file holds the data and the estimates.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum CopyTopics {
+    /// None: the output holds the estimates only.
+    #[default]
+    None,
+    /// Every topic of the input bag (but `/estimate`, the estimates' own).
+    All,
+    /// These topics.
+    Only(Vec<String>),
 }
 
 /// The largest number of states for which `port-est filter` runs a set-membership filter with an
@@ -129,6 +146,11 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (entry, solver) = select(&options.estimator, options.solver.as_deref())?;
     if crate::bag::writes_bag(&options.output) {
         return crate::bag::filter_to_bag(options, entry, solver);
+    }
+    if options.copy_topics != CopyTopics::None {
+        return Err(Error::Usage(
+            "--copy-topics copies the input bag's topics into a bag output: give --output OUT.mcap".into(),
+        ));
     }
     let stdin = options.input.as_os_str() == "-";
     let stdout = options.output.as_os_str() == "-";
@@ -325,7 +347,7 @@ pub(crate) fn run_filter_into<W: Write>(
     out: &mut W,
     out_path: &Path,
     tally: &mut StatusTally,
-    mut bag_out: Option<&mut crate::bag::BagOutput>,
+    mut bag_out: Option<&mut crate::bag::BagOutput<'_>>,
 ) -> Result<(), Error> {
     let mut est = build(model, entry, solver)?;
     if let Some(checks) = checks {
@@ -374,8 +396,8 @@ pub(crate) fn run_filter_into<W: Write>(
         enforce(status, e.status(), || data.locate(Some(0)), row.k)?;
         write!(out, "{label}").map_err(wio)?;
         columns.write(out, e).map_err(wio)?;
-        if !complete && row.measured.iter().any(|&b| b) {
-            // A partial measurement: the status says which outputs the step used.
+        // A partial measurement: the status says which outputs the step used.
+        let measured = if !complete && row.measured.iter().any(|&b| b) {
             let names = data.columns();
             let used: Vec<&str> = row
                 .measured
@@ -384,14 +406,18 @@ pub(crate) fn run_filter_into<W: Write>(
                 .filter(|&(_, &b)| b)
                 .map(|(i, _)| names.get(1 + model.inputs() + i).map_or("?", String::as_str))
                 .collect();
-            write!(out, "+measured:{}", used.join(";")).map_err(wio)?;
-        }
+            let suffix = format!("+measured:{}", used.join(";"));
+            write!(out, "{suffix}").map_err(wio)?;
+            Some(suffix)
+        } else {
+            None
+        };
         writeln!(out).map_err(wio)?;
         if let Some(bag) = bag_out.as_deref_mut() {
             let Some(t) = data.estimate_time_ns() else {
-                return Err(Error::Usage("estimates are written as a bag only from a bag read at a fixed step".into()));
+                return Err(Error::Usage("estimates are written as a bag only from a bag input".into()));
             };
-            bag.write(row.k, t, e)?;
+            bag.write(row.k, t, e, measured.as_deref())?;
         }
         tally.record(e.status());
         largest.observe(&row, model.outputs(), data);

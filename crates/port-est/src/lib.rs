@@ -40,7 +40,7 @@ use std::io::{self, Write};
 
 pub use cli::{Cli, Command, FilterArgs};
 pub use error::{Error, Location};
-pub use filter::{FilterOptions, FilterSummary, GapPolicy, filter};
+pub use filter::{CopyTopics, FilterOptions, FilterSummary, GapPolicy, filter};
 pub use limits::Limits;
 pub use model::{Model, parse_model, parse_model_with, read_model, read_model_with};
 pub use run::{OnError, StatusPolicy, StatusTally};

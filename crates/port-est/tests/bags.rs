@@ -66,6 +66,7 @@ fn options(d: &Path, input: PathBuf, output: &str, estimator: &str) -> FilterOpt
         checks: Some(DataChecks::OFF),
         on_error: OnError::Discard,
         limits: Limits::default(),
+        copy_topics: Default::default(),
     }
 }
 
@@ -169,6 +170,7 @@ fn estimates_written_as_a_bag_hold_the_csv_numbers() {
         let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
         let msgs = messages(&d.join("out.mcap"), port_est::bag::ESTIMATE_TOPIC);
         assert_eq!(msgs.len(), rows.len(), "{estimator}");
+        assert!(text.contains("+measured:wz"), "{estimator}: partial steps (their status is compared below)");
         let t0: u64 = 1_700_000_000_123_456_789;
         for (i, ((t, m), row)) in msgs.iter().zip(&rows).enumerate() {
             // Step k's estimate x_{k+1} at the end of its window, t0 + (k + 1) ts.
@@ -180,7 +182,7 @@ fn estimates_written_as_a_bag_hold_the_csv_numbers() {
                 let a: f64 = row[3 + j].parse().unwrap();
                 assert_eq!(m[spread][state].as_f64().unwrap().to_bits(), a.to_bits(), "{estimator}: row {i}");
             }
-            assert!(row.last().unwrap().starts_with(m["status"].as_str().unwrap()), "{estimator}: row {i}");
+            assert_eq!(m["status"].as_str(), Some(*row.last().unwrap()), "{estimator}: row {i}");
         }
     }
     // Refused: a CSV input, keep-partial, the input as output.
@@ -262,4 +264,93 @@ fn ros2_bags_of_standard_messages_give_their_rows_output() {
     let kept = partial.lines().count();
     assert!(kept > 1 && kept < want.lines().count(), "{kept} lines kept");
     assert!(want.starts_with(&partial), "the kept steps are the intact bag's");
+}
+
+/// The outputs of a run on `input` as CSV and as a bag: the CSV's rows and the bag's messages.
+fn csv_and_bag(d: &Path, input: PathBuf, estimator: &str, copy: port_est::CopyTopics) -> (String, PathBuf) {
+    let csv = filter(&options(d, input.clone(), "out.csv", estimator)).unwrap();
+    let bag = filter(&FilterOptions { copy_topics: copy, ..options(d, input, "out.mcap", estimator) }).unwrap();
+    assert_eq!(csv.tally, bag.tally);
+    (std::fs::read_to_string(d.join("out.csv")).unwrap(), d.join("out.mcap"))
+}
+
+/// The bag's estimates equal the CSV's rows: centre, spread (`std`, columns 3..) and status.
+fn assert_same_numbers(csv: &str, msgs: &[(u64, serde_json::Value)], states: &[&str]) {
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(msgs.len(), rows.len());
+    let n = states.len();
+    for (i, ((_, m), row)) in msgs.iter().zip(&rows).enumerate() {
+        assert_eq!(m["k"].as_u64(), Some(i as u64));
+        for (j, state) in states.iter().enumerate() {
+            let bits = |s: &str| s.parse::<f64>().unwrap().to_bits();
+            assert_eq!(m["x"][state].as_f64().unwrap().to_bits(), bits(row[1 + j]), "row {i}");
+            assert_eq!(m["std"][state].as_f64().unwrap().to_bits(), bits(row[1 + n + j]), "row {i}");
+        }
+        assert_eq!(m["status"].as_str(), Some(*row.last().unwrap()), "row {i}");
+    }
+}
+
+#[test]
+fn estimates_per_driving_message_are_stamped_at_the_next_one() {
+    let d = dir("per-message");
+    let log = LOG.replace("ts = 0.05", "driving = \"/speed_json\"");
+    std::fs::write(d.join("m.toml"), format!("{MODEL}{log}")).unwrap();
+    let (csv, out) = csv_and_bag(&d, fixture("json.mcap"), "ekf", port_est::CopyTopics::None);
+    let msgs = messages(&out, port_est::bag::ESTIMATE_TOPIC);
+    assert_same_numbers(&csv, &msgs, &["px", "w"]);
+    // Step k's window is (t_k, t_{k+1}], t_{k+1} the next driving message: its estimate's time.
+    let spec = ros_bag::LogSpec::per_message("/speed_json")
+        .input("v", "/speed_json", "v")
+        .output("x", "/pose_json", "x")
+        .output("valid", "/pose_json", "valid")
+        .output("wz", "/speed_json", "gyro[2]");
+    let rows = ros_bag::Bag::open(fixture("json.mcap")).unwrap().read_rows(&spec).unwrap();
+    assert_eq!(rows.len(), msgs.len());
+    for (i, ((t, m), r)) in msgs.iter().zip(&rows).enumerate() {
+        let next = rows.get(i + 1).map_or(r.end_ns, |n| n.t_ns);
+        assert_eq!((*t as i64, r.end_ns), (next, next), "row {i}");
+        assert_eq!(m["t"].as_f64().unwrap().to_bits(), (next as f64 / 1e9).to_bits());
+    }
+}
+
+/// Every message of a bag in file order: (topic, sequence, log time, publish time, bytes).
+fn all_messages(path: &Path) -> Vec<(String, u32, u64, u64, Vec<u8>)> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .map(|m| (m.channel.topic.clone(), m.sequence, m.log_time, m.publish_time, m.data.into_owned()))
+        .collect()
+}
+
+#[test]
+fn copied_topics_are_the_inputs_byte_for_byte_beside_the_estimates() {
+    let d = dir("copy");
+    std::fs::write(d.join("m.toml"), ROS2_MODEL).unwrap();
+    let input = fixture("ros2_zstd.mcap");
+    let source = all_messages(&input);
+    let states = ["lat", "v", "yaw_rate"];
+    let (csv, out) = csv_and_bag(&d, input.clone(), "ekf", port_est::CopyTopics::All);
+    assert_same_numbers(&csv, &messages(&out, port_est::bag::ESTIMATE_TOPIC), &states);
+    let got = all_messages(&out);
+    let copied: Vec<_> = got.iter().filter(|m| m.0 != port_est::bag::ESTIMATE_TOPIC).cloned().collect();
+    assert_eq!(copied, source, "every topic, message for message, in the input's order");
+    // Interleaved by time: an estimate comes after the input's messages up to its time.
+    let first = got.iter().position(|m| m.0 == port_est::bag::ESTIMATE_TOPIC).unwrap();
+    assert!(got[..first].iter().all(|m| m.2 <= got[first].2) && first > 0);
+    // Some topics, named.
+    let only = port_est::CopyTopics::Only(vec!["/imu".into(), "/gnss/fix".into()]);
+    let (_, out) = csv_and_bag(&d, input.clone(), "ekf", only);
+    let copied: Vec<_> = all_messages(&out).into_iter().filter(|m| m.0 != port_est::bag::ESTIMATE_TOPIC).collect();
+    let want: Vec<_> = source.iter().filter(|m| m.0 == "/imu" || m.0 == "/gnss/fix").cloned().collect();
+    assert_eq!(copied, want);
+    // Refused before anything is written: an unknown topic (naming what exists), a CSV output.
+    let bad = port_est::CopyTopics::Only(vec!["/nope".into()]);
+    let o = FilterOptions { copy_topics: bad, ..options(&d, input.clone(), "bad.mcap", "ekf") };
+    let e = filter(&o).unwrap_err().to_string();
+    assert!(e.contains("--copy-topics") && e.contains("/nope") && e.contains("/imu"), "{e}");
+    assert!(!d.join("bad.mcap").exists());
+    let o = FilterOptions { copy_topics: port_est::CopyTopics::All, ..options(&d, input, "bad.csv", "ekf") };
+    assert!(filter(&o).unwrap_err().to_string().contains("--output OUT.mcap"));
+    assert!(!d.join("bad.csv").exists());
 }

@@ -37,6 +37,7 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
         checks: None,
         on_error: port_est::OnError::Discard,
         limits: port_est::Limits::default(),
+        copy_topics: Default::default(),
     };
     (dir, options)
 }

@@ -49,6 +49,7 @@ fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
         checks: None,
         on_error: port_est::OnError::Discard,
         limits: port_est::Limits::default(),
+        copy_topics: Default::default(),
     })
     .map(|s| s.tally.steps)
     .map_err(|e| e.to_string());
@@ -129,6 +130,7 @@ fn a_measurement_outside_the_boxes_stops_the_run_at_its_line_or_is_flagged() {
         checks,
         on_error: port_est::OnError::Discard,
         limits: port_est::Limits::default(),
+        copy_topics: Default::default(),
     };
     for estimator in ["rmhe", "mhe"] {
         let e = filter(&options(estimator, None)).unwrap_err().to_string();

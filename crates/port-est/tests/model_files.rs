@@ -66,6 +66,7 @@ fn the_vessel_log_is_tracked_by_the_nonlinear_estimators_of_its_model_file() {
             checks: None,
             on_error: port_est::OnError::Discard,
             limits: port_est::Limits::default(),
+            copy_topics: Default::default(),
         })
         .unwrap_or_else(|e| panic!("{estimator}: {e}"));
         assert_eq!(summary.tally.steps, truth.len() as u64, "{estimator}");
@@ -121,6 +122,7 @@ fn a_builtin_vehicle_is_its_compiled_model_with_its_files_noise() {
             checks: None,
             on_error: port_est::OnError::Discard,
             limits: port_est::Limits::default(),
+            copy_topics: Default::default(),
         })
         .unwrap_or_else(|e| panic!("{model} {estimator}: {e}"));
         csv(&output).1

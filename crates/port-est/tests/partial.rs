@@ -50,6 +50,7 @@ fn filter_options(d: &Path, on_error: OnError, status: StatusPolicy) -> FilterOp
         checks: None,
         on_error,
         limits: Limits::default(),
+        copy_topics: Default::default(),
     }
 }
 

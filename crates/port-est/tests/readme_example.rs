@@ -51,6 +51,7 @@ fn readme_filter_example_runs_for_every_estimator() {
             checks: None,
             on_error: port_est::OnError::Discard,
             limits: port_est::Limits::default(),
+            copy_topics: Default::default(),
         })
         .unwrap_or_else(|e| panic!("{label}: {e}"));
         assert_eq!(summary.tally.steps, 40, "{label}");

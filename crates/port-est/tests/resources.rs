@@ -108,6 +108,7 @@ fn filter_options(d: &Path, model: &Path, input: &Path, gaps: GapPolicy, limits:
         checks: None,
         on_error: OnError::Discard,
         limits,
+        copy_topics: Default::default(),
     }
 }
 

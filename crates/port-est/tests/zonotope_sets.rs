@@ -38,6 +38,7 @@ fn options(d: &Path, model: &str, data: &str) -> FilterOptions {
         checks: None,
         on_error: port_est::OnError::Discard,
         limits: port_est::Limits::default(),
+        copy_topics: Default::default(),
     }
 }
 
