@@ -11,7 +11,8 @@
 //!   [`cholesky_checked`].
 //! * [`small`]: the same kernels with their sizes as const generic parameters, for a caller
 //!   that knows its sizes once (a filter of `n` states and `m` outputs) and dispatches to them;
-//!   same operations in the same order, so the same numbers.
+//!   same operations in the same order, so the same numbers; [`fixed`]: their twins that also
+//!   skip a zero multiplier as the general kernels do, so the same bits on any data.
 //! * Validation ([`spd`]): symmetry and positive definiteness with the workspace's tolerances,
 //!   reporting the offending entry or pivot.
 //!
@@ -26,6 +27,7 @@
 //! target's.
 
 pub mod cholesky;
+pub mod fixed;
 pub mod small;
 pub mod spd;
 
@@ -130,6 +132,7 @@ fn scale_col(c: &mut [f64], beta: f64) {
 }
 
 /// `Σ aᵢ bᵢ`; for matrices of equal shape, the Frobenius inner product `⟨A, B⟩ = tr(Aᵀ B)`.
+#[inline]
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());
     let mut s = 0.0;
@@ -145,6 +148,7 @@ pub fn fro(a: &[f64]) -> f64 {
 }
 
 /// `out = x · a + y · b` entrywise (same shapes).
+#[inline]
 pub fn lin2(out: &mut [f64], x: f64, a: &[f64], y: f64, b: &[f64]) {
     for i in 0..out.len() {
         out[i] = x * a[i] + y * b[i];
@@ -152,6 +156,7 @@ pub fn lin2(out: &mut [f64], x: f64, a: &[f64], y: f64, b: &[f64]) {
 }
 
 /// `out += alpha · a` entrywise.
+#[inline]
 pub fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
     for i in 0..out.len() {
         out[i] += alpha * a[i];
@@ -159,6 +164,7 @@ pub fn add_scaled(out: &mut [f64], alpha: f64, a: &[f64]) {
 }
 
 /// `a ← (a + aᵀ)/2`.
+#[inline]
 pub fn symmetrize(a: &mut DMatrix<f64>) {
     let n = a.nrows();
     for j in 0..n {

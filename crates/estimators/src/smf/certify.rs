@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use models::StepModel;
 
 use super::filter::SetEstimate;
+use super::kernels::{Kernels, StepFns};
 
 /// The certification inflation: `P_{k+1} = (1 + relative) Φ̂ + absolute · I`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -53,6 +54,8 @@ pub(crate) struct CertWork {
     pub(crate) lr: DMatrix<f64>,
     pub(crate) p_new: DMatrix<f64>,
     pub(crate) x_new: DVector<f64>,
+    /// The kernels of this size (module [`super::kernels`]).
+    pub(crate) fns: StepFns,
 }
 
 impl CertWork {
@@ -67,6 +70,7 @@ impl CertWork {
             lr: DMatrix::zeros(n, m),
             p_new: nn(),
             x_new: DVector::zeros(n),
+            fns: StepFns::for_sizes(n, m),
         }
     }
 }
@@ -86,48 +90,66 @@ pub(crate) fn certify(
     u: &DVector<f64>,
     y: &DVector<f64>,
 ) -> Option<Inflation> {
-    let (n, m) = l.shape();
-    dense_kernels::i_minus_lc(l, model.c, &mut cw.k);
-    let fro = |a: &DMatrix<f64>| fro_upper(a.as_slice());
-    let (na, nb, nc, nl, nk) = (fro(model.a), fro(model.b), fro(model.c), fro(l), fro(&cw.k));
-    let (nx1, nq, nr, np) = (fro(x1), fro(q), fro(r), fro(&est.shape));
+    (cw.fns.certify)(cw, model, l, tau, x1, q, r, est, u, y)
+}
+
+/// [`certify`] with the kernels `K`.
+pub(crate) fn certify_with<K: Kernels>(
+    cw: &mut CertWork,
+    model: &StepModel<'_>,
+    l: &DMatrix<f64>,
+    tau: [f64; 3],
+    x1: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    est: &SetEstimate,
+    u: &DVector<f64>,
+    y: &DVector<f64>,
+) -> Option<Inflation> {
+    let (n, m) = K::dims(l.nrows(), l.ncols());
+    let (nn, nm) = (n * n, n * m);
+    K::i_minus_lc(l, model.c, &mut cw.k);
+    let fro = |a: &DMatrix<f64>, len: usize| fro_upper(&a.as_slice()[..len]);
+    let (na, nb, nc, nl, nk) =
+        (fro(model.a, nn), fro_upper(model.b.as_slice()), fro(model.c, nm), fro(l, nm), fro(&cw.k, nn));
+    let (nx1, nq, nr, np) = (fro(x1, nn), fro(q, nn), fro(r, m * m), fro(&est.shape, nn));
     let e_x = gamma(2 * n) * na * na * np;
     let e_k = gamma(m + 1) * ((n as f64).sqrt() + nl * nc);
     let kappa = nk + e_k;
     let lin = 2.0 * nk * e_k + e_k * e_k;
     // T₁ = K X₁ Kᵀ/τ₁.
-    dense_kernels::mul_nn(1.0, &cw.k, x1, 0.0, &mut cw.kx);
-    dense_kernels::mul_nt(1.0 / tau[0], &cw.kx, &cw.k, 0.0, &mut cw.p_new);
-    let nt1 = fro(&cw.p_new);
+    K::mul_nn_nnn(1.0, &cw.k, x1, 0.0, &mut cw.kx);
+    K::mul_nt_nnn(1.0 / tau[0], &cw.kx, &cw.k, 0.0, &mut cw.p_new);
+    let nt1 = fro(&cw.p_new, nn);
     let mut err = (gamma(2 * n + 2) * nk * nk * nx1 + lin * nx1 + kappa * kappa * e_x) / tau[0];
     // T₂ = K Q Kᵀ/τ₂.
-    dense_kernels::mul_nn(1.0, &cw.k, q, 0.0, &mut cw.kx);
-    dense_kernels::mul_nt(1.0 / tau[1], &cw.kx, &cw.k, 0.0, &mut cw.t);
-    let nt2 = fro(&cw.t);
+    K::mul_nn_nnn(1.0, &cw.k, q, 0.0, &mut cw.kx);
+    K::mul_nt_nnn(1.0 / tau[1], &cw.kx, &cw.k, 0.0, &mut cw.t);
+    let nt2 = fro(&cw.t, nn);
     err += (gamma(2 * n + 2) * nk * nk * nq + lin * nq) / tau[1];
-    dense_kernels::add_scaled(cw.p_new.as_mut_slice(), 1.0, cw.t.as_slice());
+    dense_kernels::add_scaled(&mut cw.p_new.as_mut_slice()[..nn], 1.0, &cw.t.as_slice()[..nn]);
     let mut nt3 = 0.0;
     if tau[2] > 0.0 {
         // T₃ = L R Lᵀ/τ₃.
-        dense_kernels::mul_nn(1.0, l, r, 0.0, &mut cw.lr);
-        dense_kernels::mul_nt(1.0 / tau[2], &cw.lr, l, 0.0, &mut cw.t);
-        nt3 = fro(&cw.t);
+        K::mul_nn_nmm(1.0, l, r, 0.0, &mut cw.lr);
+        K::mul_nt_nmn(1.0 / tau[2], &cw.lr, l, 0.0, &mut cw.t);
+        nt3 = fro(&cw.t, nn);
         err += gamma(2 * m + 2) * nl * nl * nr / tau[2];
-        dense_kernels::add_scaled(cw.p_new.as_mut_slice(), 1.0, cw.t.as_slice());
+        dense_kernels::add_scaled(&mut cw.p_new.as_mut_slice()[..nn], 1.0, &cw.t.as_slice()[..nn]);
     }
     err += gamma(4) * (nt1 + nt2 + nt3);
-    dense_kernels::symmetrize(&mut cw.p_new);
-    let nphi = fro(&cw.p_new);
+    K::symmetrize_n(&mut cw.p_new);
+    let nphi = fro(&cw.p_new, nn);
     let eps2 = 2.0 * err + 4.0 * U * nphi;
     // Centre: z = A x̂ + B ū, x̂⁺ = K̂ z + L y.
-    dense_kernels::gemv(1.0, model.a, &est.center, 0.0, &mut cw.z);
-    dense_kernels::gemv(1.0, model.b, u, 1.0, &mut cw.z);
-    dense_kernels::gemv(1.0, &cw.k, &cw.z, 0.0, &mut cw.x_new);
-    dense_kernels::gemv(1.0, l, y, 1.0, &mut cw.x_new);
-    let nxh = fro_upper(est.center.as_slice());
+    K::gemv_nn(1.0, model.a, &est.center, 0.0, &mut cw.z);
+    K::gemv_np(1.0, model.b, u, 1.0, &mut cw.z);
+    K::gemv_nn(1.0, &cw.k, &cw.z, 0.0, &mut cw.x_new);
+    K::gemv_nm(1.0, l, y, 1.0, &mut cw.x_new);
+    let nxh = fro_upper(&est.center.as_slice()[..n]);
     let nu = fro_upper(u.as_slice());
-    let nz = fro_upper(cw.z.as_slice());
-    let ny = fro_upper(y.as_slice());
+    let nz = fro_upper(&cw.z.as_slice()[..n]);
+    let ny = fro_upper(&y.as_slice()[..m]);
     let e_z = gamma(n + u.len()) * (na * nxh + nb * nu);
     let rho = 2.0 * (gamma(n + m + 1) * (nk * nz + nl * ny) + e_k * nz + kappa * e_z);
     let trc = cw.p_new.trace() + n as f64 * eps2;

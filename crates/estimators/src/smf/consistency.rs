@@ -28,6 +28,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::kernels::{Kernels, StepFns};
+
 /// Relative margin of [`check`]: inconsistency needs `g(d) > MARGIN · (dᵀe + Σ √(dᵀ Mᵢ d))`.
 pub const MARGIN: f64 = 1e-7;
 
@@ -71,6 +73,8 @@ pub(crate) struct ConsistencyWork {
     e: DVector<f64>,
     d: DVector<f64>,
     t: DVector<f64>,
+    /// The kernels of this size (module [`super::kernels`]).
+    pub(crate) fns: StepFns,
 }
 
 impl ConsistencyWork {
@@ -84,26 +88,32 @@ impl ConsistencyWork {
             e: DVector::zeros(m),
             d: DVector::zeros(m),
             t: DVector::zeros(m),
+            fns: StepFns::for_sizes(n, m),
         }
     }
 }
 
 /// `dᵀ M d`.
-fn quad(m: &DMatrix<f64>, d: &DVector<f64>, t: &mut DVector<f64>) -> f64 {
-    dense_kernels::gemv(1.0, m, d, 0.0, t);
-    dense_kernels::dot(d.as_slice(), t.as_slice()).max(0.0)
+#[inline(always)]
+fn quad<K: Kernels>(m: &DMatrix<f64>, d: &DVector<f64>, t: &mut DVector<f64>, len: usize) -> f64 {
+    K::gemv_mm(1.0, m, d, 0.0, t);
+    dense_kernels::dot(&d.as_slice()[..len], &t.as_slice()[..len]).max(0.0)
 }
 
 /// Solves `S d = e` into `w.d` for `S = Σ Mᵢ/τᵢ` (factorised in `w.s`); `false` if `S` is not
 /// numerically positive definite.
-fn direction(w: &mut ConsistencyWork, r: &DMatrix<f64>, tau: [f64; 3]) -> bool {
-    dense_kernels::lin2(w.s.as_mut_slice(), 1.0 / tau[0], w.m1.as_slice(), 1.0 / tau[1], w.m2.as_slice());
-    dense_kernels::add_scaled(w.s.as_mut_slice(), 1.0 / tau[2], r.as_slice());
-    if dense_kernels::cholesky_in_place(&mut w.s).is_err() {
+#[inline(always)]
+fn direction<K: Kernels>(w: &mut ConsistencyWork, r: &DMatrix<f64>, tau: [f64; 3]) -> bool {
+    let m = K::dims(w.z.len(), w.d.len()).1;
+    let mm = m * m;
+    let (m1, m2) = (&w.m1.as_slice()[..mm], &w.m2.as_slice()[..mm]);
+    dense_kernels::lin2(&mut w.s.as_mut_slice()[..mm], 1.0 / tau[0], m1, 1.0 / tau[1], m2);
+    dense_kernels::add_scaled(&mut w.s.as_mut_slice()[..mm], 1.0 / tau[2], &r.as_slice()[..mm]);
+    if K::cholesky_m(&mut w.s).is_err() {
         return false;
     }
-    w.d.copy_from(&w.e);
-    dense_kernels::cholesky_solve(w.s.as_slice(), w.s.nrows(), w.d.as_mut_slice());
+    w.d.as_mut_slice()[..m].copy_from_slice(&w.e.as_slice()[..m]);
+    K::cholesky_solve_m(&w.s, &mut w.d);
     true
 }
 
@@ -119,16 +129,30 @@ pub(crate) fn check(
     y: &DVector<f64>,
     tau: [f64; 3],
 ) -> Consistency {
+    (w.fns.check)(w, c, x1, q, r, y, tau)
+}
+
+/// [`check`] with the kernels `K`.
+pub(crate) fn check_with<K: Kernels>(
+    w: &mut ConsistencyWork,
+    c: &DMatrix<f64>,
+    x1: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    y: &DVector<f64>,
+    tau: [f64; 3],
+) -> Consistency {
+    let m = K::dims(c.ncols(), c.nrows()).1;
     // e = y − C z; M₁ = C X₁ Cᵀ; M₂ = C Q Cᵀ.
-    w.e.copy_from(y);
-    dense_kernels::gemv(-1.0, c, &w.z, 1.0, &mut w.e);
-    dense_kernels::mul_nn(1.0, c, x1, 0.0, &mut w.cx);
-    dense_kernels::mul_nt(1.0, &w.cx, c, 0.0, &mut w.m1);
-    dense_kernels::mul_nn(1.0, c, q, 0.0, &mut w.cx);
-    dense_kernels::mul_nt(1.0, &w.cx, c, 0.0, &mut w.m2);
-    dense_kernels::symmetrize(&mut w.m1);
-    dense_kernels::symmetrize(&mut w.m2);
-    if w.e.iter().any(|v| !v.is_finite()) {
+    w.e.as_mut_slice()[..m].copy_from_slice(&y.as_slice()[..m]);
+    K::gemv_mn(-1.0, c, &w.z, 1.0, &mut w.e);
+    K::mul_nn_mnn(1.0, c, x1, 0.0, &mut w.cx);
+    K::mul_nt_mnm(1.0, &w.cx, c, 0.0, &mut w.m1);
+    K::mul_nn_mnn(1.0, c, q, 0.0, &mut w.cx);
+    K::mul_nt_mnm(1.0, &w.cx, c, 0.0, &mut w.m2);
+    K::symmetrize_m(&mut w.m1);
+    K::symmetrize_m(&mut w.m2);
+    if w.e.as_slice()[..m].iter().any(|v| !v.is_finite()) {
         return Consistency::Consistent;
     }
     // Fixed-point search from the filter's τ (kept inside the simplex). Each iterate gives two
@@ -139,12 +163,15 @@ pub(crate) fn check(
     t = t.map(|v| v / sum);
     let mut previous = f64::NAN;
     for _ in 0..MAX_ITERATIONS {
-        if !direction(w, r, t) {
+        if !direction::<K>(w, r, t) {
             return Consistency::Consistent;
         }
-        let delta = dense_kernels::dot(w.e.as_slice(), w.d.as_slice());
-        let h =
-            [quad(&w.m1, &w.d, &mut w.t).sqrt(), quad(&w.m2, &w.d, &mut w.t).sqrt(), quad(r, &w.d, &mut w.t).sqrt()];
+        let delta = dense_kernels::dot(&w.e.as_slice()[..m], &w.d.as_slice()[..m]);
+        let h = [
+            quad::<K>(&w.m1, &w.d, &mut w.t, m).sqrt(),
+            quad::<K>(&w.m2, &w.d, &mut w.t, m).sqrt(),
+            quad::<K>(r, &w.d, &mut w.t, m).sqrt(),
+        ];
         let support = h[0] + h[1] + h[2];
         let g = delta - support;
         if !(g.is_finite() && support.is_finite()) {

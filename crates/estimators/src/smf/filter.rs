@@ -13,6 +13,7 @@ use super::consistency::{self, Consistency, ConsistencyWork, InconsistencyPolicy
 use super::fallback::{FallbackReason, GainCtx, clamp_tau, near_simplex};
 use super::gain::GainWork;
 use super::input::{InputModel, check_in_box, effective_noise};
+use super::kernels::StepFns;
 use super::partial::SubsetFilter;
 use super::two_multiplier::TwoMultiplierSolver;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
@@ -168,6 +169,18 @@ struct Workspace {
     cons: ConsistencyWork,
     /// A zero measurement for the prediction-only step's certification (`L = 0`).
     y_zero: DVector<f64>,
+    /// The step's parts compiled for this size, or the general ones (module `kernels`).
+    fns: StepFns,
+}
+
+impl Workspace {
+    /// Runs the step's parts with `fns` (the solver's own are set apart).
+    fn set_fns(&mut self, fns: StepFns) {
+        self.fns = fns;
+        self.cert.fns = fns;
+        self.gain.fns = fns;
+        self.cons.fns = fns;
+    }
 }
 
 /// What [`SetMembershipFilter::predict`] keeps for a following [`SetMembershipFilter::update`]:
@@ -221,6 +234,21 @@ impl SetMembershipFilter<TwoMultiplierSolver> {
     pub fn new(setup: Setup) -> Result<Self, EstimatorError> {
         Self::with_solver(setup, TwoMultiplierSolver::new())
     }
+
+    /// Runs every later step with the runtime-size kernels instead of those compiled for the
+    /// filter's size (same numbers; for the tests and benches that compare the two).
+    #[doc(hidden)]
+    pub fn use_general_kernels(&mut self) {
+        self.ws.set_fns(StepFns::general());
+        self.solver.use_general_kernels();
+        self.partial.clear();
+    }
+
+    /// Whether the step runs code compiled for the filter's size (module `kernels`).
+    #[doc(hidden)]
+    pub fn runs_compiled_step(&self) -> bool {
+        self.ws.fns.fixed && self.solver.runs_compiled_kernels()
+    }
 }
 
 impl<S: UpdateSolver> SetMembershipFilter<S> {
@@ -267,6 +295,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                 gain_r: DMatrix::zeros(m, m),
                 cons: ConsistencyWork::new(n, m),
                 y_zero: DVector::zeros(m),
+                fns: StepFns::for_sizes(n, m),
             },
             pending: PendingPrediction {
                 armed: false,
@@ -708,6 +737,13 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
 }
 
 impl<S: UpdateSolver> SetMembershipFilter<S> {
+    /// Runs the runtime-size kernels when `parent` does (a partial step's filter).
+    pub(super) fn follow_kernels_of(&mut self, parent: &Self) {
+        if !parent.ws.fns.fixed {
+            self.ws.set_fns(StepFns::general());
+        }
+    }
+
     /// The filter's own proof ([`consistency`]) that `y` contradicts the set predicted with
     /// `model` and `u` and the noise bounds: `Some(excess)` when it finds one. Only workspaces
     /// change; allocation-free.
@@ -773,8 +809,7 @@ fn consistency_of(
     r: &DMatrix<f64>,
     y: &DVector<f64>,
 ) -> Consistency {
-    dense_kernels::gemv(1.0, model.a, center, 0.0, &mut ws.cons.z);
-    dense_kernels::gemv(1.0, model.b, u_used, 1.0, &mut ws.cons.z);
+    (ws.fns.centre)(model.a, model.b, center, u_used, &mut ws.cons.z);
     let q_used = if bounded { &ws.q_eff } else { q };
     consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm)
 }
@@ -791,8 +826,7 @@ fn predictor<'a>(
     u: &'a DVector<f64>,
     ws: &mut Workspace,
 ) -> (bool, &'a DVector<f64>) {
-    dense_kernels::mul_nn(1.0, model.a, shape, 0.0, &mut ws.ap);
-    dense_kernels::mul_nt(1.0, &ws.ap, model.a, 0.0, &mut ws.x1);
+    (ws.fns.x1)(model.a, shape, &mut ws.ap, &mut ws.x1);
     match input {
         InputModel::Predictor => (false, u),
         InputModel::BoundedDisturbance { mid, w_diag, .. } => {

@@ -4,6 +4,8 @@
 
 use nalgebra::DMatrix;
 
+use super::kernels::{Kernels, StepFns};
+
 /// Value, gradient and Hessian of `g` on the positive orthant, at one `τ`.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Eval {
@@ -36,6 +38,8 @@ pub(crate) struct GainWork {
     /// The `τ` (bits) whose gain `l`, `k` hold, after a successful [`GainWork::gain`] on the
     /// data of the last [`GainWork::load`].
     gain_tau: Option<[u64; 3]>,
+    /// The kernels of this size (module [`super::kernels`]).
+    pub(crate) fns: StepFns,
 }
 
 impl GainWork {
@@ -60,38 +64,55 @@ impl GainWork {
             b3: nm(),
             wn: nm(),
             gain_tau: None,
+            fns: StepFns::for_sizes(n, m),
         }
     }
 
     /// Precomputes the `τ`-independent products `X₁Cᵀ`, `QCᵀ`, `CX₁Cᵀ`, `CQCᵀ`.
     pub(crate) fn load(&mut self, x1: &DMatrix<f64>, q: &DMatrix<f64>, c: &DMatrix<f64>) {
+        (self.fns.load)(self, x1, q, c)
+    }
+
+    /// [`GainWork::load`] with the kernels `K`.
+    pub(crate) fn load_with<K: Kernels>(&mut self, x1: &DMatrix<f64>, q: &DMatrix<f64>, c: &DMatrix<f64>) {
         self.gain_tau = None;
-        dense_kernels::mul_nt(1.0, x1, c, 0.0, &mut self.x1c);
-        dense_kernels::mul_nt(1.0, q, c, 0.0, &mut self.qc);
-        dense_kernels::mul_nn(1.0, c, &self.x1c, 0.0, &mut self.cx1c);
-        dense_kernels::mul_nn(1.0, c, &self.qc, 0.0, &mut self.cqc);
+        K::mul_nt_nnm(1.0, x1, c, 0.0, &mut self.x1c);
+        K::mul_nt_nnm(1.0, q, c, 0.0, &mut self.qc);
+        K::mul_nn_mnm(1.0, c, &self.x1c, 0.0, &mut self.cx1c);
+        K::mul_nn_mnm(1.0, c, &self.qc, 0.0, &mut self.cqc);
     }
 
     /// The gain (G1) for `τ` (after [`GainWork::load`]): fills `G`, `W`, `L`, `K`.
     /// `false` if `S` is not numerically positive definite or something is not finite.
     pub(crate) fn gain(&mut self, tau: [f64; 3], c: &DMatrix<f64>, r: &DMatrix<f64>) -> bool {
+        (self.fns.gain)(self, tau, c, r)
+    }
+
+    /// [`GainWork::gain`] with the kernels `K`.
+    pub(crate) fn gain_with<K: Kernels>(&mut self, tau: [f64; 3], c: &DMatrix<f64>, r: &DMatrix<f64>) -> bool {
         self.gain_tau = None;
         let [t1, t2, t3] = tau;
+        let (n, m) = K::dims(self.l.nrows(), self.l.ncols());
+        let (nm, mm) = (n * m, m * m);
         // M Cᵀ = X₁Cᵀ/τ₁ + QCᵀ/τ₂ and N = C M Cᵀ without forming M.
-        dense_kernels::lin2(self.mc.as_mut_slice(), 1.0 / t1, self.x1c.as_slice(), 1.0 / t2, self.qc.as_slice());
-        dense_kernels::lin2(self.nmat.as_mut_slice(), 1.0 / t1, self.cx1c.as_slice(), 1.0 / t2, self.cqc.as_slice());
+        let (x1c, qc) = (&self.x1c.as_slice()[..nm], &self.qc.as_slice()[..nm]);
+        dense_kernels::lin2(&mut self.mc.as_mut_slice()[..nm], 1.0 / t1, x1c, 1.0 / t2, qc);
+        let (cx1c, cqc) = (&self.cx1c.as_slice()[..mm], &self.cqc.as_slice()[..mm]);
+        dense_kernels::lin2(&mut self.nmat.as_mut_slice()[..mm], 1.0 / t1, cx1c, 1.0 / t2, cqc);
         // S = τ₃ N + R = G Gᵀ.
-        dense_kernels::lin2(self.g.as_mut_slice(), t3, self.nmat.as_slice(), 1.0, r.as_slice());
-        if dense_kernels::cholesky_in_place(&mut self.g).is_err() {
+        let (nmat, r) = (&self.nmat.as_slice()[..mm], &r.as_slice()[..mm]);
+        dense_kernels::lin2(&mut self.g.as_mut_slice()[..mm], t3, nmat, 1.0, r);
+        if K::cholesky_m(&mut self.g).is_err() {
             return false;
         }
         // W = M Cᵀ G⁻ᵀ G⁻¹, L = τ₃ W, K = I − L C.
-        self.w.copy_from(&self.mc);
-        dense_kernels::solve_right_lower_t(&mut self.w, &self.g);
-        dense_kernels::solve_right_lower(&mut self.w, &self.g);
-        dense_kernels::lin2(self.l.as_mut_slice(), t3, self.w.as_slice(), 0.0, self.w.as_slice());
-        dense_kernels::i_minus_lc(&self.l, c, &mut self.k);
-        let finite = self.w.as_slice().iter().all(|v| v.is_finite());
+        self.w.as_mut_slice()[..nm].copy_from_slice(&self.mc.as_slice()[..nm]);
+        K::solve_right_lower_t_nm(&mut self.w, &self.g);
+        K::solve_right_lower_nm(&mut self.w, &self.g);
+        let w = &self.w.as_slice()[..nm];
+        dense_kernels::lin2(&mut self.l.as_mut_slice()[..nm], t3, w, 0.0, w);
+        K::i_minus_lc(&self.l, c, &mut self.k);
+        let finite = w.iter().all(|v| v.is_finite());
         if finite {
             self.gain_tau = Some(tau.map(f64::to_bits));
         }
@@ -113,29 +134,46 @@ impl GainWork {
         c: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Option<Eval> {
-        if !self.gain(tau, c, r) {
+        (self.fns.eval)(self, tau, x1, q, c, r)
+    }
+
+    /// [`GainWork::eval`] with the kernels `K`.
+    pub(crate) fn eval_with<K: Kernels>(
+        &mut self,
+        tau: [f64; 3],
+        x1: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        c: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Option<Eval> {
+        if !self.gain_with::<K>(tau, c, r) {
             return None;
         }
         let [t1, t2, t3] = tau;
+        let (n, m) = K::dims(self.l.nrows(), self.l.ncols());
+        let (nn, nm) = (n * n, n * m);
+        let dot = |a: &DMatrix<f64>, b: &DMatrix<f64>, len: usize| {
+            dense_kernels::dot(&a.as_slice()[..len], &b.as_slice()[..len])
+        };
         // tr T₁ = ⟨K X₁, K⟩/τ₁, tr T₂ = ⟨K Q, K⟩/τ₂, tr(W R Wᵀ) = ⟨W R, W⟩.
-        dense_kernels::mul_nn(1.0, &self.k, x1, 0.0, &mut self.kx);
-        let tr1 = dense_kernels::dot(self.kx.as_slice(), self.k.as_slice()) / t1;
-        dense_kernels::mul_nn(1.0, &self.k, q, 0.0, &mut self.kx);
-        let tr2 = dense_kernels::dot(self.kx.as_slice(), self.k.as_slice()) / t2;
-        dense_kernels::mul_nn(1.0, &self.w, r, 0.0, &mut self.wr);
-        let wrw = dense_kernels::dot(self.wr.as_slice(), self.w.as_slice());
+        K::mul_nn_nnn(1.0, &self.k, x1, 0.0, &mut self.kx);
+        let tr1 = dot(&self.kx, &self.k, nn) / t1;
+        K::mul_nn_nnn(1.0, &self.k, q, 0.0, &mut self.kx);
+        let tr2 = dot(&self.kx, &self.k, nn) / t2;
+        K::mul_nn_nmm(1.0, &self.w, r, 0.0, &mut self.wr);
+        let wrw = dot(&self.wr, &self.w, nm);
         let g = tr1 + tr2 + t3 * wrw;
         let grad = [-tr1 / t1, -tr2 / t2, -wrw];
         // βᵢ = ãᵢ G⁻ᵀ.
-        dense_kernels::mul_nn(1.0 / t1, &self.k, &self.x1c, 0.0, &mut self.b1);
-        dense_kernels::solve_right_lower_t(&mut self.b1, &self.g);
-        dense_kernels::mul_nn(1.0 / t2, &self.k, &self.qc, 0.0, &mut self.b2);
-        dense_kernels::solve_right_lower_t(&mut self.b2, &self.g);
-        self.b3.copy_from(&self.wr);
-        dense_kernels::solve_right_lower_t(&mut self.b3, &self.g); // −β₃
-        dense_kernels::mul_nn(1.0, &self.w, &self.nmat, 0.0, &mut self.wn);
-        dense_kernels::solve_right_lower_t(&mut self.wn, &self.g);
-        let d = |a: &DMatrix<f64>, b: &DMatrix<f64>| dense_kernels::dot(a.as_slice(), b.as_slice());
+        K::mul_nn_nnm(1.0 / t1, &self.k, &self.x1c, 0.0, &mut self.b1);
+        K::solve_right_lower_t_nm(&mut self.b1, &self.g);
+        K::mul_nn_nnm(1.0 / t2, &self.k, &self.qc, 0.0, &mut self.b2);
+        K::solve_right_lower_t_nm(&mut self.b2, &self.g);
+        self.b3.as_mut_slice()[..nm].copy_from_slice(&self.wr.as_slice()[..nm]);
+        K::solve_right_lower_t_nm(&mut self.b3, &self.g); // −β₃
+        K::mul_nn_nmm(1.0, &self.w, &self.nmat, 0.0, &mut self.wn);
+        K::solve_right_lower_t_nm(&mut self.wn, &self.g);
+        let d = |a: &DMatrix<f64>, b: &DMatrix<f64>| dot(a, b, nm);
         let h11 = 2.0 * (tr1 - t3 * d(&self.b1, &self.b1)) / (t1 * t1);
         let h22 = 2.0 * (tr2 - t3 * d(&self.b2, &self.b2)) / (t2 * t2);
         let h12 = -2.0 * t3 * d(&self.b1, &self.b2) / (t1 * t2);

@@ -99,6 +99,7 @@ pub mod fallback;
 pub mod filter;
 pub(crate) mod gain;
 pub mod input;
+mod kernels;
 pub mod lmi28;
 pub mod nonlinear;
 pub mod observer;

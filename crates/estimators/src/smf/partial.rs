@@ -135,6 +135,7 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
         };
         let mut filter = SetMembershipFilter::with_solver(setup, solver)?;
         filter.input = self.input.clone();
+        filter.follow_kernels_of(self);
         Ok(SubsetFilter { filter, c: DMatrix::zeros(k, n), y: DVector::zeros(k), r })
     }
 }

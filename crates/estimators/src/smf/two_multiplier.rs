@@ -91,6 +91,7 @@
 //! iterations in steady state, 4–5 when `τ` moves far between steps.
 
 use super::gain::GainWork;
+use super::kernels::StepFns;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 use crate::error::EstimatorError;
 
@@ -107,6 +108,8 @@ pub struct TwoMultiplierSolver {
     work: Option<GainWork>,
     max_iterations: u32,
     tolerance: f64,
+    /// Whether the runtime-size kernels are used whatever the size (module `kernels`).
+    general: bool,
 }
 
 impl Default for TwoMultiplierSolver {
@@ -142,7 +145,21 @@ const TANGENTS: [[f64; 2]; 3] = [[0.0, 1.0], [1.0, 0.0], [1.0, -1.0]];
 impl TwoMultiplierSolver {
     /// Default settings: at most 100 Newton iterations, decrement tolerance `1e-13` relative.
     pub fn new() -> Self {
-        Self { work: None, max_iterations: 100, tolerance: 1e-13 }
+        Self { work: None, max_iterations: 100, tolerance: 1e-13, general: false }
+    }
+
+    /// Uses the runtime-size kernels from the next solve on (same numbers as those compiled for
+    /// the size; for comparisons).
+    pub(crate) fn use_general_kernels(&mut self) {
+        self.general = true;
+        if let Some(w) = &mut self.work {
+            w.fns = StepFns::general();
+        }
+    }
+
+    /// Whether the solves run the kernels compiled for the prepared size.
+    pub(crate) fn runs_compiled_kernels(&self) -> bool {
+        self.work.as_ref().is_some_and(|w| w.fns.fixed)
     }
 
     /// Sets the iteration limit (at least 1).
@@ -494,7 +511,11 @@ impl UpdateSolver for TwoMultiplierSolver {
     }
 
     fn prepare(&mut self, n: usize, m: usize) -> Result<(), EstimatorError> {
-        self.work = Some(GainWork::new(n, m));
+        let mut work = GainWork::new(n, m);
+        if self.general {
+            work.fns = StepFns::general();
+        }
+        self.work = Some(work);
         Ok(())
     }
 
@@ -505,7 +526,7 @@ impl UpdateSolver for TwoMultiplierSolver {
 
     /// The same settings, without the workspace (prepared for its own size).
     fn for_fewer_outputs(&self) -> Option<Self> {
-        Some(Self { work: None, max_iterations: self.max_iterations, tolerance: self.tolerance })
+        Some(Self { work: None, max_iterations: self.max_iterations, tolerance: self.tolerance, general: self.general })
     }
 
     fn solve(
