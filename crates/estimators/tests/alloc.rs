@@ -1,4 +1,5 @@
-//! No heap allocation in a Kalman step or a set-membership step (two-multiplier, fallback,
+//! No heap allocation in a Kalman step or a set-membership step (two-multiplier, compiled for its
+//! size or on the runtime-size kernels, fallback,
 //! re-certification with the fallback, Yang–Li (a), SDP-backed) after a warm-up step (a counting global allocator, counting only on this test's thread).
 
 mod common;
@@ -76,6 +77,17 @@ fn steps_do_not_allocate_after_warm_up() {
         });
         assert_eq!(n, 0, "two-multiplier step allocated (m = {m})");
         assert!(smf.estimate().report.fallback.is_none());
+        assert!(smf.runs_compiled_step(), "(4, {m}) runs the step compiled for its size");
+        // The runtime-size step, as a filter of another size runs it.
+        let mut general = smf.clone();
+        general.use_general_kernels();
+        general.step(&model, &u, &ys[0]).unwrap();
+        let (_, n) = count(|| {
+            for y in &ys {
+                general.step(&model, &u, y).unwrap();
+            }
+        });
+        assert_eq!(n, 0, "two-multiplier step with the runtime-size kernels allocated (m = {m})");
 
         // Also: the fallback path and the Yang–Li (a) reconstruction.
         smf.set_time_budget(Some(std::time::Duration::ZERO));
