@@ -119,14 +119,18 @@ fn vessel(c: &mut Criterion) {
     // The default stopping rule (the estimate within 1e-9 of the converged one by the observed
     // contraction), and iterating to the 1e-10 step tolerance, side by side.
     let paper = NonlinearMheSettings::paper().estimate_tolerance;
-    for (name, arrival, estimate_tolerance) in [
-        ("mhe-ukf-arrival", NonlinearArrival::Ukf(UkfParams::paper()), paper),
-        ("mhe-ukf-arrival-full", NonlinearArrival::Ukf(UkfParams::paper()), None),
-        ("mhe-ekf-arrival", NonlinearArrival::Ekf, paper),
+    // Then real-time iterations: one and two Gauss–Newton iterations per update.
+    for (name, arrival, estimate_tolerance, real_time_iterations) in [
+        ("mhe-ukf-arrival", NonlinearArrival::Ukf(UkfParams::paper()), paper, None),
+        ("mhe-ukf-arrival-full", NonlinearArrival::Ukf(UkfParams::paper()), None, None),
+        ("mhe-ekf-arrival", NonlinearArrival::Ekf, paper, None),
+        ("mhe-ukf-arrival-rti-1", NonlinearArrival::Ukf(UkfParams::paper()), paper, Some(1)),
+        ("mhe-ukf-arrival-rti-2", NonlinearArrival::Ukf(UkfParams::paper()), paper, Some(2)),
     ] {
         let mut s = NonlinearMheSettings::paper();
         s.arrival = arrival;
         s.estimate_tolerance = estimate_tolerance;
+        s.real_time_iterations = real_time_iterations;
         let setup =
             Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 };
         let mut warm = NonlinearMhe::new(setup, s).unwrap();

@@ -99,10 +99,15 @@ pub enum SolveOutcome {
     FallbackUsed,
     /// The step's constraints could not all hold; the estimate of a relaxed problem is published.
     Relaxed,
+    /// A real-time iteration scheme spent its configured budget of iterations, from the previous
+    /// step's solution: the iterate is published, not converged by design (clean: the step did
+    /// what its settings ask).
+    RealTimeIteration,
 }
 
 impl SolveOutcome {
-    /// A short label: `initial`, `predicted`, `converged`, `not-converged`, `fallback`, `relaxed`.
+    /// A short label: `initial`, `predicted`, `converged`, `not-converged`, `fallback`, `relaxed`,
+    /// `real-time`.
     #[must_use]
     pub fn label(self) -> &'static str {
         match self {
@@ -112,6 +117,7 @@ impl SolveOutcome {
             SolveOutcome::NotConverged => "not-converged",
             SolveOutcome::FallbackUsed => "fallback",
             SolveOutcome::Relaxed => "relaxed",
+            SolveOutcome::RealTimeIteration => "real-time",
         }
     }
 }
@@ -171,8 +177,10 @@ impl StepStatus {
     /// guarantee (if any) holds.
     #[must_use]
     pub fn is_clean(&self) -> bool {
-        matches!(self.outcome, SolveOutcome::Initial | SolveOutcome::Predicted | SolveOutcome::Converged)
-            && self.data != DataCheck::Inconsistent
+        matches!(
+            self.outcome,
+            SolveOutcome::Initial | SolveOutcome::Predicted | SolveOutcome::Converged | SolveOutcome::RealTimeIteration
+        ) && self.data != DataCheck::Inconsistent
             && !matches!(self.guarantee, Guarantee::Lost | Guarantee::Diverging)
     }
 

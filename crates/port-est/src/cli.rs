@@ -271,7 +271,7 @@ Files:
               `lo1,…,lon,hi1,…,hin,trace_shape` (guaranteed intervals), or nothing (point
               estimates of the moving-horizon estimators: no bounds), then the estimator's own
               numbers (`tau1,tau2,tau3`; `scale,distance`; `iterations`) and `status`: converged,
-              predicted, not-converged, fallback or relaxed, with `+inconsistent` and
+              predicted, not-converged, fallback, relaxed or real-time, with `+inconsistent` and
               `+not-guaranteed` where they apply. Steps that do not end cleanly are counted in a
               warning on stderr; --strict makes the first one an error. The file is written to a
               temporary file beside it and renamed on success (removed on Ctrl-C or SIGTERM; one

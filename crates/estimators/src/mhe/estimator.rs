@@ -79,6 +79,7 @@ pub(crate) fn window_outcome(status: WindowStatus, measured: bool) -> SolveOutco
         WindowStatus::Converged => SolveOutcome::Predicted,
         WindowStatus::NotConverged | WindowStatus::InnerFailure => SolveOutcome::NotConverged,
         WindowStatus::Infeasible => SolveOutcome::Relaxed,
+        WindowStatus::RealTimeIteration => SolveOutcome::RealTimeIteration,
     }
 }
 

@@ -22,6 +22,9 @@ pub enum WindowStatus {
     /// The constraints of the window cannot all hold (the nonlinear MHE's boxes on `ω` and `ν`):
     /// the unconstrained estimate is published.
     Infeasible,
+    /// The nonlinear MHE's real-time iterations spent their budget (as configured: not
+    /// converged by design); the last iterate is published.
+    RealTimeIteration,
 }
 
 /// Counters of one window solve.

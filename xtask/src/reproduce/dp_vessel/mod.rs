@@ -11,6 +11,7 @@
 
 pub mod certified;
 pub mod figures;
+pub mod real_time;
 pub mod report;
 pub mod run;
 
@@ -136,6 +137,8 @@ pub struct Summary {
     /// The certified position and heading of `smf-nl` with bounded noise (not the paper's
     /// experiment).
     pub certified: certified::CertifiedVessel,
+    /// `mhe-ukf`'s runs replayed with real-time iterations, per scenario.
+    pub real_time: Vec<real_time::RealTimeReplay>,
     /// Total wall-clock seconds.
     pub total_seconds: f64,
 }
@@ -163,7 +166,9 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
     let total = SCENARIOS.len() * run::ESTIMATORS.len() * sizes.seeds;
     let bar = super::progress_bar(total as u64, "dp-vessel closed-loop runs");
     let mut results = Vec::new();
+    let mut real_time = Vec::new();
     for scenario in &SCENARIOS {
+        let mut replays = Vec::new();
         for spec in run::ESTIMATORS {
             let mut seeds = Vec::with_capacity(sizes.seeds);
             let mut step_ns = Vec::new();
@@ -171,6 +176,12 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
             for i in 0..sizes.seeds {
                 let s = seed.wrapping_add(i as u64);
                 let rec = run::run_one(scenario, spec, sizes.steps, s)?;
+                if spec.id == estimators::registry::names::MHE_UKF {
+                    let mut tally = real_time::ReplayTally::default();
+                    real_time::replay(scenario, &rec, &mut tally)
+                        .map_err(|e| format!("{} / seed {s}: {e}", scenario.id))?;
+                    replays.push(tally);
+                }
                 let mut m = run::metrics(&rec, s, sizes.steady_from_s, limits);
                 step_ns.append(&mut m.step_ns);
                 seeds.push(m);
@@ -199,6 +210,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
                 csv,
             });
         }
+        real_time.push(real_time::RealTimeReplay::of(scenario.id, replays));
     }
     bar.finish_and_clear();
     let figures = figures::comparison_figures(&out.join("figures"), &results)
@@ -221,9 +233,15 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
         load_average,
         certified,
+        real_time,
         total_seconds: t0.elapsed().as_secs_f64(),
     };
-    let report = format!("{}\n{}", report::markdown(&summary), certified::markdown(&summary.certified));
+    let report = format!(
+        "{}\n{}\n{}",
+        report::markdown(&summary),
+        real_time::markdown(&summary.real_time),
+        certified::markdown(&summary.certified)
+    );
     outputs::write_summary_and_report(out, &summary, &report)?;
     Ok(summary)
 }
@@ -271,6 +289,15 @@ impl Summary {
             "results": results,
             "figures": self.figures.iter().map(|f| f.0.clone()).collect::<Vec<_>>(),
             "claims": self.claims.iter().map(|c| json!({"claim": c.claim, "verdict": c.verdict})).collect::<Vec<_>>(),
+            "real_time_distance_sigma": self
+                .real_time
+                .iter()
+                .map(|x| json!({
+                    "scenario": x.scenario,
+                    "steps": x.steps,
+                    "median_p99_worst": x.distance_sigma.iter().map(|d| d.map(r)).collect::<Vec<_>>(),
+                }))
+                .collect::<Vec<_>>(),
             "certified": {
                 "seeds": self.certified.seeds,
                 "steps": self.certified.steps,

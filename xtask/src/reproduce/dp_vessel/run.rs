@@ -84,29 +84,53 @@ fn build_ukf(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
     registry::build(names::UKF, setup(s), Some(EstimatorSettings::Unscented(ukf_params(s))))
 }
 
-fn mhe(s: &FilterSettings, prior: estimators::mhe::NonlinearPrior) -> Result<AnyEstimator, EstimatorError> {
+fn mhe(
+    s: &FilterSettings,
+    prior: estimators::mhe::NonlinearPrior,
+    real_time_iterations: Option<usize>,
+) -> Result<AnyEstimator, EstimatorError> {
     use estimators::mhe::{NonlinearArrival, NonlinearMheSettings};
     let mut settings = NonlinearMheSettings::paper();
     settings.arrival = NonlinearArrival::Ukf(ukf_params(s));
     settings.prior = prior;
+    settings.real_time_iterations = real_time_iterations;
     registry::build(names::MHE_UKF, setup(s), Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(settings))))
 }
 
 /// The paper's MHE: prior mean `x̂_{s+1|T}` (the previous estimate), UKF arrival weight.
 fn build_mhe(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
-    mhe(s, estimators::mhe::NonlinearPrior::Smoothed)
+    mhe(s, estimators::mhe::NonlinearPrior::Smoothed, None)
 }
+
+/// The paper's MHE with `k` real-time iterations per update (Gauss–Newton iterations from the
+/// shifted previous window) instead of iterating to the tolerance.
+pub fn build_mhe_real_time(s: &FilterSettings, k: usize) -> Result<AnyEstimator, EstimatorError> {
+    mhe(s, estimators::mhe::NonlinearPrior::Smoothed, Some(k))
+}
+
+fn build_mhe_rti(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
+    build_mhe_real_time(s, REAL_TIME_ITERATIONS)
+}
+
+/// Real-time iterations of the `mhe-ukf-rti` estimator in the loop.
+pub const REAL_TIME_ITERATIONS: usize = 2;
 
 /// The MHE whose arrival UKF keeps its own mean (no measurement counted twice).
 fn build_mhe_own_mean(s: &FilterSettings) -> Result<AnyEstimator, EstimatorError> {
-    mhe(s, estimators::mhe::NonlinearPrior::ArrivalFilter)
+    mhe(s, estimators::mhe::NonlinearPrior::ArrivalFilter, None)
 }
 
 /// The estimators in the loop, in table order: the paper's MHE with a UKF arrival cost
-/// (N = 10, Gauss–Newton on the window), then the EKF and the UKF as baselines.
+/// (N = 10, Gauss–Newton on the window), its variants (the arrival UKF's own mean; real-time
+/// iterations), then the EKF and the UKF as baselines.
 pub const ESTIMATORS: &[EstimatorSpec] = &[
     EstimatorSpec { id: names::MHE_UKF, label: "MHE, UKF arrival cost (N = 10)", build: build_mhe },
     EstimatorSpec { id: "mhe-ukf-own", label: "MHE, arrival UKF with its own mean", build: build_mhe_own_mean },
+    EstimatorSpec {
+        id: "mhe-ukf-rti",
+        label: "MHE, UKF arrival cost, 2 real-time iterations per step",
+        build: build_mhe_rti,
+    },
     EstimatorSpec { id: names::EKF, label: "EKF", build: build_ekf },
     EstimatorSpec { id: names::UKF, label: "UKF (α = 0.5, β = 2, κ = −2)", build: build_ukf },
 ];
@@ -190,6 +214,18 @@ pub fn matched_q_diag() -> Result<Vec<f64>, String> {
     Ok(q)
 }
 
+/// The estimators' settings of `scenario`.
+///
+/// # Errors
+/// The vessel's parameters are invalid.
+pub fn filter_settings(scenario: &Scenario) -> Result<FilterSettings, String> {
+    let mut settings = FilterSettings::digest(scenario.r_psi);
+    if scenario.matched_q {
+        settings.q_diag = matched_q_diag()?;
+    }
+    Ok(settings)
+}
+
 /// Runs one closed loop of `duration_s` seconds.
 ///
 /// # Errors
@@ -197,10 +233,7 @@ pub fn matched_q_diag() -> Result<Vec<f64>, String> {
 pub fn run_one(scenario: &Scenario, spec: &EstimatorSpec, steps: usize, seed: u64) -> Result<LoopRecord, String> {
     let params = VesselParams::paper();
     let plant = DiscreteVessel::paper(params).map_err(|e| format!("vessel: {e}"))?;
-    let mut settings = FilterSettings::digest(scenario.r_psi);
-    if scenario.matched_q {
-        settings.q_diag = matched_q_diag()?;
-    }
+    let settings = filter_settings(scenario)?;
     let mut est = (spec.build)(&settings).map_err(|e| format!("{}: {e}", spec.id))?;
     // The paper's estimators have no data check.
     est.set_data_checks(DataChecks::OFF).map_err(|e| format!("{}: {e}", spec.id))?;

@@ -399,7 +399,11 @@ impl NonlinearMhe {
         let mut infeasible = false;
         // The relative size of the last accepted step (the contraction estimate).
         let mut last_ratio: Option<f64> = None;
-        while iterations < self.settings.max_iterations {
+        // Real-time iterations: the budget, and whether `d` holds the undamped factor at the
+        // last linearisation point (then the covariance below takes it).
+        let budget = self.settings.real_time_iterations.unwrap_or(self.settings.max_iterations);
+        let mut factor_at_last_point = false;
+        while iterations < budget {
             iterations += 1;
             win.linearise(model, rings, &wts, start, len)?;
             if constrained {
@@ -445,6 +449,7 @@ impl NonlinearMhe {
                 if trial.is_finite() && trial <= cost + 1e-13 * cost.abs() {
                     win.accept_trial(len);
                     cost = trial;
+                    factor_at_last_point = mu == 0.0;
                     // Linear convergence at the observed rate c: the iterate is within
                     // ‖Δ‖ c/(1 − c) of the limit.
                     if let (Some(limit), Some(last)) = (self.settings.estimate_tolerance, last_ratio) {
@@ -472,6 +477,10 @@ impl NonlinearMhe {
                 break;
             }
         }
+        let real_time = self.settings.real_time_iterations.is_some();
+        if real_time && status == WindowStatus::NotConverged {
+            status = WindowStatus::RealTimeIteration;
+        }
         if infeasible {
             status = WindowStatus::Infeasible;
         }
@@ -480,10 +489,11 @@ impl NonlinearMhe {
         }
         // Covariance of the last state: the last diagonal block of the inverse Gauss–Newton
         // matrix = (L_last L_lastᵀ)⁻¹ of the (undamped) block Cholesky.
-        let have_cov = factor_current || {
-            win.linearise(model, rings, &wts, start, len)?;
-            win.factor_and_solve(rings, &wts, start, len, 0.0)
-        };
+        let have_cov =
+            factor_current || (real_time && status == WindowStatus::RealTimeIteration && factor_at_last_point) || {
+                win.linearise(model, rings, &wts, start, len)?;
+                win.factor_and_solve(rings, &wts, start, len, 0.0)
+            };
         // Commit.
         for j in 0..len {
             self.traj[j].copy_from(&win.x[j]);

@@ -5,6 +5,9 @@ use nalgebra::DVector;
 use crate::error::EstimatorError;
 use crate::ukf::UkfParams;
 
+/// The most real-time iterations per update: beyond a few, iterate to the tolerance instead.
+pub const MAX_REAL_TIME_ITERATIONS: usize = 10;
+
 /// How the arrival-cost weight `P_s` advances when the window slides.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -37,6 +40,16 @@ pub struct NonlinearMheSettings {
     /// estimate needs (default `1e−9`, which keeps the vessel's estimates within `1e−8` of the
     /// fully iterated ones, tested; `None`: iterate to `tolerance`).
     pub estimate_tolerance: Option<f64>,
+    /// Real-time iterations (as acados' RTI scheme): `Some(k)` spends at most `k` Gauss–Newton
+    /// iterations per update, from the previous window shifted by one sample and the new state
+    /// predicted through `f`, and publishes the iterate then reached with the status
+    /// [`WindowStatus::RealTimeIteration`](crate::mhe::WindowStatus::RealTimeIteration) (not
+    /// converged, by design); the covariance comes from the Gauss–Newton matrix at the last
+    /// linearisation point instead of one more linearisation at the published window. `None`
+    /// (default): iterate to `tolerance` (or `max_iterations`). At most
+    /// [`MAX_REAL_TIME_ITERATIONS`]; docs/dp-vessel.md measures the distance to the converged
+    /// windows.
+    pub real_time_iterations: Option<usize>,
     /// The prior mean of a new window start (default: the paper's smoothed estimate).
     pub prior: NonlinearPrior,
     /// Optional box `[lo, hi]` on the disturbances `ω_j = x_{j+1} − f(x_j, u_j)` (length `n`;
@@ -73,6 +86,7 @@ impl NonlinearMheSettings {
             max_iterations: 20,
             tolerance: 1e-10,
             estimate_tolerance: Some(1e-9),
+            real_time_iterations: None,
             prior: NonlinearPrior::Smoothed,
             w_box: None,
             v_box: None,
@@ -123,6 +137,14 @@ impl NonlinearMheSettings {
                 estimator: "mhe-ukf",
                 message: format!("estimate_tolerance must be positive and finite, got {t}"),
             });
+        }
+        if let Some(k) = self.real_time_iterations
+            && !(1..=MAX_REAL_TIME_ITERATIONS).contains(&k)
+        {
+            return Err(bad(format!(
+                "real_time_iterations must be between 1 and {MAX_REAL_TIME_ITERATIONS}, got {k} (none: iterate to the \
+                 tolerance)"
+            )));
         }
         if self.max_iterations == 0 || self.tolerance.is_nan() || self.tolerance <= 0.0 {
             return Err(bad(format!(
@@ -179,6 +201,10 @@ mod tests {
         let paper = NonlinearMheSettings::paper;
         assert_eq!(message(&NonlinearMheSettings { horizon: 0, ..paper() }), "the horizon N must be at least 1");
         assert!(message(&NonlinearMheSettings { max_iterations: 0, ..paper() }).contains("max_iterations must be ≥ 1"));
+        for k in [0, MAX_REAL_TIME_ITERATIONS + 1] {
+            let rti = NonlinearMheSettings { real_time_iterations: Some(k), ..paper() };
+            assert!(message(&rti).starts_with("real_time_iterations must be between 1 and 10"), "{k}");
+        }
         for tolerance in [0.0, -1.0, f64::NAN] {
             assert!(message(&NonlinearMheSettings { tolerance, ..paper() }).contains("tolerance > 0"), "{tolerance}");
         }
