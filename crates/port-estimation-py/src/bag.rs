@@ -292,6 +292,19 @@ fn nanoseconds(seconds: f64, what: &str) -> PyResult<i64> {
     }
 }
 
+/// `spec` with step 0 at `start` (s) or `start_ns` (ns), if given (a fixed step only).
+fn with_start(spec: LogSpec, start: Option<f64>, start_ns: Option<i64>) -> PyResult<LogSpec> {
+    if (start.is_some() || start_ns.is_some()) && !matches!(spec.time_base(), ros_bag::TimeBase::FixedStep { .. }) {
+        return Err(value_error("start= and start_ns= apply to a fixed step (ts=), not to driving="));
+    }
+    match (start, start_ns) {
+        (Some(_), Some(_)) => Err(value_error("give start= (s) or start_ns= (ns), not both")),
+        (Some(s), None) => Ok(spec.start_ns(nanoseconds(s, "start")?)),
+        (None, Some(ns)) => Ok(spec.start_ns(ns)),
+        (None, None) => Ok(spec),
+    }
+}
+
 /// The spec the arguments of `read_bag` ask for.
 fn spec(
     (inputs, outputs): (Vec<Mapping>, Vec<Mapping>),
@@ -307,12 +320,7 @@ fn spec(
             }
             LogSpec::fixed_step(ts)
         }
-        (None, Some(topic)) => {
-            if start.is_some() || start_ns.is_some() {
-                return Err(value_error("start= and start_ns= apply to a fixed step (ts=), not to driving="));
-            }
-            LogSpec::per_message(topic)
-        }
+        (None, Some(topic)) => LogSpec::per_message(topic),
         (Some(_), Some(_)) => {
             return Err(value_error(
                 "give ts= (a fixed step, seconds) or driving= (a topic: one step per message), not both",
@@ -324,12 +332,7 @@ fn spec(
             ));
         }
     };
-    match (start, start_ns) {
-        (Some(_), Some(_)) => return Err(value_error("give start= (s) or start_ns= (ns), not both")),
-        (Some(s), None) => spec = spec.start_ns(nanoseconds(s, "start")?),
-        (None, Some(ns)) => spec = spec.start_ns(ns),
-        (None, None) => {}
-    }
+    spec = with_start(spec, start, start_ns)?;
     spec = spec.stamps(match stamps {
         "log" => Stamps::LogTime,
         "header" => Stamps::Header,
@@ -423,7 +426,8 @@ fn open(py: Python<'_>, path: &Path) -> PyResult<Bag> {
 /// 1) is how far topics may lag one another in the file.
 ///
 /// Returns a ``BagLog``: ``est.run(log.u, log.y, measured=log.measured)`` filters it. The file
-/// is read in Rust with the GIL released (Ctrl-C stops it).
+/// is read in Rust with the GIL released (Ctrl-C stops it). A model file's ``[log]`` table is the
+/// same mapping written once: ``ModelFile.read_bag(path)`` reads a bag through it.
 ///
 /// Raises ValueError for bad arguments and a mapping that does not fit the bag (an unknown topic
 /// lists the topics, an unknown field the numeric fields), OSError (FileNotFoundError, …) when
@@ -448,12 +452,27 @@ pub fn read_bag(
 ) -> PyResult<BagLog> {
     let maps = (mappings(inputs, "inputs")?, mappings(outputs, "outputs")?);
     let spec = spec(maps, (ts, driving), stamps, (start, start_ns), reorder_window)?;
+    read_spec(py, path, &spec)
+}
+
+/// Reads the bag at `path` as `spec` says (``read_bag``, ``ModelFile.read_bag``); `start`,
+/// `start_ns` set step 0 of a fixed step.
+pub(crate) fn read_with(
+    py: Python<'_>,
+    path: PathBuf,
+    spec: &LogSpec,
+    (start, start_ns): (Option<f64>, Option<i64>),
+) -> PyResult<BagLog> {
+    read_spec(py, path, &with_start(spec.clone(), start, start_ns)?)
+}
+
+fn read_spec(py: Python<'_>, path: PathBuf, spec: &LogSpec) -> PyResult<BagLog> {
     let names = (
         spec.input_keys().into_iter().map(str::to_owned).collect(),
         spec.output_keys().into_iter().map(str::to_owned).collect(),
     );
     let bag = open(py, &path)?;
-    let mut rows = detached(py, || bag.rows(&spec))?.map_err(|e| bag_error(py, &path, &e, None))?;
+    let mut rows = detached(py, || bag.rows(spec))?.map_err(|e| bag_error(py, &path, &e, None))?;
     let mut tables = Tables::default();
     // Stretches of about `SLICE` with the GIL released, Python's signals looked at between them.
     while !detached(py, || tables.fill(&mut rows))?.map_err(|e| bag_error(py, &path, &e, Some(tables.rows)))? {

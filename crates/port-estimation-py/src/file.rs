@@ -28,11 +28,14 @@ use crate::settings::FileSettings;
 ///     The input range, if given.
 /// has_mhe : bool
 ///     Whether the file has an ``[mhe]`` table (the settings of ``rmhe`` and ``mhe``).
+/// has_log : bool
+///     Whether the file has a ``[log]`` table (how ``read_bag`` reads a ROS 2 bag for it).
 /// path : str
 ///     The file it was read from.
 ///
 /// ``estimator(name, **settings)`` builds a registry estimator from the file, as
-/// ``port-est filter --estimator NAME`` does.
+/// ``port-est filter --estimator NAME`` does; ``read_bag(path)`` reads a ROS 2 bag through the
+/// file's ``[log]`` table, as ``port-est filter --input run.mcap`` does.
 #[pyclass(frozen, module = "port_estimation")]
 pub struct ModelFile {
     file: port_est::Model,
@@ -83,6 +86,37 @@ impl ModelFile {
             source: Some(&self.file),
         };
         Estimator::create(py, name, self.model.bind(py), initial, settings, file)
+    }
+
+    /// Reads a ROS 2 bag (MCAP) as the file's ``[log]`` table maps it (the table ``port-est filter
+    /// --input run.mcap`` reads, parsed by the same code): a ``BagLog`` whose ``u`` and ``y`` have
+    /// the model's inputs and outputs in the model's order, for ``self.estimator(...).run(log.u,
+    /// log.y, measured=log.measured)``. ``start`` (s) or ``start_ns`` (ns) place step 0 of a fixed
+    /// step (``ts``), as for ``read_bag``.
+    ///
+    /// Raises ValueError if the file has no ``[log]`` table, and what ``read_bag`` raises.
+    #[pyo3(signature = (path, *, start = None, start_ns = None))]
+    fn read_bag(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        start: Option<f64>,
+        start_ns: Option<i64>,
+    ) -> PyResult<crate::bag::BagLog> {
+        let Some(spec) = &self.file.log else {
+            return Err(value_error(format!(
+                "{}: no [log] table: a bag is read through a `[log]` table mapping the model's inputs and outputs \
+                 to topics (or give the mapping to read_bag)",
+                self.file.path().display()
+            )));
+        };
+        crate::bag::read_with(py, path, spec, (start, start_ns))
+    }
+
+    /// Whether the file has a ``[log]`` table (``read_bag`` reads a bag through it).
+    #[getter]
+    fn has_log(&self) -> bool {
+        self.file.log.is_some()
     }
 
     /// The model: ``Model(a, b, c)``, or the file's equations.
@@ -146,12 +180,13 @@ impl ModelFile {
 
     fn __repr__(&self) -> String {
         format!(
-            "ModelFile({:?}: {} states, {} inputs, {} outputs{})",
+            "ModelFile({:?}: {} states, {} inputs, {} outputs{}{})",
             self.file.path().display().to_string(),
             self.file.states(),
             self.file.inputs(),
             self.file.outputs(),
-            if self.file.mhe.is_some() { ", [mhe]" } else { "" }
+            if self.file.mhe.is_some() { ", [mhe]" } else { "" },
+            if self.file.log.is_some() { ", [log]" } else { "" }
         )
     }
 }

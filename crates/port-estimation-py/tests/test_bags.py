@@ -309,3 +309,71 @@ def test_a_damaged_chunk_is_named_by_its_offset(tmp_path):
     with pytest.raises(pe.BagError, match=f"chunk at byte {at}") as e:
         pe.read_bag(bad, ROS2_INPUTS, ROS2_OUTPUTS, ts=0.01)
     assert e.value.offset == at and e.value.rows_read > 0
+
+
+# The ROS 2 fixtures' model file: its [log] table is the mapping ROS2_INPUTS, ROS2_OUTPUTS at 10 ms.
+ROS2_MODEL = """
+x0 = [0.0, 0.0, 0.0]
+p0 = [100.0, 100.0, 100.0]
+q = [1.0, 1.0, 1.0]
+r = [1.0, 10.0, 1.0, 1.0, 1.0]
+
+[model]
+states = ["lat", "v", "yaw_rate"]
+inputs = ["a", "delta"]
+outputs = ["gnss_lat", "gnss_status", "gyro", "wheel_speed", "gyro_var"]
+
+[f]
+lat = "lat"
+v = "v + 0.01 * a"
+yaw_rate = "yaw_rate + 0.01 * delta"
+
+[h]
+gnss_lat = "lat"
+gnss_status = "0 * lat"
+gyro = "yaw_rate"
+wheel_speed = "v"
+gyro_var = "0 * v"
+
+[log]
+ts = 0.01
+
+[log.fields]
+wheel_speed = { topic = "/odom", field = "twist.twist.linear.x" }
+a = { topic = "/imu", field = "linear_acceleration.x" }
+delta = { topic = "/cmd_vel", field = "twist.angular.z" }
+gnss_lat = { topic = "/gnss/fix", field = "latitude" }
+gnss_status = { topic = "/gnss/fix", field = "status.status" }
+gyro = { topic = "/imu", field = "angular_velocity.z" }
+gyro_var = { topic = "/imu", field = "angular_velocity_covariance[8]" }
+"""
+
+
+def test_a_model_files_log_table_reads_the_bag():
+    """``ModelFile.read_bag`` reads through the file's ``[log]`` table (port-est's parser): the rows
+    of the same mapping given to ``read_bag``, in the model's order whatever the table's order."""
+    mf = pe.parse_model(ROS2_MODEL, "ros2.toml")
+    assert mf.has_log and "[log]" in repr(mf)
+    log = mf.read_bag(bag("ros2_zstd.mcap"))
+    assert_log_equals_csv(log, "ros2_zstd.fixed_logtime.csv")
+    assert (log.inputs, log.outputs) == (list(ROS2_INPUTS), list(ROS2_OUTPUTS))
+    at_02 = pe.parse_model(ROS2_MODEL.replace("ts = 0.01", "ts = 0.02"), "ros2.toml")
+    assert_log_equals_csv(at_02.read_bag(bag("ros2_zstd.mcap"), start_ns=T0 + 500_000_000), "ros2_zstd.fixed_start.csv")
+    per_message = ROS2_MODEL.replace("ts = 0.01", 'driving = "/imu"\nstamps = "header"')
+    assert_log_equals_csv(pe.parse_model(per_message).read_bag(bag("ros2_zstd.mcap")), "ros2_zstd.imu_header.csv")
+    # The file's estimator runs on it as on the mapping's arrays.
+    by_hand = pe.read_bag(bag("ros2_zstd.mcap"), ROS2_INPUTS, ROS2_OUTPUTS, ts=0.01)
+    a = mf.estimator("ekf").run(log.u, log.y, measured=log.measured)
+    b = mf.estimator("ekf").run(by_hand.u, by_hand.y, measured=by_hand.measured)
+    np.testing.assert_array_equal(bits(a.center), bits(b.center))
+    # A file without a [log] table, a start with one step per message, a bad table: ValueError naming the file.
+    plain = pe.parse_model(ROS2_MODEL.split("[log]")[0], "plain.toml")
+    assert not plain.has_log
+    with pytest.raises(ValueError, match=r"plain\.toml: no \[log\] table"):
+        plain.read_bag(bag("ros2_zstd.mcap"))
+    with pytest.raises(ValueError, match="apply to a fixed step"):
+        pe.parse_model(per_message).read_bag(bag("ros2_zstd.mcap"), start=1.0)
+    with pytest.raises(ValueError, match=r"bad\.toml:\d+:\d+: .*no topic for `gyro_var`"):
+        pe.parse_model(ROS2_MODEL.replace('gyro_var = { topic = "/imu", field = "angular_velocity_covariance[8]" }', ""), "bad.toml")
+    with pytest.raises(ValueError, match="/nope"):
+        pe.parse_model(ROS2_MODEL.replace('"/odom"', '"/nope"')).read_bag(bag("ros2_zstd.mcap"))

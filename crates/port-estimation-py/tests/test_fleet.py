@@ -280,3 +280,31 @@ def test_ros2_bags_are_logs_too(tmp_path):
     short = dict(mapping, outputs={"x": "/pose_json:x"})
     [wrong] = fleet.filter_logs([bag], tmp_path / "y", model=model, estimator="kf", bag=short, **kw)
     assert wrong["status"] == "error" and "1 outputs" in wrong["error"], wrong
+
+
+def test_a_model_files_log_table_maps_the_bags(tmp_path):
+    # The model file's [log] table is the mapping: as model= (its own table) or as bag=.
+    from test_bags import ROS2_INPUTS, ROS2_MODEL, ROS2_OUTPUTS
+
+    import pyarrow.parquet as pq
+
+    bag = str(BAGS / "ros2_zstd.mcap")
+    mf = pe.parse_model(ROS2_MODEL, "ros2.toml")
+    [by_file] = fleet.filter_logs([bag], tmp_path / "a", model=mf, estimator="ekf", chunk_rows=64)
+    mapping = dict(inputs=ROS2_INPUTS, outputs=ROS2_OUTPUTS, ts=0.01)
+    [by_hand] = fleet.filter_logs([bag], tmp_path / "b", model=mf, estimator="ekf", bag=mapping, chunk_rows=64)
+    plain = pe.parse_model(ROS2_MODEL.split("[log]")[0], "plain.toml")
+    [as_bag] = fleet.filter_logs([bag], tmp_path / "c", model=plain, estimator="ekf", bag=mf, chunk_rows=64)
+    assert by_file["status"] == by_hand["status"] == as_bag["status"] == "ok", (by_file, by_hand, as_bag)
+    want = pq.read_table(by_hand["output"])
+    assert pq.read_table(by_file["output"]).equals(want) and pq.read_table(as_bag["output"]).equals(want)
+    log = mf.read_bag(bag)
+    run = mf.estimator("ekf").run(log.u, log.y, measured=log.measured)
+    np.testing.assert_array_equal(want.column("xhat2").to_numpy(), run.center[:, 1])
+    # A model file without a table: the bag's error names both ways of mapping it; bag= must have a table.
+    [none] = fleet.filter_logs([bag], tmp_path / "d", model=plain, estimator="ekf")
+    assert none["status"] == "error" and "[log] table" in none["error"] and "bag=dict" in none["error"], none
+    with pytest.raises(ValueError, match=r"plain\.toml: the model file has no \[log\] table"):
+        fleet.filter_logs([bag], tmp_path / "e", model=mf, estimator="ekf", bag=plain)
+    with pytest.raises(TypeError, match="bag must be"):
+        fleet.filter_logs([bag], tmp_path / "e", model=mf, estimator="ekf", bag=3)

@@ -16,10 +16,12 @@ the estimator's own numbers
 ``status``, ``clean``
     How each step ended.
 
-A log may also be a ROS 2 bag (a ``.mcap`` file): give ``bag=dict(inputs=..., outputs=..., ts=...)``, the
-mapping ``read_bag`` takes, and the bag's rows are filtered as a Parquet log's would be (its estimates go to
-``<name>.parquet``). A bag is read whole into its arrays (``T × (p + 2m)`` numbers) before it is filtered in
-pieces; the bag itself is memory-mapped, not read into memory.
+A log may also be a ROS 2 bag (a ``.mcap`` file), read through a mapping and filtered as a Parquet log's rows
+would be (its estimates go to ``<name>.parquet``). The mapping is the ``[log]`` table of the model file when
+``model`` is a ``ModelFile`` that has one (as ``ModelFile.read_bag`` and ``port-est`` read it), or ``bag=``:
+``read_bag``'s keywords (``dict(inputs=..., outputs=..., ts=...)``) or a ``ModelFile`` whose ``[log]`` table maps
+the bags; ``bag=`` wins over the model file's table. A bag is read whole into its arrays (``T × (p + 2m)`` numbers)
+before it is filtered in pieces; the bag itself is memory-mapped, not read into memory.
 
 Each output is written to a temporary file beside it and renamed, so a reader never sees half a
 file. A log is read, filtered and written in consecutive pieces (``DEFAULT_CHUNK_ROWS`` rows at a
@@ -285,9 +287,18 @@ def _output_name(path: PathLike) -> str:
 def _bag_pieces(path: str, spec: Mapping[str, Any], est: Estimator, chunk: int):
     """``k``, ``us``, ``ys`` (masked where not measured) of a bag read through ``spec["bag"]``, in
     pieces of ``chunk`` rows."""
-    if not spec["bag"]:
-        raise ValueError(f"{path}: a ROS 2 bag needs bag=dict(inputs=..., outputs=..., ts=... or driving=...)")
-    log = read_bag(path, **spec["bag"])
+    source, model = spec["bag"], spec["model"]
+    if isinstance(source, ModelFile):
+        log = source.read_bag(path)
+    elif source:
+        log = read_bag(path, **source)
+    elif isinstance(model, ModelFile) and model.has_log:
+        log = model.read_bag(path)
+    else:
+        raise ValueError(
+            f"{path}: a ROS 2 bag needs a mapping: a model file with a [log] table, or "
+            "bag=dict(inputs=..., outputs=..., ts=... or driving=...)"
+        )
     if len(log.inputs) != est.dim_u or len(log.outputs) != est.dim_z:
         raise ValueError(
             f"{path}: bag= maps {len(log.inputs)} inputs and {len(log.outputs)} outputs; "
@@ -340,7 +351,7 @@ def filter_log(
     R: Any = None,
     settings: Mapping[str, Any] | None = None,
     chunk_rows: int | None = None,
-    bag: Mapping[str, Any] | None = None,
+    bag: Mapping[str, Any] | ModelFile | PathLike | None = None,
 ) -> dict[str, Any]:
     """Filters one log into ``out_path`` (see the module); returns its summary
     (``log``, ``output``, ``status``, ``steps``, ``unclean``, ``seconds``). A log that cannot be
@@ -373,6 +384,14 @@ def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows, bag=None) -> dic
         raise TypeError(f"model must be a Model, a ModelFile or a model file's path, not {type(model).__name__}")
     if chunk_rows is not None and (isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1):
         raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows!r}")
+    if isinstance(bag, (str, os.PathLike)):
+        from ._native import read_model
+
+        bag = read_model(bag)
+    if isinstance(bag, ModelFile) and not bag.has_log:
+        raise ValueError(f"bag={bag.path}: the model file has no [log] table mapping a bag's topics")
+    if bag is not None and not isinstance(bag, (ModelFile, Mapping)):
+        raise TypeError(f"bag must be read_bag's keywords (a dict) or a ModelFile, not {type(bag).__name__}")
     initial = {key: value for key, value in (("x0", x0), ("P0", P0), ("Q", Q), ("R", R)) if value is not None}
     if isinstance(model, ModelFile) and initial:
         raise ValueError("a model file brings its own x0, p0, q, r: do not give x0, P0, Q or R with it")
@@ -382,7 +401,7 @@ def _spec(model, estimator, x0, P0, Q, R, settings, chunk_rows, bag=None) -> dic
         "initial": initial,
         "settings": dict(settings or {}),
         "chunk_rows": chunk_rows,
-        "bag": dict(bag or {}),
+        "bag": bag if isinstance(bag, ModelFile) else dict(bag or {}),
     }
 
 
@@ -399,7 +418,7 @@ def filter_logs(
     settings: Mapping[str, Any] | None = None,
     client: Any = None,
     chunk_rows: int | None = None,
-    bag: Mapping[str, Any] | None = None,
+    bag: Mapping[str, Any] | ModelFile | PathLike | None = None,
 ) -> list[dict[str, Any]]:
     """Filters every log of ``paths`` with the registry estimator ``estimator`` on ``model``, one
     task per log, writing ``out_dir/<log name>`` (Parquet; see the module for the columns).
@@ -425,9 +444,11 @@ def filter_logs(
     chunk_rows : int, optional
         Rows per ``run`` call and per written piece (default ``DEFAULT_CHUNK_ROWS``, fewer if
         ``MAX_RUN_VALUES`` demands).
-    bag : dict, optional
+    bag : dict, ModelFile or path, optional
         For logs that are ROS 2 bags (``.mcap``): ``read_bag``'s keywords (``inputs``, ``outputs``,
-        ``ts`` or ``driving``, ...); their estimates go to ``<name>.parquet``.
+        ``ts`` or ``driving``, ...), or a model file (or its path) whose ``[log]`` table maps them;
+        without it, the ``[log]`` table of ``model`` when it is a model file that has one. Their
+        estimates go to ``<name>.parquet``.
 
     Returns
     -------
