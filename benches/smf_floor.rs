@@ -1,7 +1,8 @@
 //! One exact set-membership filter step against a fixed-size floor, on the same data:
 //! [`estimators::SetMembershipFilter`] (default solver: the exact two-multiplier method) through its
-//! public dynamic-size API, and the same step written here on nalgebra `SMatrix` (const sizes, no
-//! heap, no validation) as the floor, so that "ours / floor" can be reported.
+//! public dynamic-size API (its linear algebra compiled for (4, 3); `estimators-general`: the same
+//! filter on the runtime-size kernels), and the same step written here on nalgebra `SMatrix` (const
+//! sizes, no heap, no validation) as the floor, so that "ours / floor" can be reported.
 //!
 //! The floor does the same work as ours: the prediction `X₁ = A P Aᵀ`; the data-consistency check
 //! (the fixed-point search of `smf/consistency.rs`); the damped Newton with active set of
@@ -497,6 +498,20 @@ fn smf_floor(crit: &mut Criterion) {
                 smf = smf0.clone();
             }
             black_box(smf.step(&model, &u, &dys[k]).unwrap().center[0])
+        })
+    });
+    // The same filter on the runtime-size kernels (the step before it was compiled per size;
+    // the same bits, tested in `crates/estimators/tests/smf_compiled.rs`).
+    let mut general0 = smf0.clone();
+    general0.use_general_kernels();
+    let mut general = general0.clone();
+    k = 0;
+    group.bench_function("estimators-general", |b| {
+        b.iter(|| {
+            if advance(&mut k, dys.len()) {
+                general = general0.clone();
+            }
+            black_box(general.step(&model, &u, &dys[k]).unwrap().center[0])
         })
     });
     (k, floor) = (0, floor0.clone());
