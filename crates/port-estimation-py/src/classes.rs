@@ -309,7 +309,9 @@ impl MovingHorizonEstimator {
 /// x0, P0, Q, R : array_like
 ///     Prior mean and weights.
 /// **settings
-///     ``horizon`` (default 10), ``max_iterations``, ``tolerance``, ``arrival`` (``"unscented"``,
+///     ``horizon`` (default 10), ``max_iterations``, ``tolerance``, ``real_time_iterations``
+///     (1 to 10 Gauss–Newton iterations per update from the previous window, status
+///     ``real-time``; default: iterate to the tolerance), ``arrival`` (``"unscented"``,
 ///     ``"extended"``, ``"fixed"``) with ``alpha``, ``beta``, ``kappa``, ``prior`` (``"smoothed"``,
 ///     ``"arrival-filter"``), optional boxes ``w_lower``/``w_upper``, ``v_lower``/``v_upper``,
 ///     ``memory_limit`` (bytes, default 256 MiB; checked before anything is allocated).

@@ -27,9 +27,11 @@ use crate::convert::{mat_out, vec_out};
 ///     interval of a set; None for point estimates.
 /// status : str
 ///     How the step ended: ``initial``, ``predicted``, ``converged``, ``not-converged``, ``fallback``,
-///     ``relaxed``, followed by ``+inconsistent`` and ``+not-guaranteed`` where they apply.
+///     ``relaxed``, ``real-time`` (a real-time iteration's budget spent, as configured), followed
+///     by ``+inconsistent`` and ``+not-guaranteed`` where they apply.
 /// clean : bool
-///     Whether nothing is wrong (initial, predicted or converged, consistent, guarantee intact).
+///     Whether nothing is wrong (initial, predicted, converged or real-time, consistent, guarantee
+///     intact).
 /// guaranteed : bool
 ///     Whether this is a guaranteed set whose guarantee holds.
 /// set : tuple of ndarray, or None

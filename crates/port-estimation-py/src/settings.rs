@@ -65,6 +65,7 @@ pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
         SettingsKind::NonlinearMovingHorizon => &[
             "horizon",
             "max_iterations",
+            "real_time_iterations",
             "tolerance",
             "arrival",
             "alpha",
@@ -283,6 +284,8 @@ fn nonlinear_moving_horizon(kw: &Kwargs<'_>, dims: Dims, entry: &EstimatorEntry)
     if let Some(i) = iteration_count(kw, "max_iterations")? {
         s.max_iterations = i;
     }
+    // Checked (1 to MAX_REAL_TIME_ITERATIONS) with the other settings when the estimator is built.
+    s.real_time_iterations = kw.count("real_time_iterations")?;
     if let Some(t) = kw.float("tolerance")? {
         s.tolerance = t;
     }

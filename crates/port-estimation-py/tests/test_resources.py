@@ -58,6 +58,25 @@ def test_iteration_counts_are_bounded():
         pe.MovingHorizonEstimator(_linear(), R=np.eye(1), max_sweeps=10_001, **_boxes(2, 1))
     with pytest.raises(ValueError, match="max_iterations = 1000000: at most 10000"):
         pe.NonlinearMHE(pe.Model.vessel(), max_iterations=10**6)
+    for k in (0, 11, 10**6):
+        with pytest.raises(ValueError, match=f"real_time_iterations must be between 1 and 10, got {k}"):
+            pe.NonlinearMHE(pe.Model.vessel(), real_time_iterations=k)
+
+
+def test_real_time_iterations_spend_their_budget_and_say_so():
+    model = pe.Model.vessel()
+    rng = np.random.default_rng(3)
+    full, fast = pe.NonlinearMHE(model), pe.NonlinearMHE(model, real_time_iterations=1)
+    x = np.zeros(6)
+    for k in range(30):
+        u = np.array([1e5, 5e4 * np.sin(0.1 * k), 1e6 * np.cos(0.05 * k)])
+        x = model.f(x, u)
+        y = model.h(x, u) + rng.normal(size=3) * np.array([1.0, 1.0, 0.3])
+        a, b = full.step(u, y), fast.step(u, y)
+        assert b.status == "real-time" and b.clean and b.details["iterations"] == 1
+        assert a.status == "converged"
+    # One iteration from the previous window stays within a fraction of a standard deviation.
+    assert np.max(np.abs(a.center - b.center) / np.sqrt(np.diag(a.shape))) < 0.2
 
 
 def _long_log(rows: int):
