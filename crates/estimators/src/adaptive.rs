@@ -36,6 +36,7 @@ use models::{Dims, LinearModel};
 
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, KalmanFilter};
+use crate::partial::Measured;
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
 use crate::validate::check_vec;
@@ -145,7 +146,8 @@ pub struct ScalingContext<'a> {
     pub status: ReceiverStatus,
     /// `d_k`: the norm of the two horizontal innovation components (BDS fix to INS prediction).
     pub distance: f64,
-    /// The whole innovation `r_k = y − C x⁻` (8).
+    /// The whole innovation `r_k = y − C x⁻` (8); in a partial step its unmeasured entries are
+    /// not defined (NaN when the measurement's were).
     pub innovation: &'a DVector<f64>,
     /// The step (1 for the first update of the filter).
     pub step: u64,
@@ -307,6 +309,13 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         model: &M,
         status: &ReceiverStatus,
     ) -> Result<AdaptiveStep, AdaptiveError> {
+        let scale = self.scale(status)?;
+        self.kf.update_buffered(model.c(), &self.r_scaled)?;
+        Ok(self.commit_scale(scale))
+    }
+
+    /// `t_k` and `d_k` from the buffered innovation, with `t_k R` in `r_scaled`.
+    fn scale(&mut self, status: &ReceiverStatus) -> Result<AdaptiveStep, AdaptiveError> {
         let innovation = self.kf.innovation();
         let [i, j] = self.horizontal;
         let distance = innovation[i].hypot(innovation[j]);
@@ -317,11 +326,14 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         }
         self.r_scaled.copy_from(self.kf.measurement_noise());
         self.r_scaled.iter_mut().for_each(|v| *v *= scale);
-        self.kf.update_buffered(model.c(), &self.r_scaled)?;
+        Ok(AdaptiveStep { scale, distance })
+    }
+
+    /// Counts a published update and reports its scale.
+    fn commit_scale(&mut self, report: AdaptiveStep) -> AdaptiveStep {
         self.updates += 1;
-        let report = AdaptiveStep { scale, distance };
         self.kf.set_details(StepDetails::Adaptive(Some(report)));
-        Ok(report)
+        report
     }
 
     /// The prediction (no fix this epoch, or the first half of a step): `x⁻ = A x + B u`,
@@ -373,6 +385,86 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
                 Ok(self.kf.estimate())
             }
         }
+    }
+
+    /// One step with the entries `measured[i]` of `[y₁ … y_m, N, RTK]` only
+    /// (docs/partial-measurements.md (P7)): no output measured is a prediction, as is a fix
+    /// whose RTK code is 0; a proper subset of the outputs updates with their rows `C_S` and the
+    /// sub-block of `t_k R`, where `t_k` comes from the fix as in a whole step — which needs the
+    /// receiver status and both horizontal outputs (`d_k`): without them the scale is not defined
+    /// and the step is refused. Unmeasured entries are ignored (they may be NaN). On error the
+    /// filter is unchanged. Allocation-free after the first step with that many outputs measured
+    /// (if the scaling is).
+    ///
+    /// # Errors
+    /// As [`AdaptiveKalmanFilter::step`]; a mask of another length; [`EstimatorError::Unsupported`]
+    /// for a proper subset without the receiver status or a horizontal output.
+    pub fn step_partial<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<&GaussianEstimate, EstimatorError> {
+        let m = self.outputs.len();
+        if measured.len() != m + 2 {
+            return Err(EstimatorError::DimensionMismatch { what: "measured", expected: m + 2, found: measured.len() });
+        }
+        if y.len() != m + 2 {
+            return Err(EstimatorError::DimensionMismatch { what: "y", expected: m + 2, found: y.len() });
+        }
+        if let Some(index) = (0..m + 2).find(|&i| measured[i] && !y[i].is_finite()) {
+            return Err(EstimatorError::NonFinite { what: "y", index });
+        }
+        let outputs = &measured[..m];
+        if measured.iter().all(|&b| b) {
+            return self.step(model, u, y);
+        }
+        if !outputs.iter().any(|&b| b) {
+            return self.predict(model, u);
+        }
+        let [i, j] = self.horizontal;
+        if !(measured[m] && measured[m + 1] && outputs[i] && outputs[j]) {
+            return Err(EstimatorError::Unsupported {
+                estimator: "fkf",
+                operation: "a partial measurement without the receiver status or a horizontal output",
+                reason: "its noise scale t_k is a function of the receiver status (N, RTK) and of the horizontal \
+                         innovation d_k, so both horizontal outputs and the status must be measured; leave every \
+                         output unmeasured for a prediction",
+            });
+        }
+        let Some(status) = ReceiverStatus::from_measurement(y[m], y[m + 1]).map_err(|e| adaptive_error(e, m))? else {
+            return self.predict(model, u);
+        };
+        self.outputs.copy_from(&y.rows(0, m));
+        let outputs_y = std::mem::take(&mut self.outputs);
+        let result = self.partial_update(model, u, &outputs_y, outputs, &status);
+        self.outputs = outputs_y;
+        result.map_err(|e| adaptive_error(e, m))?;
+        Ok(self.kf.estimate())
+    }
+
+    /// The partial step's prediction, innovation and update with `t_k` (`outputs` measured).
+    fn partial_update<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        outputs: &[bool],
+        status: &ReceiverStatus,
+    ) -> Result<AdaptiveStep, AdaptiveError> {
+        let k = match self.kf.predict_and_innovate_partial(model, u, y, outputs)? {
+            Measured::Some(k) => k,
+            // The caller sends a proper, non-empty subset only.
+            Measured::All | Measured::Nothing => {
+                return Err(AdaptiveError::Filter(EstimatorError::NumericalFailure(
+                    "the partial step's mask is not a proper subset",
+                )));
+            }
+        };
+        let scale = self.scale(status)?;
+        self.kf.update_buffered_partial(model.c(), Some(&self.r_scaled), k)?;
+        Ok(self.commit_scale(scale))
     }
 
     /// The measurement update of the current estimate with `[y₁ … y_m, N, RTK]` (nothing changes
@@ -474,7 +566,7 @@ fn adaptive_error(e: AdaptiveError, m: usize) -> EstimatorError {
     }
 }
 
-forward_estimator!(impl<S: NoiseScaling> for AdaptiveKalmanFilter<S>, LinearModel, GaussianEstimate);
+forward_estimator!(impl<S: NoiseScaling> for AdaptiveKalmanFilter<S>, LinearModel, GaussianEstimate, partial);
 
 #[cfg(test)]
 mod tests {

@@ -360,17 +360,47 @@ impl KalmanFilter {
         y: &DVector<f64>,
         measured: &[bool],
     ) -> Result<&GaussianEstimate, EstimatorError> {
+        match self.predict_and_innovate_partial(model, u, y, measured)? {
+            Measured::All => self.step(model, u, y),
+            Measured::Nothing => self.predict(model, u),
+            Measured::Some(k) => self.update_buffered_partial(model.c(), None, k),
+        }
+    }
+
+    /// The first half of [`KalmanFilter::step_partial`] for filters that choose their measurement
+    /// noise from the innovation (`adaptive`): validates and classifies the mask and, for a
+    /// proper subset, predicts into the buffers and forms the innovation (its unmeasured entries
+    /// are not read); nothing is published. Allocation-free.
+    pub(crate) fn predict_and_innovate_partial<M: LinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        u: &DVector<f64>,
+        y: &DVector<f64>,
+        measured: &[bool],
+    ) -> Result<Measured, EstimatorError> {
         check_model(model, self.n, self.p, self.m)?;
-        let k = match classify(measured, u, y, (self.m, self.p), &mut self.subsets.rows)? {
-            Measured::All => return self.step(model, u, y),
-            Measured::Nothing => return self.predict(model, u),
-            Measured::Some(k) => k,
-        };
-        self.predict_into_buffers(model.a(), model.b(), u);
-        self.innovate(model.c(), y, model.angles());
+        let k = classify(measured, u, y, (self.m, self.p), &mut self.subsets.rows)?;
+        if let Measured::Some(_) = k {
+            self.predict_into_buffers(model.a(), model.b(), u);
+            self.innovate(model.c(), y, model.angles());
+        }
+        Ok(k)
+    }
+
+    /// The second half: the update of the buffered prediction with the `k` rows the last
+    /// classification measured, `C_S`, the sub-block of `r` (`m × m`; `None`: `R`) and the gate
+    /// with `k` degrees of freedom; published on success, nothing changes on error.
+    /// Allocation-free after the first step with `k` outputs measured.
+    pub(crate) fn update_buffered_partial(
+        &mut self,
+        c: &DMatrix<f64>,
+        r: Option<&DMatrix<f64>>,
+        k: usize,
+    ) -> Result<&GaussianEstimate, EstimatorError> {
         let (n, checks, step) = (self.n, self.gate.checks(), self.steps + 1);
+        let r = r.unwrap_or(&self.r);
         let (sub, rows) = self.subsets.get(k, || GaussianSubset::new(n, k, checks))?;
-        sub.gather(rows, model.c(), &self.r, &self.innov);
+        sub.gather(rows, c, r, &self.innov);
         let nis = sub.upd.compute(&self.x_pred, &self.p_pred, &sub.h, &sub.r, &sub.innov, sub.gate.is_on())?;
         sub.upd
             .commit_gated(&sub.gate, (nis, &sub.innov), step, &mut self.est, &mut self.x_pred, &mut self.p_pred)

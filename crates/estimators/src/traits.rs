@@ -136,8 +136,7 @@ pub trait Estimator<M: ?Sized> {
             Err(EstimatorError::Unsupported {
                 estimator: "this estimator",
                 operation: "a partial measurement",
-                reason: "it updates with every output at once (the fuzzy-adaptive filter scales its noise from \
-                         the whole fix); the other estimators take a subset, or give every output",
+                reason: "it updates with every output at once; give every output, or none for a prediction",
             })
         }
     }

@@ -1,7 +1,8 @@
 //! The fuzzy-adaptive Kalman filter (`docs/bds-ins-fuzzy-kf.md` §2) on the 13-state BDS/INS
 //! model: agreement with the plain Kalman filter when `t ≡ 1`, agreement with an independent
 //! textbook implementation of (9) for a scale that depends on `d_k`, the FIS's scales, bad input
-//! (typed errors, state unchanged), and no allocation per step.
+//! (typed errors, state unchanged), partial fixes (the measured rows with the scale of the fix,
+//! against the same independent implementation), and no allocation per step.
 
 use bds_ins_dynamics::{DiscreteInsModel, InsErrorModel, InsNoise, InsParams, scenario, simulate_error_states};
 use counting_allocator::{Counting, count};
@@ -102,14 +103,27 @@ struct Reference {
 
 impl Reference {
     fn step(&mut self, m: &DiscreteInsModel, r: &DMatrix<f64>, y: &DVector<f64>, t_of_d: impl Fn(f64) -> f64) -> f64 {
+        self.step_rows(m, r, y, &[0, 1, 2], t_of_d)
+    }
+
+    /// The same with the output rows `rows` only (`H_S`, `R_SS`, `ν_S`; rows 0 and 1 among them).
+    fn step_rows(
+        &mut self,
+        m: &DiscreteInsModel,
+        r: &DMatrix<f64>,
+        y: &DVector<f64>,
+        rows: &[usize],
+        t_of_d: impl Fn(f64) -> f64,
+    ) -> f64 {
         let x_pred = &m.phi * &self.x;
         let p_pred = &m.phi * &self.p * m.phi.transpose() + &m.q;
-        let innov = y - &m.h * &x_pred;
+        let h = m.h.select_rows(rows);
+        let innov = DVector::from_iterator(rows.len(), rows.iter().map(|&i| y[i])) - &h * &x_pred;
         let t = t_of_d((innov[0] * innov[0] + innov[1] * innov[1]).sqrt());
-        let s = &m.h * &p_pred * m.h.transpose() + r * t;
-        let k = &p_pred * m.h.transpose() * s.try_inverse().unwrap();
+        let s = &h * &p_pred * h.transpose() + r.select_rows(rows).select_columns(rows) * t;
+        let k = &p_pred * h.transpose() * s.try_inverse().unwrap();
         self.x = &x_pred + &k * innov;
-        self.p = (DMatrix::identity(13, 13) - &k * &m.h) * p_pred;
+        self.p = (DMatrix::identity(13, 13) - &k * &h) * p_pred;
         t
     }
 }
@@ -139,6 +153,68 @@ fn a_distance_dependent_scale_matches_an_independent_implementation_of_eq_9() {
         }
     }
     assert!(largest > 2.0, "the scale never left 1 ({largest}): the test would not test (9)");
+}
+
+#[test]
+fn a_partial_fix_updates_with_its_rows_and_the_scale_of_its_horizontal_innovation() {
+    use estimators::Estimator;
+    let m = model();
+    let ys = measurements(&m, 200, 100, 4);
+    let t_of_d = |d: f64| 1.0 + 10.0 * d * d;
+    let mut f = filter(&m, move |c: &ScalingContext<'_>| t_of_d(c.distance));
+    let mut reference = Reference { x: DVector::zeros(13), p: scenario::initial_covariance() };
+    let u = DVector::zeros(0);
+    for (k, y) in ys.iter().enumerate() {
+        // The heading missing at every third epoch (NaN in its cell), the whole fix otherwise.
+        let heading = k % 3 != 0;
+        let mut full = DVector::from_iterator(5, y.iter().copied().chain([20.0, 4.0]));
+        if !heading {
+            full[2] = f64::NAN;
+        }
+        let measured = [true, true, heading, true, true];
+        let e = Estimator::<DiscreteInsModel>::step_partial(&mut f, &m, &u, &full, &measured).unwrap().clone();
+        let rows: &[usize] = if heading { &[0, 1, 2] } else { &[0, 1] };
+        let t = reference.step_rows(&m, &scenario::nominal_r(), y, rows, t_of_d);
+        assert!((f.last_step().unwrap().scale - t).abs() <= 1e-9 * t, "step {k}");
+        for i in 0..13 {
+            let scale = reference.p[(i, i)].sqrt();
+            assert!((e.center[i] - reference.x[i]).abs() <= 1e-7 * scale, "step {k}: x[{i}]");
+            assert!((e.covariance[(i, i)] - reference.p[(i, i)]).abs() <= 1e-7 * reference.p[(i, i)], "P[{i}]");
+        }
+    }
+    assert_eq!(f.updates(), ys.len() as u64);
+}
+
+#[test]
+fn a_partial_fix_without_its_scale_s_inputs_is_refused_unchanged() {
+    use estimators::Estimator;
+    let m = model();
+    let mut f = filter(&m, ConstantScaling(2.0));
+    let u = DVector::zeros(0);
+    let y = DVector::from_vec(vec![1.0, 2.0, 0.1, 20.0, 4.0]);
+    f.step(&m, &u, &y).unwrap();
+    let before = f.estimate().clone();
+    let mut step = |measured: [bool; 5], y: &DVector<f64>| {
+        Estimator::<DiscreteInsModel>::step_partial(&mut f, &m, &u, y, &measured).map(|e| e.center.clone())
+    };
+    // A horizontal output or the receiver status missing: d_k or t_k is not defined.
+    for mask in [[true, false, true, true, true], [false, true, true, true, true], [true, true, true, false, true]] {
+        let e = step(mask, &y).unwrap_err();
+        assert!(matches!(e, EstimatorError::Unsupported { estimator: "fkf", .. }), "{mask:?}: {e}");
+    }
+    // NaN where measured, a mask of the wrong length.
+    let nan = DVector::from_vec(vec![1.0, f64::NAN, 0.1, 20.0, 4.0]);
+    assert!(matches!(step([true, true, false, true, true], &nan), Err(EstimatorError::NonFinite { index: 1, .. })));
+    let e = Estimator::<DiscreteInsModel>::step_partial(&mut f, &m, &u, &y, &[true; 4]).unwrap_err();
+    assert!(matches!(e, EstimatorError::DimensionMismatch { what: "measured", .. }), "{e}");
+    assert_eq!(f.estimate().center, before.center);
+    assert_eq!(f.estimate().covariance, before.covariance);
+    // RTK 0 (no fix) with a partial row, or nothing measured: predictions.
+    let no_fix = DVector::from_vec(vec![1.0, 2.0, f64::NAN, 20.0, 0.0]);
+    let updates = f.updates();
+    Estimator::<DiscreteInsModel>::step_partial(&mut f, &m, &u, &no_fix, &[true, true, false, true, true]).unwrap();
+    Estimator::<DiscreteInsModel>::step_partial(&mut f, &m, &u, &no_fix, &[false; 5]).unwrap();
+    assert_eq!(f.updates(), updates);
 }
 
 #[test]

@@ -159,16 +159,20 @@ def test_the_certified_filter_contains_the_truth_through_the_dropouts():
     assert widths[599] > 2 * widths[299] and widths[700] < widths[599] / 2
 
 
-def test_the_fuzzy_adaptive_filter_refuses_a_partial_fix_unchanged():
-    # Its noise scale comes from the whole fix (both horizontal innovations and the receiver
-    # status): a partial one is refused by name; a whole one, or none, steps.
-    a, b, c = np.eye(2), np.zeros((2, 0)), np.eye(2)
-    est = pe.Estimator("fkf", pe.Model(a, b, c), x0=np.zeros(2), P0=1.0, Q=1e-2, R=1e-2)
+def test_the_fuzzy_adaptive_filter_takes_a_partial_fix_that_defines_its_scale():
+    # Its noise scale comes from the receiver status and the horizontal innovation: a partial fix
+    # with both (the third output missing) is the Kalman partial step with t_k R; one without a
+    # horizontal output is refused by name, unchanged; nothing measured predicts.
+    a, b, c = np.eye(3), np.zeros((3, 0)), np.eye(3)
+    est = pe.Estimator("fkf", pe.Model(a, b, c), x0=np.zeros(3), P0=1.0, Q=1e-2, R=1e-2)
     with pytest.raises(pe.EstimationError, match="fkf.*partial"):
-        est.step(None, np.array([0.1, np.nan, 8.0, 3.0]), measured=np.array([True, False, True, True]))
-    assert_close(est.x, np.zeros(2))
-    assert est.step(None, np.zeros(4), measured=np.array([False] * 4)).status.startswith("predicted")
-    est.step(None, np.array([0.0, 0.0, 8.0, 3.0]), measured=np.array([True] * 4))
+        est.step(None, np.array([0.1, np.nan, 0.2, 8.0, 3.0]), measured=np.array([True, False, True, True, True]))
+    assert_close(est.x, np.zeros(3))
+    assert est.step(None, np.zeros(5), measured=np.array([False] * 5)).status.startswith("predicted")
+    e = est.step(None, np.array([0.1, -0.1, np.nan, 8.0, 3.0]), measured=np.array([True, True, False, True, True]))
+    assert est.x[0] > 0.0 and est.x[1] < 0.0 and est.x[2] == 0.0
+    assert e.details["scale"] > 0.0
+    est.step(None, np.array([0.0, 0.0, 0.0, 8.0, 3.0]), measured=np.array([True] * 5))
 
 
 @pytest.mark.parametrize("name", ["rmhe", "mhe"])
