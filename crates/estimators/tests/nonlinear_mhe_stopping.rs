@@ -13,13 +13,7 @@ use vessel_dynamics::{DiscreteVessel, VesselParams};
 #[test]
 fn stopping_early_keeps_every_estimate_within_1e_8_of_the_converged_one() {
     let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
-    let setup = Setup {
-        x0: DVector::zeros(6),
-        p0: DMatrix::from_diagonal(&dvector![1.0, 1.0, 0.1, 0.1, 0.1, 0.01]),
-        process_noise: DMatrix::identity(6, 6) * 1e-2,
-        measurement_noise: DMatrix::from_diagonal(&dvector![1.0, 1.0, 0.1]),
-        inputs: 3,
-    };
+    let setup = vessel_setup();
     let early = NonlinearMheSettings::paper();
     assert_eq!(early.estimate_tolerance, Some(1e-9));
     let full = NonlinearMheSettings { estimate_tolerance: None, ..NonlinearMheSettings::paper() };
