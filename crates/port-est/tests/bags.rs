@@ -354,3 +354,18 @@ fn copied_topics_are_the_inputs_byte_for_byte_beside_the_estimates() {
     assert!(filter(&o).unwrap_err().to_string().contains("--output OUT.mcap"));
     assert!(!d.join("bad.csv").exists());
 }
+
+#[test]
+fn the_readmes_complete_example_maps_the_multi_rate_model() {
+    // The [log] table of examples/ros2-bag (the script's LOG) is the README's, and fits the model.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let script = std::fs::read_to_string(root.join("examples/ros2-bag/ros2_bag_example.py")).unwrap();
+    let log = script.split("LOG = \"\"\"").nth(1).and_then(|s| s.split("\"\"\"").next()).unwrap();
+    let readme = std::fs::read_to_string(root.join("crates/port-est/README.md")).unwrap();
+    assert!(readme.contains(&format!("```toml{log}```")), "the README shows the example's [log] table");
+    let model = std::fs::read_to_string(root.join("examples/multi-rate/model.toml")).unwrap();
+    let parsed = port_est::parse_model(Path::new("model.toml"), &format!("{model}{log}")).unwrap();
+    let spec = parsed.log.unwrap();
+    assert_eq!(spec.input_keys(), ["a", "delta"]);
+    assert_eq!(spec.output_keys(), ["gnss_x", "gnss_y", "gyro", "wheel_speed", "compass"]);
+}
