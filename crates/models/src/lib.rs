@@ -8,6 +8,8 @@
 //!   none by default) and [`wrap_angle`].
 //! * [`capability`]: [`AnyModel`], a model seen through the capabilities it offers (for
 //!   estimators chosen at run time), and [`Capability`].
+//! * [`closure`]: [`ClosureModel`], a model from two closures `f(x, u)`, `h(x, u)` whose
+//!   Jacobians come from forward-mode automatic differentiation ([`dual`]: [`Dual`]).
 //! * [`enclosure`]: [`SecondOrderModel`], rigorous enclosures of `f`, `h` and their first and
 //!   second derivatives over boxes of states (the nonlinear set-membership filter's remainder
 //!   bound); every linear model offers them.
@@ -50,8 +52,10 @@
 
 pub mod angles;
 pub mod capability;
+pub mod closure;
 pub mod continuous;
 pub mod discretize;
+pub mod dual;
 pub mod enclosure;
 pub mod error;
 pub mod model;
@@ -62,10 +66,12 @@ pub mod validate;
 
 pub use angles::{Angles, angle_branch, wrap_angle};
 pub use capability::{AnyModel, Capability, DifferentiableView, DiscreteView, LinearView};
+pub use closure::ClosureModel;
 pub use continuous::{
     ContinuousModel, DifferentiableContinuousModel, Discretized, Integrator, LinearContinuous, van_loan,
 };
 pub use discretize::{ZohDiscretization, expm, zoh_discretize, zoh_discretize_fixed};
+pub use dual::Dual;
 pub use enclosure::{SecondOrderModel, TaylorEnclosure, check_enclosure_dims};
 pub use error::{ModelError, check_spd};
 pub use intervals::Interval;
