@@ -29,7 +29,9 @@ pub use vessel_dynamics;
 
 /// What a first estimate needs, in one `use port_estimation::prelude::*;`: the matrices and
 /// their macros ([`dmatrix!`](crate::dmatrix), [`dvector!`](crate::dvector), which need no
-/// `nalgebra` of the caller's own), the setup, the estimators and what their steps return.
+/// `nalgebra` of the caller's own), the setup, the estimators and what their steps return, and
+/// a nonlinear model from two closures ([`ClosureModel`](models::ClosureModel), Jacobians by
+/// automatic differentiation).
 pub mod prelude {
     pub use crate::{dmatrix, dvector};
     pub use estimators::nalgebra::{DMatrix, DVector};
@@ -37,7 +39,10 @@ pub mod prelude {
         AnyEstimator, ConstrainedZonotopeFilter, Estimate, EstimateKind, Estimator, EstimatorError,
         ExtendedKalmanFilter, KalmanFilter, SetMembershipFilter, Setup, StepModel, UnscentedKalmanFilter,
     };
-    pub use models::{ConstantModel, DifferentiableModel, Dims, DiscreteModel, LinearModel, ModelError};
+    pub use models::{
+        Angles, ClosureModel, ConstantModel, DifferentiableModel, Dims, DiscreteModel, Dual, Integrator, LinearModel,
+        ModelError,
+    };
 }
 
 /// A `DMatrix<f64>` from rows separated by `;`, entries by `,`: `dmatrix![1.0, 0.1; 0.0, 1.0]`
