@@ -324,7 +324,8 @@ impl<const N: usize> Mul<Dual<N>> for f64 {
 impl<const N: usize> Div<Dual<N>> for f64 {
     type Output = Dual<N>;
     fn div(self, b: Dual<N>) -> Dual<N> {
-        b.recip() * self
+        let v = self / b.re;
+        b.chain(v, -v / b.re)
     }
 }
 
@@ -357,6 +358,8 @@ mod tests {
     use super::Dual;
 
     type D = Dual<1>;
+    type Unary = (&'static str, fn(D) -> D);
+    type Binary = (&'static str, fn(D, D) -> D);
 
     /// `g'(a)` by the dual number against a central difference of `g` on `f64`.
     fn check(name: &str, g: impl Fn(D) -> D, a: f64) {
@@ -369,7 +372,7 @@ mod tests {
     #[test]
     fn every_function_differentiates_as_central_differences() {
         let c = D::constant(0.7);
-        let unary: [(&str, fn(D) -> D); 22] = [
+        let unary: [Unary; 22] = [
             ("sin", D::sin),
             ("cos", D::cos),
             ("sin_cos", |a| a.sin_cos().0 + a.sin_cos().1 * 2.0),
@@ -405,7 +408,7 @@ mod tests {
                 check(name, g, a);
             }
         }
-        let binary: [(&str, fn(D, D) -> D); 5] = [
+        let binary: [Binary; 5] = [
             ("atan2", D::atan2),
             ("hypot", D::hypot),
             ("pow", D::pow),
