@@ -82,3 +82,8 @@ pub use model::{
 pub use noise::{Noise, NoiseDistribution};
 pub use rng::{Xoshiro256StarStar, splitmix64};
 pub use simulate::{SimulationConfig, Trajectory, simulate, simulate_ltv};
+
+/// The crate README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
