@@ -1,6 +1,8 @@
 //! The closure model against an independent reference: the same equations compiled by the
 //! equation models (hand-written derivative rules through a graph, the chain rule through RK4
-//! and Euler written out by hand) agree to 1e-12 in `f`, `h` and both Jacobians.
+//! and Euler written out by hand) agree to 1e-12 in `f`, `h` and both Jacobians; and every
+//! registry estimator that the model can serve (EKF, UKF, the MHE with a UKF arrival cost) steps
+//! on it through `&dyn AnyModel`.
 
 use std::path::Path;
 
@@ -127,4 +129,43 @@ fn every_function_matches_the_equation_models_discrete_euler_and_rk4() {
             agree(&closures, &file, &x, &[0.4, -1.2]);
         }
     }
+}
+
+#[test]
+fn every_registry_estimator_it_can_serve_steps_on_it() {
+    use estimators::{Setup, registry::ESTIMATORS};
+    use models::{AnyModel, Capability, DiscreteModel};
+    let model = ClosureModel::continuous(
+        1,
+        0.1,
+        Integrator::Rk4 { substeps: 1 },
+        |x, u| [x[1], -(x[0].sin()) * 9.81 - 0.2 * x[1] + u[0]],
+        |x, _| [x[0].sin() * 2.0, x[0].cos() * -2.0],
+    )
+    .unwrap();
+    assert_eq!(Capability::of(&model), Capability::Differentiable);
+    let diag = |v: &[f64]| DMatrix::from_diagonal(&DVector::from_column_slice(v));
+    let mut served = Vec::new();
+    for entry in ESTIMATORS.iter().filter(|e| e.needs.is_offered_by(&model) && e.extra_measurements == 0) {
+        let setup = Setup {
+            x0: DVector::from_vec(vec![0.3, 0.0]),
+            p0: diag(&[0.1, 0.1]),
+            process_noise: diag(&[1e-6, 1e-4]),
+            measurement_noise: diag(&[1e-4, 1e-4]),
+            inputs: 1,
+        };
+        let Ok(mut estimator) = entry.build(setup, None) else { continue }; // needs settings of its own
+        // Measurements of the model's own noise-free run from the initial mean.
+        let (u, mut x, mut next, mut y) =
+            (DVector::zeros(1), DVector::from_vec(vec![0.3, 0.0]), DVector::zeros(2), DVector::zeros(2));
+        for k in 0..20 {
+            model.f(&x, &u, &mut next).unwrap();
+            x.copy_from(&next);
+            model.h(&x, &u, &mut y).unwrap();
+            let step = estimator.step(&model as &dyn AnyModel, &u, &y);
+            assert!(step.is_ok(), "{} step {k}: {:?}", entry.name, step.err());
+        }
+        served.push(entry.name);
+    }
+    assert!(served.len() >= 2, "{served:?}");
 }
