@@ -50,7 +50,7 @@ const POINTS: [([f64; 4], [f64; 2]); 4] = [
 
 #[test]
 fn kinematic_bicycle_matches_its_model_file() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/models/kinematic_bicycle.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/models/kinematic_bicycle.toml");
     let file = EquationModel::from_file(&path).unwrap();
     let (lf, lr) = (1.2, 1.6);
     let closures = ClosureModel::continuous(
