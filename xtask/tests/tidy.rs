@@ -9,11 +9,16 @@
 //! * **One registry.** Only `estimators::registry` dispatches on estimator names: library code of
 //!   the command line, of the reproduction and of the Python binding compares, matches or looks up
 //!   no estimator name written as a literal (it uses `registry::names` or the registry's rows).
+//! * **No circles of files.** Inside a crate, no two files import each other through others (a
+//!   strongly connected group in the graph of `use crate::…` and `crate::…` paths of library
+//!   code): status and data types sit below the code that reports them. The groups that remain are
+//!   listed in [`ACCEPTED_FILE_CYCLES`] with the reason, so that none is added unnoticed and a
+//!   removed one must leave the list.
 //! * **No unwrap on input.** Library code (`crates/*/src`, outside `#[cfg(test)]` modules) has no
 //!   `.unwrap()` or `.expect(` unless the line or the one above carries a
 //!   `// tidy: invariant — <why it cannot fail>` comment.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Workspace crates and the workspace crates each may depend on. `*-dynamics` is any vehicle
@@ -301,4 +306,222 @@ fn only_the_registry_dispatches_on_estimator_names() {
 fn the_name_scanner_sees_what_it_should() {
     let text = "fn a() {\n    let x = registry::build(\"kf\", s, None);\n    let p = \"kf_scripted\";\n    if id == names::KF {}\n    matches!(n, \"rmhe\" | \"mhe\");\n}\n#[cfg(test)]\nmod t { fn f() { build(\"kf\") } }\n";
     assert_eq!(name_dispatches(text, &["kf", "mhe", "rmhe"]), vec![2, 5]);
+}
+
+/// The groups of files that import each other and stay so, with why no layer is drawn between
+/// them (crate, then the files' module paths in order).
+const ACCEPTED_FILE_CYCLES: &[(&str, &[&str], &str)] = &[
+    (
+        "lmi",
+        &["certificate", "solver"],
+        "a solution records the certificate its check rejected, and the check reads solutions: one \
+         vocabulary of outcomes in two files",
+    ),
+    (
+        "port-est",
+        &["bag", "blame", "data", "error", "filter", "limits", "mhe_table", "model", "output", "run"],
+        "the command's files share its error type, which names the places (file, line, row) that \
+         the readers define: one command, one error vocabulary",
+    ),
+    (
+        "svg-plot",
+        &["clip", "layout", "legend", "render"],
+        "a plot's parts lay themselves out with the renderer's primitives, which draws them",
+    ),
+];
+
+/// A crate's source files by module path (`a::b`; `lib.rs`, `main.rs` and `mod.rs` name their
+/// folder's module, the root being the empty path).
+fn module_files(src: &Path) -> BTreeMap<String, PathBuf> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    files
+        .into_iter()
+        .map(|f| {
+            let rel = f.strip_prefix(src).unwrap().with_extension("");
+            let mut parts: Vec<String> =
+                rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+            if matches!(parts.last().map(String::as_str), Some("mod" | "lib" | "main")) {
+                parts.pop();
+            }
+            (parts.join("::"), f)
+        })
+        .collect()
+}
+
+/// Library code of a file: before its first `#[cfg(test)]`, without comment lines.
+fn library_code(text: &str) -> String {
+    let code = text.split("#[cfg(test)]").next().unwrap_or("");
+    code.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n")
+}
+
+/// `prefix` joined with each path of the `use` tree `tree` (braces expanded).
+fn expand_use(prefix: &[String], tree: &str, out: &mut Vec<Vec<String>>) {
+    let tree = tree.trim();
+    if let Some(inner) = tree.strip_prefix('{').and_then(|t| t.strip_suffix('}')) {
+        let (mut depth, mut start) = (0, 0);
+        for (i, ch) in inner.char_indices() {
+            match ch {
+                '{' => depth += 1,
+                '}' => depth -= 1,
+                ',' if depth == 0 => {
+                    expand_use(prefix, &inner[start..i], out);
+                    start = i + 1;
+                }
+                _ => {}
+            }
+        }
+        expand_use(prefix, &inner[start..], out);
+    } else if let Some(i) = tree.find("::{") {
+        let mut p = prefix.to_vec();
+        p.extend(tree[..i].split("::").map(str::to_owned));
+        expand_use(&p, &tree[i + 2..], out);
+    } else if !tree.is_empty() {
+        let mut p = prefix.to_vec();
+        p.extend(tree.split(" as ").next().unwrap_or("").split("::").map(|s| s.trim().to_owned()));
+        out.push(p);
+    }
+}
+
+/// The paths into its own crate that library code names: `use crate::…` trees and `crate::…` paths.
+fn crate_paths(code: &str) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(i) = rest.find("crate::") {
+        let after = &rest[i + "crate::".len()..];
+        let is_use = rest[..i].trim_end().ends_with("use");
+        if is_use {
+            let end = after.find(';').unwrap_or(after.len());
+            let tree = after[..end].split_whitespace().collect::<Vec<_>>().join(" ");
+            expand_use(&[], &tree, &mut out);
+            rest = &after[end..];
+        } else {
+            let end = after.find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':')).unwrap_or(after.len());
+            out.push(after[..end].split("::").filter(|s| !s.is_empty()).map(str::to_owned).collect());
+            rest = &after[end..];
+        }
+    }
+    out
+}
+
+/// Which module files each module file names (the longest module-file prefix of each path).
+fn file_graph(modules: &BTreeMap<String, String>) -> BTreeMap<String, BTreeSet<String>> {
+    modules
+        .iter()
+        .map(|(m, code)| {
+            let targets = crate_paths(code)
+                .into_iter()
+                .filter_map(|p| {
+                    (1..=p.len()).rev().map(|k| p[..k].join("::")).find(|prefix| modules.contains_key(prefix))
+                })
+                .filter(|t| t != m)
+                .collect();
+            (m.clone(), targets)
+        })
+        .collect()
+}
+
+/// The groups of two or more files that reach each other (Tarjan's strongly connected
+/// components), each sorted.
+fn file_cycles(graph: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
+    struct Tarjan<'g> {
+        graph: &'g BTreeMap<String, BTreeSet<String>>,
+        index: BTreeMap<&'g str, usize>,
+        low: BTreeMap<&'g str, usize>,
+        stack: Vec<&'g str>,
+        groups: Vec<Vec<String>>,
+    }
+    impl<'g> Tarjan<'g> {
+        fn visit(&mut self, v: &'g str) {
+            let i = self.index.len();
+            self.index.insert(v, i);
+            self.low.insert(v, i);
+            self.stack.push(v);
+            for w in self.graph.get(v).into_iter().flatten() {
+                let w = w.as_str();
+                if !self.graph.contains_key(w) {
+                    continue;
+                }
+                if !self.index.contains_key(w) {
+                    self.visit(w);
+                    let lw = self.low[w];
+                    let lv = self.low.get_mut(v).unwrap();
+                    *lv = (*lv).min(lw);
+                } else if self.stack.contains(&w) {
+                    let iw = self.index[w];
+                    let lv = self.low.get_mut(v).unwrap();
+                    *lv = (*lv).min(iw);
+                }
+            }
+            if self.low[v] == self.index[v] {
+                let mut group = Vec::new();
+                while let Some(w) = self.stack.pop() {
+                    group.push(w.to_owned());
+                    if w == v {
+                        break;
+                    }
+                }
+                if group.len() > 1 {
+                    group.sort();
+                    self.groups.push(group);
+                }
+            }
+        }
+    }
+    let mut t = Tarjan { graph, index: BTreeMap::new(), low: BTreeMap::new(), stack: Vec::new(), groups: Vec::new() };
+    for v in graph.keys() {
+        if !t.index.contains_key(v.as_str()) {
+            t.visit(v);
+        }
+    }
+    t.groups.sort();
+    t.groups
+}
+
+#[test]
+fn no_files_import_each_other_in_a_circle() {
+    let mut crates: Vec<(String, PathBuf)> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .flatten()
+        .map(|e| (e.file_name().to_string_lossy().into_owned(), e.path().join("src")))
+        .filter(|(_, src)| src.is_dir())
+        .collect();
+    crates.push(("xtask".into(), root().join("xtask/src")));
+    crates.sort();
+    assert!(crates.len() > 15, "found only {} crates", crates.len());
+    let mut found = Vec::new();
+    for (name, src) in &crates {
+        let modules: BTreeMap<String, String> = module_files(src)
+            .into_iter()
+            .map(|(m, f)| (m, library_code(&std::fs::read_to_string(f).unwrap())))
+            .collect();
+        for group in file_cycles(&file_graph(&modules)) {
+            found.push(format!("{name}: {}", group.join(" ")));
+        }
+    }
+    let accepted: Vec<String> =
+        ACCEPTED_FILE_CYCLES.iter().map(|(c, files, _)| format!("{c}: {}", files.join(" "))).collect();
+    assert_eq!(
+        found, accepted,
+        "files importing each other in a circle (draw a layer: the shared types below the code that uses them; \
+         or, if none can be drawn, list the group in ACCEPTED_FILE_CYCLES with the reason)"
+    );
+}
+
+#[test]
+fn the_cycle_scanner_sees_what_it_should() {
+    let modules: BTreeMap<String, String> = [
+        ("", "mod a;\nmod b;"),
+        ("a", "use crate::{b::{X, Y as Z}, c::W};\nfn f() { crate::d::e::g(); }"),
+        ("b", "// use crate::a::Q;\npub(crate) use crate::a::P;"),
+        ("c", "use crate::d::e;"),
+        ("d::e", "#[cfg(test)]\nmod tests { use crate::c::T; }"),
+        ("d", "pub mod e;"),
+    ]
+    .into_iter()
+    .map(|(m, c)| (m.to_owned(), library_code(c)))
+    .collect();
+    let graph = file_graph(&modules);
+    assert_eq!(graph["a"], BTreeSet::from(["b".to_owned(), "c".to_owned(), "d::e".to_owned()]));
+    assert_eq!(file_cycles(&graph), [["a".to_owned(), "b".to_owned()]]);
 }

@@ -12,7 +12,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use intervals::{Interval, LIBM_ULPS, down, up};
 
-use crate::graph::{Bin, Fun};
+use crate::ops::{Bin, Fun};
 
 fn widen_down(x: f64) -> f64 {
     (0..LIBM_ULPS).fold(x, |v, _| down(v))

@@ -61,6 +61,7 @@ mod graph;
 mod interval_rules;
 pub mod limits;
 mod model;
+mod ops;
 mod parse;
 mod scratch;
 mod tape;

@@ -670,7 +670,8 @@ impl AnyModel for EquationModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::graph::{Fun, Op};
+    use crate::graph::Op;
+    use crate::ops::Fun;
 
     #[test]
     fn a_definition_is_evaluated_once_for_all_its_users() {

@@ -5,8 +5,9 @@
 //! then `^`, all left-associative (`2^3^2` is `(2^3)^2`); a leading `-` or `+` binds tighter
 //! than `^` (`-x^2` is `(-x)^2`); functions take their arguments in parentheses.
 
-use crate::graph::{Bin, Fun, Graph, Op};
+use crate::graph::{Graph, Op};
 use crate::limits::{MAX_DEPTH, MAX_EXPRESSION_BYTES, MAX_OPERATORS};
+use crate::ops::{Bin, Fun};
 
 /// The functions of the expression language (one argument, and the two-argument `atan2`,
 /// `min`, `max`).

@@ -11,7 +11,8 @@
 //! same expression as in [`Graph::run`], in the same order: the results are bit for bit the same
 //! (tested against it).
 
-use crate::graph::{Bin, Fun, Graph, Op};
+use crate::graph::{Graph, Op};
+use crate::ops::{Bin, Fun};
 
 /// Which operands of a binary node carry derivatives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

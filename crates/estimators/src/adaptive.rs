@@ -31,58 +31,19 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use fuzzy_inference::{Evaluation, FuzzyError, FuzzySystem};
+use fuzzy_inference::{Evaluation, FuzzySystem};
 use models::{Dims, LinearModel};
 
+pub use crate::error::AdaptiveError;
 use crate::error::EstimatorError;
 use crate::kalman::{GaussianEstimate, KalmanFilter};
 use crate::partial::Measured;
 use crate::traits::forward_estimator;
-use crate::traits::{Setup, StepDetails};
+use crate::traits::{DetailField, Setup, StepDetails};
 use crate::validate::check_vec;
 
 /// The RTK codes the paper uses (P): 1 single, 2 differential, 3 fixed, 4 float.
 pub const RTK_CODES: std::ops::RangeInclusive<u8> = 1..=4;
-
-/// What the adaptive filter and its scalings can reject.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum AdaptiveError {
-    /// A receiver-status value is NaN or infinite.
-    #[error("{what} must be finite, got {value}")]
-    NonFinite {
-        /// Which value.
-        what: &'static str,
-        /// The value given.
-        value: f64,
-    },
-    /// A negative number of satellites.
-    #[error("the satellite count must be non-negative, got {0}")]
-    NegativeSatellites(f64),
-    /// An RTK status code outside 1–4 (or not an integer).
-    #[error("RTK status code {0} is not one of 1 (single), 2 (differential), 3 (fixed), 4 (float)")]
-    RtkOutOfRange(f64),
-    /// The scaling returned a `t_k` that is not positive and finite.
-    #[error("the noise scale t_k must be positive and finite, got {0}")]
-    InvalidScale(f64),
-    /// The innovation components that form `d_k` are not distinct outputs of the model.
-    #[error("the horizontal components {components:?} must be two distinct indices below {outputs}")]
-    HorizontalComponents {
-        /// The indices given.
-        components: [usize; 2],
-        /// Number of outputs `m`.
-        outputs: usize,
-    },
-    /// A fuzzy system given to [`FuzzyScaling`] does not have the three inputs `[N, RTK, d]`.
-    #[error("a noise-scaling fuzzy system needs 3 inputs [N, RTK, d], this one has {0}")]
-    FuzzyInputCount(usize),
-    /// The fuzzy system rejected its inputs.
-    #[error("fuzzy inference: {0}")]
-    Fuzzy(#[from] FuzzyError),
-    /// The Kalman step rejected its data (dimensions, NaN, a numerical failure).
-    #[error(transparent)]
-    Filter(#[from] EstimatorError),
-}
 
 /// The receiver's working state at one epoch, validated: satellites used `N ≥ 0` and the RTK
 /// status code (1 single, 2 differential, 3 fixed, 4 float; NMEA GGA 1 → 1, 2 → 2, 4 → 3,
@@ -237,6 +198,13 @@ pub struct AdaptiveStep {
     pub distance: f64,
 }
 
+/// The numbers an adaptive step reports beyond its status (`port-est`'s columns, Python's
+/// `details`; `None` before the first update and after a prediction without a fix).
+pub const DETAILS: &[DetailField] = &[
+    DetailField { name: "scale", meaning: "the measurement-noise scale t_k of the epoch" },
+    DetailField { name: "distance", meaning: "the horizontal innovation distance d_k that chose it" },
+];
+
 /// The Kalman filter with the measurement noise scaled by a [`NoiseScaling`] (module
 /// documentation); [`FuzzyKalmanFilter`] is the paper's.
 #[derive(Debug, Clone)]
@@ -246,6 +214,8 @@ pub struct AdaptiveKalmanFilter<S> {
     r_scaled: DMatrix<f64>,
     horizontal: [usize; 2],
     updates: u64,
+    /// `t_k`, `d_k` of the last step (`None` before the first update and after a prediction).
+    last_step: Option<AdaptiveStep>,
     /// The model outputs `y₁ … y_m` of a measurement vector `[y, N, RTK]`.
     outputs: DVector<f64>,
 }
@@ -263,10 +233,10 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// [`AdaptiveError::HorizontalComponents`] for fewer than two outputs.
     pub fn new(setup: Setup, scaling: S) -> Result<Self, AdaptiveError> {
         let mut kf = KalmanFilter::new(setup)?;
-        kf.set_details(StepDetails::Adaptive(None));
+        kf.set_details(StepDetails::new(DETAILS, &[None, None]));
         let r_scaled = kf.measurement_noise().clone();
         let outputs = DVector::zeros(r_scaled.nrows());
-        Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, outputs }.with_horizontal([0, 1])
+        Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, last_step: None, outputs }.with_horizontal([0, 1])
     }
 
     /// Chooses which two innovation components form `d_k = √(r_i² + r_j²)`.
@@ -332,7 +302,8 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// Counts a published update and reports its scale.
     fn commit_scale(&mut self, report: AdaptiveStep) -> AdaptiveStep {
         self.updates += 1;
-        self.kf.set_details(StepDetails::Adaptive(Some(report)));
+        self.last_step = Some(report);
+        self.kf.set_details(StepDetails::new(DETAILS, &[Some(report.scale), Some(report.distance)]));
         report
     }
 
@@ -347,7 +318,8 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         u: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         self.kf.predict(model, u)?;
-        self.kf.set_details(StepDetails::Adaptive(None));
+        self.last_step = None;
+        self.kf.set_details(StepDetails::new(DETAILS, &[None, None]));
         Ok(self.kf.estimate())
     }
 
@@ -495,10 +467,7 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// `t_k` and `d_k` of the last step (`None` before the first update and after a prediction).
     #[must_use]
     pub fn last_step(&self) -> Option<AdaptiveStep> {
-        match self.kf.estimate().details {
-            StepDetails::Adaptive(a) => a,
-            _ => None,
-        }
+        self.last_step
     }
 
     /// Number of updates so far (prediction-only steps are not counted).

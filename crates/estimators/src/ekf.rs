@@ -22,7 +22,7 @@ use crate::checks::map_worst_output;
 use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
 use crate::gaussian_update::GaussianUpdate;
-use crate::kalman::{GaussianEstimate, commit_prediction};
+use crate::gaussian_update::{GaussianEstimate, commit_prediction};
 use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, StepDetails};
@@ -68,7 +68,7 @@ impl ExtendedKalmanFilter {
             m,
             q,
             r,
-            est: GaussianEstimate::initial(x0, p0, StepDetails::None),
+            est: GaussianEstimate::initial(x0, p0, StepDetails::NONE),
             x_pred: DVector::zeros(n),
             f: nn(),
             h: DMatrix::zeros(m, n),

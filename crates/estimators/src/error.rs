@@ -1,6 +1,9 @@
-//! Errors of the estimators: what is wrong with the caller's input. A failed call leaves the
-//! filter's state unchanged.
+//! Errors of the estimators, by kind ([`EstimatorError::kind`]): input refused before any step
+//! (named field, row or value), or how a step ended without an estimate to publish (an outlier,
+//! data that contradict the noise bounds, a guarantee lost, a numerical failure). A failed call
+//! leaves the filter's state unchanged.
 
+use fuzzy_inference::FuzzyError;
 use lmi::LmiError;
 use models::{Capability, ModelError};
 
@@ -258,7 +261,7 @@ pub enum EstimatorError {
         /// The measurement component at fault (the satellite count or the RTK code), if any.
         index: Option<usize>,
         /// What is wrong.
-        source: Box<crate::adaptive::AdaptiveError>,
+        source: Box<AdaptiveError>,
     },
     /// The model could not be evaluated.
     #[error("model: {0}")]
@@ -266,6 +269,128 @@ pub enum EstimatorError {
     /// Setting up an SDP backend failed.
     #[error("SDP backend: {0}")]
     Lmi(#[from] LmiError),
+}
+
+/// What the adaptive filter ([`crate::adaptive`]) and its scalings can reject.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AdaptiveError {
+    /// A receiver-status value is NaN or infinite.
+    #[error("{what} must be finite, got {value}")]
+    NonFinite {
+        /// Which value.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A negative number of satellites.
+    #[error("the satellite count must be non-negative, got {0}")]
+    NegativeSatellites(f64),
+    /// An RTK status code outside 1–4 (or not an integer).
+    #[error("RTK status code {0} is not one of 1 (single), 2 (differential), 3 (fixed), 4 (float)")]
+    RtkOutOfRange(f64),
+    /// The scaling returned a `t_k` that is not positive and finite.
+    #[error("the noise scale t_k must be positive and finite, got {0}")]
+    InvalidScale(f64),
+    /// The innovation components that form `d_k` are not distinct outputs of the model.
+    #[error("the horizontal components {components:?} must be two distinct indices below {outputs}")]
+    HorizontalComponents {
+        /// The indices given.
+        components: [usize; 2],
+        /// Number of outputs `m`.
+        outputs: usize,
+    },
+    /// A fuzzy system given to [`FuzzyScaling`](crate::adaptive::FuzzyScaling) does not have the three inputs `[N, RTK, d]`.
+    #[error("a noise-scaling fuzzy system needs 3 inputs [N, RTK, d], this one has {0}")]
+    FuzzyInputCount(usize),
+    /// The fuzzy system rejected its inputs.
+    #[error("fuzzy inference: {0}")]
+    Fuzzy(#[from] FuzzyError),
+    /// The Kalman step rejected its data (dimensions, NaN, a numerical failure).
+    #[error(transparent)]
+    Filter(#[from] EstimatorError),
+}
+
+/// What kind of failure an [`EstimatorError`] is: the caller's input refused before anything was
+/// computed, or how a step ended. The command line and Python map errors by this kind (Python:
+/// `ValueError` for [`ErrorKind::RefusedInput`], `InconsistentDataError` for
+/// [`ErrorKind::Outlier`] and [`ErrorKind::InconsistentData`], `NumericalError` for
+/// [`ErrorKind::NumericalFailure`], `EstimationError` for the rest).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ErrorKind {
+    /// The input was refused before any step: sizes, NaN, matrices that are not symmetric or
+    /// definite, unknown names, settings, a model without the capability the estimator needs, a
+    /// receiver status or an input outside its declared box. Fix the input and call again.
+    RefusedInput,
+    /// The estimator cannot do what was asked: an operation it does not offer, an update without
+    /// the prediction it is joint with, an SDP backend that cannot be set up.
+    Unsupported,
+    /// The step's measurement failed the innovation gate.
+    Outlier,
+    /// The step's data provably contradict the noise bounds or the declared state bounds.
+    InconsistentData,
+    /// No guaranteed set can be published at this step.
+    GuaranteeLost,
+    /// The step failed numerically: a non-finite prediction, a covariance or shape that lost
+    /// definiteness, a model evaluation that overflowed.
+    NumericalFailure,
+}
+
+impl ErrorKind {
+    /// A short label: `refused-input`, `unsupported`, `outlier`, `inconsistent-data`,
+    /// `guarantee-lost`, `numerical-failure`.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            ErrorKind::RefusedInput => "refused-input",
+            ErrorKind::Unsupported => "unsupported",
+            ErrorKind::Outlier => "outlier",
+            ErrorKind::InconsistentData => "inconsistent-data",
+            ErrorKind::GuaranteeLost => "guarantee-lost",
+            ErrorKind::NumericalFailure => "numerical-failure",
+        }
+    }
+}
+
+impl EstimatorError {
+    /// Which kind of failure this is ([`ErrorKind`]).
+    #[must_use]
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            EstimatorError::DimensionMismatch { .. }
+            | EstimatorError::NonFinite { .. }
+            | EstimatorError::NotSymmetric { .. }
+            | EstimatorError::NotPositiveDefinite { .. }
+            | EstimatorError::NotPositiveSemidefinite { .. }
+            | EstimatorError::InvalidInputBounds { .. }
+            | EstimatorError::InputOutsideBounds { .. }
+            | EstimatorError::EmptySystem(_)
+            | EstimatorError::UnknownEstimator { .. }
+            | EstimatorError::UnknownSolver { .. }
+            | EstimatorError::MissingSetting { .. }
+            | EstimatorError::InvalidSetting { .. }
+            | EstimatorError::InvalidConfiguration { .. }
+            | EstimatorError::ModelLacksCapability { .. }
+            | EstimatorError::WrongSettings { .. } => ErrorKind::RefusedInput,
+            EstimatorError::Adaptive { source, .. } => match &**source {
+                AdaptiveError::Filter(e) => e.kind(),
+                _ => ErrorKind::RefusedInput,
+            },
+            EstimatorError::Model(m) if m.is_numerical() => ErrorKind::NumericalFailure,
+            EstimatorError::Model(_) => ErrorKind::RefusedInput,
+            EstimatorError::NumericalFailure(_) => ErrorKind::NumericalFailure,
+            EstimatorError::Outlier { .. } => ErrorKind::Outlier,
+            EstimatorError::InconsistentData { .. }
+            | EstimatorError::SetMissed { .. }
+            | EstimatorError::InconsistentWindow { .. }
+            | EstimatorError::OutsideStateBounds { .. } => ErrorKind::InconsistentData,
+            EstimatorError::GuaranteeLost { .. } => ErrorKind::GuaranteeLost,
+            EstimatorError::UpdateWithoutPrediction { .. }
+            | EstimatorError::Unsupported { .. }
+            | EstimatorError::Lmi(_) => ErrorKind::Unsupported,
+        }
+    }
 }
 
 /// The output of an outlying measurement whose innovation is the largest in its own standard
@@ -287,4 +412,30 @@ fn describe_worst(worst: Option<&WorstOutput>) -> String {
             w.index, w.residual, w.sigmas
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_are_classified_by_kind() {
+        let input = EstimatorError::DimensionMismatch { what: "y", expected: 3, found: 2 };
+        assert_eq!(input.kind(), ErrorKind::RefusedInput);
+        let outlier = EstimatorError::Outlier { step: 4, nis: 30.0, threshold: 11.3, probability: 0.99, worst: None };
+        assert_eq!(outlier.kind(), ErrorKind::Outlier);
+        assert_eq!(EstimatorError::SetMissed { step: 2, reason: "r" }.kind(), ErrorKind::InconsistentData);
+        assert_eq!(EstimatorError::GuaranteeLost { step: 2, reason: "r".into() }.kind(), ErrorKind::GuaranteeLost);
+        let numerical = EstimatorError::NumericalFailure("the prediction is not finite");
+        assert_eq!(numerical.kind(), ErrorKind::NumericalFailure);
+        // A model's numerical failure is not the caller's input; its refusal of a value is.
+        assert_eq!(EstimatorError::Model(ModelError::Diverged { step: 3 }).kind(), ErrorKind::NumericalFailure);
+        assert_eq!(EstimatorError::Model(ModelError::Evaluation("v = 0".into())).kind(), ErrorKind::RefusedInput);
+        // The adaptive filter's own refusals are input; its Kalman step's failures keep their kind.
+        let wrapped = EstimatorError::Adaptive { index: None, source: Box::new(AdaptiveError::Filter(numerical)) };
+        assert_eq!(wrapped.kind(), ErrorKind::NumericalFailure);
+        let rtk = EstimatorError::Adaptive { index: Some(4), source: Box::new(AdaptiveError::RtkOutOfRange(9.0)) };
+        assert_eq!(rtk.kind(), ErrorKind::RefusedInput);
+        assert_eq!(EstimatorError::UpdateWithoutPrediction { estimator: "smf" }.kind().label(), "unsupported");
+    }
 }

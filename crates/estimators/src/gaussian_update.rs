@@ -1,4 +1,5 @@
-//! The linear algebra of the Kalman and extended Kalman steps, at the filter's sizes.
+//! The Gaussian estimate the Kalman-type filters publish ([`GaussianEstimate`]), and the linear
+//! algebra of the Kalman and extended Kalman steps, at the filter's sizes.
 //!
 //! [`StepKernels`] is chosen once per filter from `(n, m)`: for `n ≤` [`MAX_STATES`] (the
 //! vehicles' filters have 3 to 13 states) and `m ≤` [`MAX_OUTPUTS`] the
@@ -15,9 +16,96 @@ use dense_kernels::small;
 
 use crate::checks::{GateVerdict, InnovationGate, name_worst_output};
 use crate::error::EstimatorError;
-use crate::kalman::{GaussianEstimate, commit_prediction, data_check};
-use crate::traits::{SolveOutcome, StepStatus};
+use crate::traits::{DataCheck, Estimate, EstimateKind, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::all_finite;
+
+/// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
+/// covariance, per-state standard deviations, the step's status and the filter's details.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaussianEstimate {
+    /// Posterior mean `x̂_{k+1}`.
+    pub center: DVector<f64>,
+    /// Posterior covariance `P_{k+1}` (symmetric).
+    pub covariance: DMatrix<f64>,
+    /// `√P_ii`.
+    pub std_dev: DVector<f64>,
+    /// How the step ended ([`SolveOutcome::Converged`] for a measurement update,
+    /// [`SolveOutcome::Predicted`] for a prediction; a fallback when a guard was needed).
+    pub status: StepStatus,
+    /// The filter's own details ([`StepDetails::NONE`] for the Kalman filters).
+    pub details: StepDetails,
+}
+
+impl GaussianEstimate {
+    /// The initial estimate `(x0, P0)` with the given details.
+    pub(crate) fn initial(x0: DVector<f64>, p0: DMatrix<f64>, details: StepDetails) -> Self {
+        let std_dev = p0.diagonal().map(|v| v.max(0.0).sqrt());
+        Self { center: x0, covariance: p0, std_dev, status: StepStatus::INITIAL, details }
+    }
+
+    /// Recomputes `std_dev` from the covariance.
+    pub(crate) fn refresh_std_dev(&mut self) {
+        let n = self.center.len();
+        for (sd, v) in self.std_dev.iter_mut().zip(self.covariance.as_slice().iter().step_by(n + 1)) {
+            *sd = v.max(0.0).sqrt();
+        }
+    }
+}
+
+impl Estimate for GaussianEstimate {
+    fn kind(&self) -> EstimateKind {
+        EstimateKind::Gaussian
+    }
+    fn center(&self) -> &DVector<f64> {
+        &self.center
+    }
+    fn shape(&self) -> &DMatrix<f64> {
+        &self.covariance
+    }
+    fn bounds(&self, i: usize) -> Option<(f64, f64)> {
+        (i < self.center.len()).then(|| (self.center[i] - self.std_dev[i], self.center[i] + self.std_dev[i]))
+    }
+    fn status(&self) -> StepStatus {
+        self.status
+    }
+    fn details(&self) -> StepDetails {
+        self.details
+    }
+}
+
+/// Publishes a prediction `(x⁻, P⁻)` as the estimate (swapping buffers) after checking that it is
+/// finite; on error nothing changes. Shared by the prediction-only steps of the Kalman and the
+/// extended Kalman filter.
+pub(crate) fn commit_prediction(
+    est: &mut GaussianEstimate,
+    x_pred: &mut DVector<f64>,
+    p_pred: &mut DMatrix<f64>,
+) -> Result<(), EstimatorError> {
+    if !all_finite(x_pred.as_slice()) || !all_finite(p_pred.as_slice()) {
+        return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
+    }
+    std::mem::swap(&mut est.center, x_pred);
+    std::mem::swap(&mut est.covariance, p_pred);
+    est.refresh_std_dev();
+    est.status = StepStatus::unchecked(SolveOutcome::Predicted);
+    Ok(())
+}
+
+/// The data check a gate verdict stands for.
+pub(crate) fn data_check(verdict: GateVerdict) -> DataCheck {
+    match verdict {
+        GateVerdict::Unchecked => DataCheck::NotChecked,
+        GateVerdict::Pass => DataCheck::Consistent,
+        GateVerdict::FlagAndUse | GateVerdict::Drop => DataCheck::Inconsistent,
+    }
+}
+
+/// `νᵀ S⁻¹ ν` from the lower Cholesky factor `G` of `S` (`‖G⁻¹ ν‖²`), using `z` (length `m`).
+pub(crate) fn nis(g: &DMatrix<f64>, innov: &DVector<f64>, z: &mut DVector<f64>) -> f64 {
+    z.copy_from(innov);
+    dense::solve_lower(g.as_slice(), g.nrows(), z.as_mut_slice());
+    z.iter().map(|v| v * v).sum()
+}
 
 /// The largest state count with const-generic kernels.
 pub(crate) const MAX_STATES: usize = 13;
@@ -217,7 +305,7 @@ fn update_general(
     b.s.copy_from(r);
     dense::mul_nn(1.0, h, &b.pht, 1.0, &mut b.s);
     dense::cholesky_in_place(&mut b.s)?;
-    let nis = if want_nis { crate::kalman::nis(&b.s, innov, &mut b.z) } else { f64::NAN };
+    let nis = if want_nis { nis(&b.s, innov, &mut b.z) } else { f64::NAN };
     b.k.copy_from(&b.pht);
     dense::solve_right_lower_t(&mut b.k, &b.s);
     dense::solve_right_lower(&mut b.k, &b.s);

@@ -11,51 +11,17 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use dense_kernels as dense;
 use models::{Angles, Dims, LinearModel};
 
 use crate::checks::map_worst_output;
-use crate::checks::{DataChecks, GateVerdict, InnovationGate};
+use crate::checks::{DataChecks, InnovationGate};
 use crate::error::EstimatorError;
-use crate::gaussian_update::GaussianUpdate;
+pub use crate::gaussian_update::GaussianEstimate;
+use crate::gaussian_update::{GaussianUpdate, commit_prediction};
 use crate::partial::{GaussianSubset, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
-use crate::traits::{DataCheck, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails, StepStatus};
-use crate::validate::all_finite;
+use crate::traits::{Setup, StepDetails};
 use crate::validate::{Covariances, InitialData, check_initial_as, check_model, check_vec};
-
-/// A Gaussian estimate after a step (Kalman, extended, unscented and adaptive filters): mean,
-/// covariance, per-state standard deviations, the step's status and the filter's details.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GaussianEstimate {
-    /// Posterior mean `x̂_{k+1}`.
-    pub center: DVector<f64>,
-    /// Posterior covariance `P_{k+1}` (symmetric).
-    pub covariance: DMatrix<f64>,
-    /// `√P_ii`.
-    pub std_dev: DVector<f64>,
-    /// How the step ended ([`SolveOutcome::Converged`] for a measurement update,
-    /// [`SolveOutcome::Predicted`] for a prediction; a fallback when a guard was needed).
-    pub status: StepStatus,
-    /// The filter's own details ([`StepDetails::None`] for the Kalman filters).
-    pub details: StepDetails,
-}
-
-impl GaussianEstimate {
-    /// The initial estimate `(x0, P0)` with the given details.
-    pub(crate) fn initial(x0: DVector<f64>, p0: DMatrix<f64>, details: StepDetails) -> Self {
-        let std_dev = p0.diagonal().map(|v| v.max(0.0).sqrt());
-        Self { center: x0, covariance: p0, std_dev, status: StepStatus::INITIAL, details }
-    }
-
-    /// Recomputes `std_dev` from the covariance.
-    pub(crate) fn refresh_std_dev(&mut self) {
-        let n = self.center.len();
-        for (sd, v) in self.std_dev.iter_mut().zip(self.covariance.as_slice().iter().step_by(n + 1)) {
-            *sd = v.max(0.0).sqrt();
-        }
-    }
-}
 
 /// A Kalman filter for `x_{k+1} = A_k x_k + B_k u_k + w_k`, `y = C x + v`, `w ~ (0, Q)`,
 /// `v ~ (0, R)`.
@@ -80,40 +46,6 @@ pub struct KalmanFilter {
     steps: u64,
 }
 
-/// Publishes a prediction `(x⁻, P⁻)` as the estimate (swapping buffers) after checking that it is
-/// finite; on error nothing changes. Shared by the prediction-only steps of the Kalman and the
-/// extended Kalman filter.
-pub(crate) fn commit_prediction(
-    est: &mut GaussianEstimate,
-    x_pred: &mut DVector<f64>,
-    p_pred: &mut DMatrix<f64>,
-) -> Result<(), EstimatorError> {
-    if !all_finite(x_pred.as_slice()) || !all_finite(p_pred.as_slice()) {
-        return Err(EstimatorError::NumericalFailure("the prediction is not finite"));
-    }
-    std::mem::swap(&mut est.center, x_pred);
-    std::mem::swap(&mut est.covariance, p_pred);
-    est.refresh_std_dev();
-    est.status = StepStatus::unchecked(SolveOutcome::Predicted);
-    Ok(())
-}
-
-/// The data check a gate verdict stands for.
-pub(crate) fn data_check(verdict: GateVerdict) -> DataCheck {
-    match verdict {
-        GateVerdict::Unchecked => DataCheck::NotChecked,
-        GateVerdict::Pass => DataCheck::Consistent,
-        GateVerdict::FlagAndUse | GateVerdict::Drop => DataCheck::Inconsistent,
-    }
-}
-
-/// `νᵀ S⁻¹ ν` from the lower Cholesky factor `G` of `S` (`‖G⁻¹ ν‖²`), using `z` (length `m`).
-pub(crate) fn nis(g: &DMatrix<f64>, innov: &DVector<f64>, z: &mut DVector<f64>) -> f64 {
-    z.copy_from(innov);
-    dense::solve_lower(g.as_slice(), g.nrows(), z.as_mut_slice());
-    z.iter().map(|v| v * v).sum()
-}
-
 impl KalmanFilter {
     /// A filter from its [`Setup`]: initial mean and covariance, process and measurement noise
     /// covariances, number of inputs.
@@ -128,7 +60,7 @@ impl KalmanFilter {
             m,
             q,
             r,
-            est: GaussianEstimate::initial(x0, p0, StepDetails::None),
+            est: GaussianEstimate::initial(x0, p0, StepDetails::NONE),
             x_pred: DVector::zeros(n),
             p_pred: DMatrix::zeros(n, n),
             ap: DMatrix::zeros(n, n),
@@ -407,27 +339,6 @@ impl KalmanFilter {
             .map_err(|e| map_worst_output(e, rows))?;
         self.steps += 1;
         Ok(&self.est)
-    }
-}
-
-impl Estimate for GaussianEstimate {
-    fn kind(&self) -> EstimateKind {
-        EstimateKind::Gaussian
-    }
-    fn center(&self) -> &DVector<f64> {
-        &self.center
-    }
-    fn shape(&self) -> &DMatrix<f64> {
-        &self.covariance
-    }
-    fn bounds(&self, i: usize) -> Option<(f64, f64)> {
-        (i < self.center.len()).then(|| (self.center[i] - self.std_dev[i], self.center[i] + self.std_dev[i]))
-    }
-    fn status(&self) -> StepStatus {
-        self.status
-    }
-    fn details(&self) -> StepDetails {
-        self.details
     }
 }
 

@@ -94,7 +94,7 @@ pub use adaptive::{
 pub use checks::{DataChecks, InnovationGate};
 pub use czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, ZonotopeEstimate, ZonotopeReport};
 pub use ekf::ExtendedKalmanFilter;
-pub use error::{EstimatorError, WorstOutput};
+pub use error::{ErrorKind, EstimatorError, WorstOutput};
 pub use kalman::{GaussianEstimate, KalmanFilter};
 pub use mhe::{MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
 pub use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel, StepModel};
@@ -107,7 +107,8 @@ pub use smf::{
     TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus,
 };
 pub use traits::{
-    DataCheck, DynEstimator, Estimate, EstimateKind, Estimator, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus,
+    DataCheck, DetailField, DynEstimator, Estimate, EstimateKind, Estimator, Guarantee, Setup, SolveOutcome,
+    StepDetails, StepStatus,
 };
 pub use ukf::{UkfParams, UkfReport, UnscentedKalmanFilter};
 pub use validate::SYMMETRY_TOLERANCE;

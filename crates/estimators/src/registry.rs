@@ -47,7 +47,7 @@ use crate::smf::{
     InconsistencyPolicy, NonlinearSetMembershipFilter, ObservedSetMembershipFilter, SdpUpdateSolver,
     SetMembershipFilter, TwoMultiplierSolver,
 };
-use crate::traits::{DynEstimator, Estimate, EstimateKind, Setup};
+use crate::traits::{DetailField, DynEstimator, Estimate, EstimateKind, Setup};
 use crate::ukf::{UkfParams, UnscentedKalmanFilter};
 use crate::yang_li;
 
@@ -315,6 +315,9 @@ pub struct EstimatorEntry {
     /// The length of its measurement vector beyond the model's outputs (the fuzzy-adaptive
     /// filter's receiver status `[N, RTK]`: 2).
     pub extra_measurements: usize,
+    /// The numbers each step reports beyond its status, with their meanings (the estimator's
+    /// module declares them; the command line's columns and Python's `details` are these).
+    pub details: &'static [DetailField],
     build: fn(&'static EstimatorEntry, Setup, EstimatorSettings) -> Result<Inner, EstimatorError>,
 }
 
@@ -408,6 +411,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::SetMembership,
         extra_measurements: 0,
+        details: crate::smf::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
             set_membership!(e, &s, |t| SetMembershipFilter::with_solver(setup, t))
@@ -420,6 +424,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::None,
         extra_measurements: 0,
+        details: &[],
         build: |e, setup, _| Ok(on_linear(e, KalmanFilter::new(setup)?)),
     },
     EstimatorEntry {
@@ -429,6 +434,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::SetMembershipInputBox,
         extra_measurements: 0,
+        details: crate::smf::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembershipInputBox(s, b) = s else { return Err(wrong_settings(e)) };
             set_membership!(e, &s, |t| yang_li::without_input(setup, &b.lower, &b.upper, t))
@@ -441,6 +447,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::SetMembership,
         extra_measurements: 0,
+        details: crate::smf::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
             set_membership!(e, &s, |t| yang_li::with_input(setup, t))
@@ -454,6 +461,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::MovingHorizon,
         extra_measurements: 0,
+        details: crate::mhe::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::MovingHorizon(s) = s else { return Err(wrong_settings(e)) };
             Ok(on_linear(e, MovingHorizonEstimator::new(setup, *s)?))
@@ -467,6 +475,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::MovingHorizon,
         extra_measurements: 0,
+        details: crate::mhe::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::MovingHorizon(s) = s else { return Err(wrong_settings(e)) };
             let settings = MheSettings { cost: MheCost::LeastSquares, ..*s };
@@ -481,6 +490,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::FuzzyAdaptive,
         extra_measurements: 2,
+        details: crate::adaptive::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::FuzzyAdaptive(s) = s else { return Err(wrong_settings(e)) };
             let FuzzyAdaptiveSettings { system, horizontal } = *s;
@@ -496,6 +506,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Differentiable,
         settings: SettingsKind::None,
         extra_measurements: 0,
+        details: &[],
         build: |e, setup, _| Ok(on_differentiable(e, ExtendedKalmanFilter::new(setup)?)),
     },
     EstimatorEntry {
@@ -506,6 +517,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Discrete,
         settings: SettingsKind::Unscented,
         extra_measurements: 0,
+        details: &[],
         build: |e, setup, s| {
             let EstimatorSettings::Unscented(params) = s else { return Err(wrong_settings(e)) };
             Ok(on_discrete(e, UnscentedKalmanFilter::new(setup, params)?))
@@ -519,6 +531,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Differentiable,
         settings: SettingsKind::NonlinearMovingHorizon,
         extra_measurements: 0,
+        details: crate::mhe::NONLINEAR_DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::NonlinearMovingHorizon(s) = s else { return Err(wrong_settings(e)) };
             Ok(on_differentiable(e, NonlinearMhe::new(setup, *s)?))
@@ -532,6 +545,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::SecondOrder,
         settings: SettingsKind::SetMembership,
         extra_measurements: 0,
+        details: crate::smf::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::SetMembership(s) = s else { return Err(wrong_settings(e)) };
             if !s.interval_observer {
@@ -565,6 +579,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::Linear,
         settings: SettingsKind::ConstrainedZonotope,
         extra_measurements: 0,
+        details: crate::czf::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::ConstrainedZonotope(s) = s else { return Err(wrong_settings(e)) };
             Ok(on_linear(e, ConstrainedZonotopeFilter::new(setup, s)?))
@@ -578,6 +593,7 @@ pub static ESTIMATORS: &[EstimatorEntry] = &[
         needs: Capability::SecondOrder,
         settings: SettingsKind::ConstrainedZonotope,
         extra_measurements: 0,
+        details: crate::czf::DETAILS,
         build: |e, setup, s| {
             let EstimatorSettings::ConstrainedZonotope(s) = s else { return Err(wrong_settings(e)) };
             Ok(on_second_order(e, ConstrainedZonotopeFilter::new(setup, s)?))

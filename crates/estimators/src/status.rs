@@ -15,14 +15,13 @@
 //!
 //! [`StepStatus::label`] writes them as one word list (`converged`, `fallback`,
 //! `converged+inconsistent+not-guaranteed`), the `status` column of `port-est`.
+//!
+//! [`StepDetails`] carries an estimator's own numbers as an open structure: each estimator
+//! declares its [`DetailField`]s (name and meaning) once, in its module; its registry row lists the
+//! same, and the command line's columns, Python's `details` and the type stubs read them from
+//! there. This module sits below every estimator and names none of them.
 
 use std::fmt;
-
-use crate::adaptive::AdaptiveStep;
-use crate::czf::ZonotopeReport;
-use crate::mhe::{MheReport, NonlinearMheReport};
-use crate::smf::StepReport;
-use crate::ukf::UkfReport;
 
 /// What kind of set an estimate describes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -207,62 +206,65 @@ impl fmt::Display for StepStatus {
     }
 }
 
-/// An estimator's own account of its last step, beyond the shared [`StepStatus`].
+/// One number an estimator reports at every step beyond its [`StepStatus`]: the name of its column
+/// (`port-est`'s output, Python's `details`) and what it means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct DetailField {
+    /// The column name (`tau1`, `scale`, `iterations`).
+    pub name: &'static str,
+    /// What the number is, in one line.
+    pub meaning: &'static str,
+}
+
+/// The most numbers one estimator reports per step ([`StepDetails`] holds them inline, so a step
+/// publishes its details without allocating).
+pub const MAX_DETAIL_FIELDS: usize = 4;
+
+/// An estimator's own numbers for its last step, beyond the shared [`StepStatus`]: the fields the
+/// estimator declares (the same at every step of one estimator, and the same as its registry row's)
+/// and this step's value of each (`None` when the step has none, e.g. the noise scale of an epoch
+/// without a fix). Typed reports stay with their estimators (`SetEstimate::report`,
+/// `UnscentedKalmanFilter::report`, `AdaptiveKalmanFilter::last_step`, …).
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[non_exhaustive]
-pub enum StepDetails {
-    /// Nothing beyond the status (Kalman and extended Kalman filters).
-    None,
-    /// The set-membership filters: multipliers, solver status and iterations, fallback,
-    /// certification inflation, consistency.
-    SetMembership(StepReport),
-    /// The constrained-zonotope filters: sizes of the set, LP fallbacks, tightening, divergence.
-    ConstrainedZonotope(ZonotopeReport),
-    /// The unscented filter's positive-definiteness guards.
-    Unscented(UkfReport),
-    /// The adaptive filter's noise scale `t_k` and distance `d_k` (`None` before the first update
-    /// and after a prediction without a fix).
-    Adaptive(Option<AdaptiveStep>),
-    /// The linear moving-horizon estimators (`None` before the first update).
-    MovingHorizon(Option<MheReport>),
-    /// The nonlinear moving-horizon estimator (`None` before the first update).
-    NonlinearMovingHorizon(Option<NonlinearMheReport>),
+pub struct StepDetails {
+    fields: &'static [DetailField],
+    values: [Option<f64>; MAX_DETAIL_FIELDS],
 }
 
 impl StepDetails {
-    /// The names of the numbers [`StepDetails::for_each_field`] reports, the same for every step of
-    /// one estimator (for file headers).
+    /// No numbers beyond the status (the Kalman filters).
+    pub const NONE: Self = Self { fields: &[], values: [None; MAX_DETAIL_FIELDS] };
+
+    /// The values `values` of `fields`, in order. Fields beyond [`MAX_DETAIL_FIELDS`] are not
+    /// representable: an estimator declaring more is a programming error caught by its tests
+    /// (debug assertion; release builds keep the first ones).
     #[must_use]
-    pub fn field_names(&self) -> &'static [&'static str] {
-        match self {
-            StepDetails::None | StepDetails::Unscented(_) => &[],
-            StepDetails::SetMembership(_) => &["tau1", "tau2", "tau3"],
-            StepDetails::Adaptive(_) => &["scale", "distance"],
-            StepDetails::ConstrainedZonotope(_) => &["generators", "constraints"],
-            StepDetails::MovingHorizon(_) | StepDetails::NonlinearMovingHorizon(_) => &["iterations"],
+    pub fn new(fields: &'static [DetailField], values: &[Option<f64>]) -> Self {
+        debug_assert!(fields.len() <= MAX_DETAIL_FIELDS && values.len() == fields.len());
+        let mut v = [None; MAX_DETAIL_FIELDS];
+        for (slot, value) in v.iter_mut().zip(values) {
+            *slot = *value;
         }
+        Self { fields: &fields[..fields.len().min(MAX_DETAIL_FIELDS)], values: v }
     }
 
-    /// Calls `f` with each of [`StepDetails::field_names`] and its value (`None` when this step
-    /// has none, e.g. the scale of an epoch without a fix). Allocation-free.
+    /// The fields every step of this estimator reports (for file headers and column lists).
+    #[must_use]
+    pub fn fields(&self) -> &'static [DetailField] {
+        self.fields
+    }
+
+    /// The value of the field called `name`: `None` when the estimator has no such field,
+    /// `Some(None)` when it has but this step gave no value.
+    #[must_use]
+    pub fn get(&self, name: &str) -> Option<Option<f64>> {
+        self.fields.iter().position(|f| f.name == name).map(|i| self.values[i])
+    }
+
+    /// Calls `f` with each field's name and value, in order. Allocation-free.
     pub fn for_each_field(&self, f: &mut dyn FnMut(&'static str, Option<f64>)) {
-        match self {
-            StepDetails::None | StepDetails::Unscented(_) => {}
-            StepDetails::SetMembership(r) => {
-                for (name, t) in ["tau1", "tau2", "tau3"].into_iter().zip(r.tau) {
-                    f(name, Some(t));
-                }
-            }
-            StepDetails::Adaptive(a) => {
-                f("scale", a.map(|a| a.scale));
-                f("distance", a.map(|a| a.distance));
-            }
-            StepDetails::ConstrainedZonotope(r) => {
-                f("generators", Some(r.generators as f64));
-                f("constraints", Some(r.constraints as f64));
-            }
-            StepDetails::MovingHorizon(r) => f("iterations", r.map(|r| r.solve.sweeps as f64)),
-            StepDetails::NonlinearMovingHorizon(r) => f("iterations", r.map(|r| r.iterations as f64)),
+        for (field, value) in self.fields.iter().zip(self.values) {
+            f(field.name, value);
         }
     }
 }
@@ -288,12 +290,16 @@ mod tests {
     }
 
     #[test]
-    fn detail_fields_match_their_names() {
-        for d in [StepDetails::None, StepDetails::Adaptive(None), StepDetails::MovingHorizon(None)] {
-            let mut names = Vec::new();
-            d.for_each_field(&mut |n, _| names.push(n));
-            assert_eq!(names, d.field_names());
-        }
+    fn details_report_their_fields_in_order() {
+        const FIELDS: &[DetailField] =
+            &[DetailField { name: "a", meaning: "first" }, DetailField { name: "b", meaning: "second" }];
+        let d = StepDetails::new(FIELDS, &[Some(1.5), None]);
+        let mut seen = Vec::new();
+        d.for_each_field(&mut |n, v| seen.push((n, v)));
+        assert_eq!(seen, [("a", Some(1.5)), ("b", None)]);
+        assert_eq!((d.get("a"), d.get("b"), d.get("c")), (Some(Some(1.5)), Some(None), None));
+        assert_eq!(d.fields(), FIELDS);
+        assert!(StepDetails::NONE.fields().is_empty());
         assert_eq!(EstimateKind::Point.bounds_meaning(), None);
         assert!(EstimateKind::Gaussian.bounds_meaning().is_some());
     }

@@ -12,7 +12,7 @@ use models::Dims;
 
 use crate::checks::DataChecks;
 use crate::error::EstimatorError;
-pub use crate::status::{DataCheck, EstimateKind, Guarantee, SolveOutcome, StepDetails, StepStatus};
+pub use crate::status::{DataCheck, DetailField, EstimateKind, Guarantee, SolveOutcome, StepDetails, StepStatus};
 
 /// What every recursive estimator starts from. The meaning of the matrices depends on the
 /// estimator's [`EstimateKind`]: covariances for the Gaussian filters, ellipsoid shape matrices

@@ -51,7 +51,7 @@ use models::{Angles, Dims, DiscreteModel, wrap_angle};
 
 use crate::checks::{DataChecks, GateVerdict, InnovationGate, map_worst_output, name_worst_output};
 use crate::error::EstimatorError;
-use crate::kalman::{GaussianEstimate, data_check, nis};
+use crate::gaussian_update::{GaussianEstimate, data_check, nis};
 use crate::partial::{self, Measured, Subsets, classify};
 use crate::traits::forward_estimator;
 use crate::traits::{Setup, SolveOutcome, StepDetails, StepStatus};
@@ -318,7 +318,7 @@ impl UnscentedKalmanFilter {
             wc0,
             wi,
             q,
-            est: GaussianEstimate::initial(x0, p0, StepDetails::Unscented(UkfReport::default())),
+            est: GaussianEstimate::initial(x0, p0, StepDetails::NONE),
             report: UkfReport::default(),
             chol: nn(),
             chol_current: false,
@@ -489,13 +489,12 @@ impl UnscentedKalmanFilter {
         Ok(&self.est)
     }
 
-    /// Writes the report into the estimate's details and the status (a fallback when a guard
-    /// was needed in this step).
+    /// Writes the status from the report (a fallback when a guard was needed in this step); the
+    /// report itself is [`UnscentedKalmanFilter::report`].
     fn publish_report(&mut self, outcome: SolveOutcome) {
         let r = self.report;
         let guarded = r.guarded_prediction || r.guarded_innovation || r.guarded_update;
         self.est.status = StepStatus::unchecked(if guarded { SolveOutcome::FallbackUsed } else { outcome });
-        self.est.details = StepDetails::Unscented(r);
     }
 
     /// The measurement update (29)–(32) of the current estimate with `y`, `h` evaluated with the

@@ -11,8 +11,8 @@
 
 use std::f64::consts::{PI, TAU};
 
+use crate::dims::Dims;
 use crate::error::ModelError;
-use crate::model::Dims;
 
 /// The angle states and angle outputs of a model, as sorted, distinct indices.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]

@@ -104,6 +104,15 @@ pub enum ModelError {
     Evaluation(String),
 }
 
+impl ModelError {
+    /// Whether the error is a numerical failure (an exponential that overflowed, a simulation
+    /// that diverged) rather than input the model refuses.
+    #[must_use]
+    pub fn is_numerical(&self) -> bool {
+        matches!(self, Self::ExponentialOverflow { .. } | Self::SingularPadeDenominator | Self::Diverged { .. })
+    }
+}
+
 /// Checks that every entry of a matrix is finite, naming it in the error.
 pub fn check_finite<R, C, S>(what: &str, m: &nalgebra::Matrix<f64, R, C, S>) -> Result<(), ModelError>
 where

@@ -54,6 +54,7 @@ pub mod angles;
 pub mod capability;
 pub mod closure;
 pub mod continuous;
+pub mod dims;
 pub mod discretize;
 pub mod dual;
 pub mod enclosure;

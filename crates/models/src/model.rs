@@ -16,26 +16,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::angles::Angles;
+pub use crate::dims::Dims;
 use crate::error::{ModelError, check_dims, check_finite};
-
-/// Dimensions of a model: `n` states, `p` inputs, `m` outputs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Dims {
-    /// States `n`.
-    pub states: usize,
-    /// Inputs `p`.
-    pub inputs: usize,
-    /// Outputs `m`.
-    pub outputs: usize,
-}
-
-impl Dims {
-    /// `(n, p, m)`.
-    #[must_use]
-    pub fn new(states: usize, inputs: usize, outputs: usize) -> Self {
-        Self { states, inputs, outputs }
-    }
-}
 
 /// A discrete-time model `x_{k+1} = f(x_k, u_k)`, `y = h(x, u)`.
 pub trait DiscreteModel {

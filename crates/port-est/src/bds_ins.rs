@@ -38,7 +38,7 @@ use bds_ins_dynamics::{
 };
 use estimators::{
     AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, Estimate, Estimator, EstimatorError, FuzzyScaling,
-    NoiseScaling, Setup, StepDetails,
+    NoiseScaling, Setup,
 };
 use fuzzy_inference::{BDS_INS_INTERFACE, FuzzySystem};
 use nalgebra::{DMatrix, DVector};
@@ -592,8 +592,8 @@ impl Runner<'_> {
             let c = correct(ins, &e.center).map_err(|e| Error::Usage(e.to_string()))?;
             let (dx, dy, dpsi) = (e.center[idx::DX], e.center[idx::DY], e.center[idx::DPSI]);
             let sd = |i: usize| e.std_dev[i];
-            let (t, d) = match e.details {
-                StepDetails::Adaptive(Some(r)) => (format!("{:e}", r.scale), format!("{:e}", r.distance)),
+            let (t, d) = match (e.details.get("scale"), e.details.get("distance")) {
+                (Some(Some(t)), Some(Some(d))) => (format!("{t:e}"), format!("{d:e}")),
                 _ => (String::new(), String::new()),
             };
             writeln!(

@@ -270,7 +270,7 @@ Files:
               `sd1,…,sdn,trace_cov` (Gaussian: one standard deviation per state),
               `lo1,…,lon,hi1,…,hin,trace_shape` (guaranteed intervals), or nothing (point
               estimates of the moving-horizon estimators: no bounds), then the estimator's own
-              numbers (`tau1,tau2,tau3`; `scale,distance`; `iterations`) and `status`: converged,
+              numbers (`tau1,tau2,tau3,iterations`; `scale,distance`; `iterations`) and `status`: converged,
               predicted, not-converged, fallback, relaxed or real-time, with `+inconsistent` and
               `+not-guaranteed` where they apply. Steps that do not end cleanly are counted in a
               warning on stderr; --strict makes the first one an error. The file is written to a

@@ -2,8 +2,8 @@
 //!
 //! `OUT.csv` has the header `k,xhat1,…,xhatn`, then columns named after what the numbers are
 //! ([`EstimateColumns`]: `sd1…,trace_cov` for Gaussian estimates, `lo1…,hi1…,trace_shape` for
-//! guaranteed sets, none for point estimates), the estimator's own numbers (`tau1,tau2,tau3`,
-//! `scale,distance`, `iterations`) and `status`; the row of step `k` is labelled `k + 1` (it
+//! guaranteed sets, none for point estimates), the estimator's own numbers (its registry row's
+//! `details`: `tau1,tau2,tau3,iterations`, `scale,distance`, `iterations`) and `status`; the row of step `k` is labelled `k + 1` (it
 //! estimates `x_{k+1}`). Numbers are written in Rust's `{:e}` notation, exact to the last bit.
 
 use std::io::{Read, Write};
@@ -478,11 +478,11 @@ mod tests {
                 assert!(lines[30].ends_with(",converged"), "{}", lines[30]);
                 continue;
             }
-            assert_eq!(lines[0], "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,status");
+            assert_eq!(lines[0], "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,iterations,status");
             assert!(lines[1].starts_with("1,"));
             let last: Vec<&str> = lines[30].split(',').collect();
-            assert_eq!(last[11], "converged", "{est}");
-            let last: Vec<f64> = last[..11].iter().map(|v| v.parse().unwrap()).collect();
+            assert_eq!(last[12], "converged", "{est}");
+            let last: Vec<f64> = last[..12].iter().map(|v| v.parse().unwrap()).collect();
             assert!(last[3] <= last[1] && last[1] <= last[5], "{est}: lo ≤ xhat ≤ hi");
         }
     }

@@ -196,8 +196,8 @@ pub fn write_estimators_for(model: &Model, w: &mut dyn Write) -> io::Result<()> 
     Ok(())
 }
 
-/// Writes the registry: every estimator with its kind, the model it needs and its settings, then
-/// the solvers.
+/// Writes the registry: every estimator with its kind, the model it needs, its settings and the
+/// columns of its own numbers with their meanings, then the solvers.
 ///
 /// # Errors
 /// When `w` fails.
@@ -218,6 +218,9 @@ pub fn write_estimators(w: &mut dyn Write) -> io::Result<()> {
             notes.push(format!("{} extra measurement columns", e.extra_measurements));
         }
         writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, notes.join("; "))?;
+        for d in e.details {
+            writeln!(w, "  {:width$}    column {}: {}", "", d.name, d.meaning)?;
+        }
     }
     writeln!(w)?;
     writeln!(w, "Solvers (--solver NAME, default {}):", registry::SmfSolver::TWO_MULTIPLIER)?;

@@ -4,7 +4,9 @@
 
 use std::io::{self, Write};
 
-use estimators::{DataCheck, Estimate, EstimateKind, EstimatorError, Guarantee, SolveOutcome, StepDetails, StepStatus};
+use estimators::{
+    DataCheck, DetailField, Estimate, EstimateKind, EstimatorError, Guarantee, SolveOutcome, StepDetails, StepStatus,
+};
 
 use crate::data::RowSource;
 use crate::error::{Error, Location};
@@ -130,14 +132,14 @@ pub fn step_error(source: EstimatorError, data: &dyn RowSource, k: u64) -> Error
 pub struct EstimateColumns {
     kind: EstimateKind,
     states: usize,
-    details: &'static [&'static str],
+    details: &'static [DetailField],
 }
 
 impl EstimateColumns {
     /// The columns of the estimates `initial` stands for (same kind, states and details).
     #[must_use]
     pub fn of(initial: &dyn Estimate) -> Self {
-        Self { kind: initial.kind(), states: initial.center().len(), details: initial.details().field_names() }
+        Self { kind: initial.kind(), states: initial.center().len(), details: initial.details().fields() }
     }
 
     /// The header after `k`, comma-separated with a leading comma.
@@ -165,7 +167,7 @@ impl EstimateColumns {
         }
         for d in self.details {
             h.push(',');
-            h.push_str(d);
+            h.push_str(d.name);
         }
         h.push_str(",status");
         h

@@ -40,6 +40,9 @@ fn estimators_lists_the_registry_and_the_solvers() {
     let list = text(&out.stdout);
     for e in estimators::registry::ESTIMATORS {
         assert!(list.contains(e.name) && list.contains(e.summary), "{}", e.name);
+        for d in e.details {
+            assert!(list.contains(&format!("column {}: {}", d.name, d.meaning)), "{}: {}", e.name, d.name);
+        }
     }
     for s in estimators::registry::SmfSolver::names() {
         assert!(list.contains(s), "{s}");

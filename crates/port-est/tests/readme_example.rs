@@ -61,7 +61,9 @@ fn readme_filter_example_runs_for_every_estimator() {
         assert_eq!(lines.len(), 41, "{label}: header and 40 steps");
         // Columns named after what they are: no bounds for point estimates.
         let expected = match info.kind {
-            EstimateKind::GuaranteedEllipsoid => "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,status",
+            EstimateKind::GuaranteedEllipsoid => {
+                "k,xhat1,xhat2,lo1,lo2,hi1,hi2,trace_shape,tau1,tau2,tau3,iterations,status"
+            }
             EstimateKind::Gaussian => "k,xhat1,xhat2,sd1,sd2,trace_cov,status",
             EstimateKind::GuaranteedConstrainedZonotope => {
                 "k,xhat1,xhat2,lo1,lo2,hi1,hi2,generators,constraints,status"

@@ -2,13 +2,13 @@
 //! matrices that are not symmetric positive definite, unknown names, bad settings), the package's
 //! `EstimationError` and its subclasses `NumericalError` and `InconsistentDataError` for what the
 //! estimation itself runs into, `BagError` (a `ValueError`) for a bag that cannot be read, and
+//! the Rust error's kind as the exception's `kind` attribute (`refused-input`, `outlier`, …), and
 //! never a Rust panic (every call into the estimators runs under [`std::panic::catch_unwind`]; an
 //! estimator that panicked is refused from then on).
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use estimators::EstimatorError;
-use models::ModelError;
+use estimators::{ErrorKind, EstimatorError};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
@@ -71,39 +71,13 @@ create_exception!(
 pub fn run_error(py: Python<'_>, e: &EstimatorError, row: usize) -> PyErr {
     let err = RunError::new_err(format!("row {row}: {e}"));
     let _ = err.value(py).setattr("row", row);
+    let _ = err.value(py).setattr("kind", e.kind().label());
     err
 }
 
 /// Whether an estimator error is the caller's input (a `ValueError`).
 pub fn is_bad_input(e: &EstimatorError) -> bool {
-    match e {
-        EstimatorError::DimensionMismatch { .. }
-        | EstimatorError::NonFinite { .. }
-        | EstimatorError::NotSymmetric { .. }
-        | EstimatorError::NotPositiveDefinite { .. }
-        | EstimatorError::NotPositiveSemidefinite { .. }
-        | EstimatorError::InvalidInputBounds { .. }
-        | EstimatorError::InputOutsideBounds { .. }
-        | EstimatorError::EmptySystem(_)
-        | EstimatorError::UnknownEstimator { .. }
-        | EstimatorError::UnknownSolver { .. }
-        | EstimatorError::MissingSetting { .. }
-        | EstimatorError::InvalidSetting { .. }
-        | EstimatorError::InvalidConfiguration { .. }
-        | EstimatorError::ModelLacksCapability { .. }
-        | EstimatorError::WrongSettings { .. }
-        | EstimatorError::Adaptive { .. } => true,
-        EstimatorError::Model(m) => !is_numerical_model_error(m),
-        _ => false,
-    }
-}
-
-/// Model errors that are numerical failures rather than bad input.
-fn is_numerical_model_error(e: &ModelError) -> bool {
-    matches!(
-        e,
-        ModelError::ExponentialOverflow { .. } | ModelError::SingularPadeDenominator | ModelError::Diverged { .. }
-    )
+    e.kind() == ErrorKind::RefusedInput
 }
 
 /// The Python exception for an estimator's error; `row` is the log row of a whole-log run.
@@ -152,12 +126,17 @@ pub fn estimator_error(py: Python<'_>, e: &EstimatorError, row: Option<usize>) -
             let _ = value.setattr("state", *state);
             err
         }
-        EstimatorError::NumericalFailure(_) => NumericalError::new_err(message),
-        EstimatorError::Model(m) if is_numerical_model_error(m) => NumericalError::new_err(message),
-        e if is_bad_input(e) => PyValueError::new_err(message),
-        _ => EstimationError::new_err(message),
+        e => match e.kind() {
+            ErrorKind::NumericalFailure => NumericalError::new_err(message),
+            ErrorKind::RefusedInput => PyValueError::new_err(message),
+            ErrorKind::Outlier | ErrorKind::InconsistentData => InconsistentDataError::new_err(message),
+            _ => EstimationError::new_err(message),
+        },
     };
     let _ = err.value(py).setattr("row", row);
+    // The Rust error's kind (`refused-input`, `outlier`, `inconsistent-data`, `guarantee-lost`,
+    // `numerical-failure`, `unsupported`), the same words as `estimators::ErrorKind::label`.
+    let _ = err.value(py).setattr("kind", e.kind().label());
     err
 }
 

@@ -38,8 +38,9 @@ use crate::convert::{mat_out, vec_out};
 ///     The guaranteed constrained zonotope ``{c + G xi : |xi|_inf <= 1, A xi = b}`` of a
 ///     ``"guaranteed constrained zonotope"`` estimate, as ``(c, G, A, b)``; None for other kinds.
 /// details : dict[str, float | None]
-///     The estimator's own numbers (``tau1``, ``tau2``, ``tau3`` of a set-membership step; ``scale``,
-///     ``distance`` of the fuzzy-adaptive filter; ``iterations`` of a moving-horizon window).
+///     The estimator's own numbers (``tau1``, ``tau2``, ``tau3``, ``iterations`` of a set-membership
+///     step; ``scale``, ``distance`` of the fuzzy-adaptive filter; ``iterations`` of a moving-horizon
+///     window); ``estimators()`` gives each estimator's with their meanings.
 ///
 /// All arrays are read-only copies.
 #[pyclass(frozen, module = "port_estimation")]

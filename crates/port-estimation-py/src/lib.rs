@@ -33,8 +33,9 @@ use pyo3::prelude::*;
 
 /// Every estimator of the registry: a list of dicts with its ``name``, ``kind`` (of estimate),
 /// ``summary``, what it ``needs`` of the model (``"linear"``, ``"differentiable"``, ``"discrete"``),
-/// its ``settings`` (in words), the keywords it takes (``keywords``) and ``extra_measurements`` (the
-/// measurement columns beyond the model's outputs).
+/// its ``settings`` (in words), the keywords it takes (``keywords``), ``extra_measurements`` (the
+/// measurement columns beyond the model's outputs) and ``details`` (the numbers each step reports in
+/// ``Estimate.details`` and ``RunResult.details``, name to meaning, in order).
 #[pyfunction(name = "estimators")]
 fn estimator_table(py: Python<'_>) -> PyResult<Vec<Bound<'_, pyo3::types::PyDict>>> {
     ::estimators::registry::ESTIMATORS
@@ -48,6 +49,11 @@ fn estimator_table(py: Python<'_>) -> PyResult<Vec<Bound<'_, pyo3::types::PyDict
             d.set_item("settings", e.settings.describe())?;
             d.set_item("keywords", settings::setting_names(e.settings).to_vec())?;
             d.set_item("extra_measurements", e.extra_measurements)?;
+            let details = pyo3::types::PyDict::new(py);
+            for f in e.details {
+                details.set_item(f.name, f.meaning)?;
+            }
+            d.set_item("details", details)?;
             Ok(d)
         })
         .collect()

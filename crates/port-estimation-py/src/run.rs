@@ -46,7 +46,7 @@ impl RunOutput {
     /// `rows · n` against [`MAX_RUN_VALUES`] first).
     pub fn new(est: &AnyEstimator, rows: usize) -> Self {
         let n = est.dims().states;
-        let names = est.estimate().details().field_names();
+        let fields = est.estimate().details().fields();
         Self {
             rows,
             states: n,
@@ -57,7 +57,7 @@ impl RunOutput {
             trace: vec![f64::NAN; rows],
             codes: vec![0; rows],
             statuses: Vec::new(),
-            details: names.iter().map(|name| (*name, vec![f64::NAN; rows])).collect(),
+            details: fields.iter().map(|f| (f.name, vec![f64::NAN; rows])).collect(),
             measured: None,
         }
     }

@@ -97,6 +97,9 @@ def test_bad_construction_is_a_value_error(system, kwargs, message):
 
 def test_bad_names_and_models_are_value_errors(system):
     model = system[0]
+    with pytest.raises(ValueError) as info:
+        pe.Estimator("smf", model, P0=-np.eye(3))
+    assert info.value.kind == "refused-input"  # refused before any step
     with pytest.raises(ValueError, match="unknown estimator"):
         pe.Estimator("nope", model)
     with pytest.raises(ValueError, match="needs the matrices"):
@@ -159,8 +162,9 @@ def test_a_numerical_failure_is_a_numerical_error_and_changes_nothing():
     model = pe.Model(np.eye(2) * 1e200, np.zeros((2, 1)), np.eye(2))
     kf = pe.KalmanFilter(model, P0=1.0, Q=1.0, R=1.0)
     snap = _snapshot(kf)
-    with pytest.raises(pe.NumericalError):
+    with pytest.raises(pe.NumericalError) as info:
         kf.step([0.0], [1.0, 1.0])
+    assert info.value.kind == "numerical-failure"  # estimators::ErrorKind's label
     _assert_same(kf, snap)
     with pytest.raises(pe.NumericalError) as info:
         kf.run(np.zeros((3, 1)), np.ones((3, 2)))
@@ -172,8 +176,9 @@ def test_operations_an_estimator_does_not_offer_are_estimation_errors(system):
     model, q, r, p0, us, ys = system
     smf = pe.SetMembershipFilter(model, P0=p0, Q=q, R=r)
     snap = _snapshot(smf)
-    with pytest.raises(pe.EstimationError, match="no prediction to update"):
+    with pytest.raises(pe.EstimationError, match="no prediction to update") as info:
         smf.update(ys[0])
+    assert info.value.kind == "unsupported"
     _assert_same(smf, snap)
     w, v = np.full(3, 0.1), np.full(2, 0.1)
     mhe = pe.MovingHorizonEstimator(model, R=np.diag(np.diag(r)), w_lower=-w, w_upper=w, v_lower=-v, v_upper=v)

@@ -74,6 +74,9 @@ def test_a_model_file_builds_every_estimator_it_can_as_port_est_does():
         est = mf.estimator(row["name"])
         log = est.run(us, ys)
         assert log.kind == row["kind"] and len(log) == len(us)
+        # The row declares the numbers every step reports, in order, each with its meaning.
+        assert list(log.details) == list(row["details"]) == list(est.estimate.details)
+        assert all(row["details"].values())
     # The default is the set-membership filter, as for `port-est filter`.
     assert mf.estimator().name == "smf"
     smf = mf.estimator("smf", solver="faer-ipm")
@@ -157,6 +160,41 @@ def test_the_type_stubs_cover_the_native_module():
             own = {a for a in vars(obj) if not a.startswith("_") or a in ("__len__",)}
             assert own <= stubs[name], f"{name}: {own - stubs[name]} not in the stub"
     assert (PACKAGE / "py.typed").exists()
+
+
+# Each convenience class is `Estimator(<registry name>, ...)` with that row's settings as keywords.
+ALIASES = {
+    "KalmanFilter": "kf",
+    "ExtendedKalmanFilter": "ekf",
+    "UnscentedKalmanFilter": "ukf",
+    "SetMembershipFilter": "smf",
+    "MovingHorizonEstimator": "rmhe",
+    "NonlinearMHE": "mhe-ukf",
+    "FuzzyKalmanFilter": "fkf",
+}
+
+
+def test_the_convenience_classes_take_their_rows_keywords_and_match_their_stubs():
+    rows = {r["name"]: r for r in pe.estimators()}
+    tree = ast.parse((PACKAGE / "_native.pyi").read_text())
+    stub_init = {
+        node.name: [a.arg for a in (f.args.args + f.args.kwonlyargs)][1:] + ([f.args.kwarg.arg] if f.args.kwarg else [])
+        for node in tree.body
+        if isinstance(node, ast.ClassDef)
+        for f in node.body
+        if isinstance(f, ast.FunctionDef) and f.name == "__init__"
+    }
+    subclasses = {c.__name__ for c in pe.Estimator.__subclasses__()}
+    assert subclasses == set(ALIASES), "a convenience class without its registry row here (or the reverse)"
+    for cls_name, name in ALIASES.items():
+        params = inspect.signature(getattr(pe, cls_name)).parameters
+        runtime = list(params)
+        assert stub_init[cls_name] == runtime, f"{cls_name}: the stub's __init__ {stub_init[cls_name]} != {runtime}"
+        own = [p for p in runtime[5:] if params[p].kind != inspect.Parameter.VAR_KEYWORD]
+        # `robust` chooses between the robust and the plain moving-horizon rows, which share settings.
+        unknown = set(own) - set(rows[name]["keywords"]) - {"robust"}
+        assert runtime[:5] == ["model", "x0", "P0", "Q", "R"] and not unknown, f"{cls_name}: {unknown}"
+        assert f'Estimator("{name}"' in getattr(pe, cls_name).__doc__, cls_name
 
 
 def test_the_readme_examples_run(tmp_path, monkeypatch):

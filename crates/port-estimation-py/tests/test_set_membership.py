@@ -92,7 +92,7 @@ def test_the_carrier_set_holds_the_state():
     # certified fallback: still guaranteed.)
     assert not any("inconsistent" in s or "not-guaranteed" in s for s in log.status), set(log.status)
     assert np.all(log.lower <= xs) and np.all(xs <= log.upper)
-    assert set(log.details) == {"tau1", "tau2", "tau3"}
+    assert set(log.details) == {"tau1", "tau2", "tau3", "iterations"}
     assert np.all(np.isfinite(log.details["tau1"]))
 
 
@@ -187,6 +187,7 @@ def test_declared_speed_limits_keep_the_vessels_set_from_growing():
     with pytest.raises(pe.InconsistentDataError) as info:
         est.step([0.0], [0.0])
     assert info.value.step == 1 and info.value.state == 1
+    assert info.value.kind == "inconsistent-data"
 
 
 UNDEFINED_AT_THE_CENTRE = """

@@ -207,3 +207,16 @@ impl<'b> TopicCopy<'b> {
         Ok(Some(id))
     }
 }
+
+/// The all-at-once copy, written here beside [`TopicCopy`] (the writer knows nothing of copies).
+impl EstimateWriter {
+    /// Copies every message of `topics` from `bag` (their channels and schemas too), in file
+    /// order, all at once; returns the number of messages copied. [`TopicCopy`] interleaves them
+    /// with the estimates by log time instead.
+    ///
+    /// # Errors
+    /// As [`TopicCopy::only`] and [`TopicCopy::rest`].
+    pub fn copy_topics(&mut self, bag: &Bag, topics: &[&str]) -> Result<u64> {
+        TopicCopy::only(bag, topics, self)?.rest(self)
+    }
+}

@@ -10,9 +10,7 @@ use atomic_output::AtomicFile;
 use mcap::records::MessageHeader;
 use mcap::write::NoSeek;
 
-use crate::bag::Bag;
 use crate::container::chain;
-use crate::copy::TopicCopy;
 use crate::error::{Error, Result};
 
 /// The schema name of the estimate messages.
@@ -235,16 +233,6 @@ impl EstimateWriter {
         r.map_err(|e| Error::Write { path, detail: chain(&e) })
     }
 
-    /// Copies every message of `topics` from `bag` (their channels and schemas too), in file
-    /// order, all at once; returns the number of messages copied. [`TopicCopy`] interleaves them
-    /// with the estimates by log time instead.
-    ///
-    /// # Errors
-    /// As [`TopicCopy::only`] and [`TopicCopy::rest`].
-    pub fn copy_topics(&mut self, bag: &Bag, topics: &[&str]) -> Result<u64> {
-        TopicCopy::only(bag, topics, self)?.rest(self)
-    }
-
     /// The topic of the estimates.
     pub fn topic(&self) -> &str {
         &self.layout.topic
@@ -255,7 +243,7 @@ impl EstimateWriter {
         &self.path
     }
 
-    /// The MCAP writer, for [`TopicCopy`].
+    /// The MCAP writer, for [`TopicCopy`](crate::TopicCopy).
     pub(crate) fn raw(&mut self) -> Result<&mut mcap::Writer<NoSeek<AtomicFile>>> {
         self.writer()
     }

@@ -81,6 +81,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod curve_enclosure;
 pub mod enclosure;
 pub mod error;
 pub mod kinematics;

@@ -7,7 +7,7 @@ use models::error::check_dims;
 use models::{ContinuousModel, DifferentiableContinuousModel, DifferentiableModel, Dims, DiscreteModel, ModelError};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::enclosure::{EnclosedWheel, enclosed_curves};
+use crate::curve_enclosure::{EnclosedWheel, enclosed_curves};
 use crate::error::{TruckError, finite_input};
 use crate::kinematics::{Geometry, WHEELS, wheel_gradients, wheel_kinematics};
 use crate::params::TruckParams;
@@ -402,7 +402,7 @@ impl TruckEkfModel {
             return Err(ModelError::InvalidSamplingPeriod(ts).into());
         }
         let planar = PlanarTruck::new(params)?;
-        Ok(Self { enclosed: enclosed_curves(&planar), planar, ts })
+        Ok(Self { enclosed: enclosed_curves(planar.curves()), planar, ts })
     }
 
     /// At the paper's period `T = 1 ms` ([`PAPER_SAMPLE_PERIOD`]).

@@ -37,7 +37,7 @@ impl Estimate for Predicted {
         StepStatus::unchecked(SolveOutcome::Predicted)
     }
     fn details(&self) -> StepDetails {
-        StepDetails::None
+        StepDetails::NONE
     }
 }
 

@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use estimators::registry::{self, AnyEstimator, EstimatorSettings};
-use estimators::{DataChecks, Estimate, EstimateKind, Setup, SolveOutcome, StepDetails};
+use estimators::{DataChecks, Estimate, EstimateKind, Setup, SolveOutcome};
 use models::{StepMatrices, Trajectory};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -43,18 +43,17 @@ impl Filter {
 impl Snapshot {
     /// A copy of an estimate.
     pub fn of(e: &dyn Estimate) -> Self {
+        let d = e.details();
         Snapshot {
             centre: e.center().clone(),
             shape: e.shape().clone(),
-            tau: match e.details() {
-                StepDetails::SetMembership(r) => Some(r.tau),
+            tau: match [d.get("tau1"), d.get("tau2"), d.get("tau3")] {
+                [Some(Some(t1)), Some(Some(t2)), Some(Some(t3))] => Some([t1, t2, t3]),
                 _ => None,
             },
             fallback: e.status().outcome == SolveOutcome::FallbackUsed,
-            iterations: match e.details() {
-                StepDetails::SetMembership(r) => Some(r.iterations),
-                _ => None,
-            },
+            // A set-membership step's solver iterations (a count, so exact in f64).
+            iterations: d.get("tau1").and(d.get("iterations")).flatten().map(|i| i as u32),
         }
     }
 }

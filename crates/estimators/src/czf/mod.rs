@@ -31,7 +31,9 @@ use crate::angle_branch::{self, Branch};
 use crate::checks::{DataChecks, InconsistencyPolicy};
 use crate::error::EstimatorError;
 use crate::partial::{self, Measured, check_measured, classify};
-use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::{
+    DataCheck, DetailField, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus,
+};
 use extension::{Function, boxed, contract_box, mean_value, predict_box};
 
 /// Settings of the constrained-zonotope filters.
@@ -89,6 +91,21 @@ pub struct ZonotopeReport {
     pub diverging: usize,
 }
 
+/// The numbers a constrained-zonotope step reports beyond its status (`port-est`'s columns,
+/// Python's `details`).
+pub const DETAILS: &[DetailField] = &[
+    DetailField { name: "generators", meaning: "generators of the set after order reduction" },
+    DetailField { name: "constraints", meaning: "equality constraints of the set after reduction" },
+];
+
+impl ZonotopeReport {
+    /// The report as [`StepDetails`] ([`DETAILS`]).
+    #[must_use]
+    pub fn details(&self) -> StepDetails {
+        StepDetails::new(DETAILS, &[Some(self.generators as f64), Some(self.constraints as f64)])
+    }
+}
+
 /// A guaranteed constrained zonotope and its certified interval hull.
 #[derive(Debug, Clone)]
 pub struct ZonotopeEstimate {
@@ -144,7 +161,7 @@ impl Estimate for ZonotopeEstimate {
         self.status
     }
     fn details(&self) -> StepDetails {
-        StepDetails::ConstrainedZonotope(self.report)
+        self.report.details()
     }
     fn constrained_zonotope(&self) -> Option<&ConstrainedZonotope> {
         Some(&self.set)

@@ -16,7 +16,7 @@ use crate::mhe::solve::{
 };
 use crate::mhe::window::WindowProblem;
 use crate::status::{DataCheck, Guarantee};
-use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::{DetailField, Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{check_model, check_vec};
 
 /// Which form of the arrival-cost recursion (20) advanced the weight in this step.
@@ -31,6 +31,14 @@ pub enum ArrivalStatus {
     /// Kalman form instead.
     HInfinityConditionFailed,
 }
+
+/// The number a moving-horizon update reports beyond its status (`port-est`'s column, Python's
+/// `details`; none before the first update).
+pub const DETAILS: &[DetailField] = &[DetailField {
+    name: "iterations",
+    meaning: "min/max sweeps of the window's solve (the coordinate rotation), or Newton iterations of the \
+              exact saddle",
+}];
 
 /// What one update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,7 +112,7 @@ impl Estimate for MheEstimate {
         }
     }
     fn details(&self) -> StepDetails {
-        StepDetails::MovingHorizon(self.report)
+        StepDetails::new(DETAILS, &[self.report.map(|r| r.solve.sweeps as f64)])
     }
 }
 

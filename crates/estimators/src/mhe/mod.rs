@@ -29,7 +29,8 @@ pub mod settings;
 mod solve;
 mod window;
 
-pub use estimator::{ArrivalStatus, MheEstimate, MheReport, MovingHorizonEstimator};
+pub use estimator::{ArrivalStatus, DETAILS, MheEstimate, MheReport, MovingHorizonEstimator};
+pub use nonlinear::DETAILS as NONLINEAR_DETAILS;
 pub use nonlinear::{
     NonlinearArrival, NonlinearMhe, NonlinearMheEstimate, NonlinearMheReport, NonlinearMheSettings, NonlinearPrior,
 };

@@ -61,3 +61,37 @@ fn settings_are_checked_against_the_row() {
     assert!(matches!(SmfSolver::by_name("nope"), Err(EstimatorError::UnknownSolver { .. })));
     assert_eq!(SmfSolver::by_name("two-multiplier").unwrap(), SmfSolver::TwoMultiplier);
 }
+
+#[test]
+fn every_row_declares_the_details_its_estimator_reports() {
+    // Two states, both measured (the fuzzy-adaptive filter needs two horizontal outputs).
+    let (a, b, c) =
+        (DMatrix::identity(2, 2) * 0.9, DMatrix::from_row_slice(2, 1, &[0.0, 0.1]), DMatrix::identity(2, 2));
+    let m = ConstantModel::new(a, b, c).unwrap();
+    let setup = Setup { measurement_noise: DMatrix::identity(2, 2) * 0.1, ..setup() };
+    let boxed = |n: usize, h: f64| (DVector::from_element(n, -h), DVector::from_element(n, h));
+    for e in ESTIMATORS {
+        let settings = match e.settings {
+            SettingsKind::SetMembershipInputBox => Some(EstimatorSettings::SetMembershipInputBox(
+                SetMembershipSettings::default(),
+                InputBox { lower: dvector![-1.0], upper: dvector![1.0] },
+            )),
+            SettingsKind::MovingHorizon => {
+                Some(EstimatorSettings::MovingHorizon(Box::new(MheSettings::new(boxed(2, 0.1), boxed(2, 0.3)))))
+            }
+            _ => None,
+        };
+        let mut est = e.build(setup.clone(), settings).unwrap_or_else(|err| panic!("{}: {err}", e.name));
+        assert_eq!(est.estimate().details().fields(), e.details, "{}: initial estimate", e.name);
+        let y = DVector::from_iterator(
+            e.measurement_len(2),
+            [0.05, -0.02, 12.0, 3.0].into_iter().take(e.measurement_len(2)),
+        );
+        let step = est.step(&m, &dvector![0.0], &y).unwrap_or_else(|err| panic!("{}: {err}", e.name));
+        let mut names = Vec::new();
+        step.details().for_each_field(&mut |name, _| names.push(name));
+        let declared: Vec<_> = e.details.iter().map(|f| f.name).collect();
+        assert_eq!(names, declared, "{}: a step", e.name);
+        assert!(e.details.iter().all(|f| !f.meaning.is_empty()), "{}", e.name);
+    }
+}

@@ -22,7 +22,9 @@ use crate::checks::DataChecks;
 use crate::error::EstimatorError;
 use crate::partial::Subsets;
 use crate::traits::forward_estimator;
-use crate::traits::{DataCheck, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::{
+    DataCheck, DetailField, Estimate, EstimateKind, Guarantee, Setup, SolveOutcome, StepDetails, StepStatus,
+};
 use crate::validate::{InitialData, check_initial, check_model, check_vec};
 
 /// What one step did.
@@ -52,7 +54,27 @@ pub struct StepReport {
     pub guaranteed: bool,
 }
 
+/// The numbers a set-membership step reports beyond its status (`port-est`'s columns, Python's
+/// `details`): the multipliers of (29) and the solver's iterations.
+pub const DETAILS: &[DetailField] = &[
+    DetailField { name: "tau1", meaning: "multiplier of the predicted set in (29)" },
+    DetailField { name: "tau2", meaning: "multiplier of the process noise in (29)" },
+    DetailField { name: "tau3", meaning: "multiplier of the measurement's strip in (29)" },
+    DetailField {
+        name: "iterations",
+        meaning: "iterations of the solve of (29): Newton steps of the two-multiplier method, or the SDP \
+                  backend's interior-point iterations (0 for the initial set and predictions)",
+    },
+];
+
 impl StepReport {
+    /// The report as [`StepDetails`] ([`DETAILS`]).
+    #[must_use]
+    pub fn details(&self) -> StepDetails {
+        let [t1, t2, t3] = self.tau;
+        StepDetails::new(DETAILS, &[Some(t1), Some(t2), Some(t3), Some(f64::from(self.iterations))])
+    }
+
     /// Whether a fallback was used.
     pub fn fallback_used(&self) -> bool {
         self.fallback.is_some()
@@ -869,7 +891,7 @@ impl Estimate for SetEstimate {
         }
     }
     fn details(&self) -> StepDetails {
-        StepDetails::SetMembership(self.report)
+        self.report.details()
     }
 }
 

@@ -111,7 +111,7 @@ pub mod update;
 pub use certify::Inflation;
 pub use consistency::{Consistency, InconsistencyPolicy};
 pub use fallback::FallbackReason;
-pub use filter::{DIVERGENCE_FACTOR, SetEstimate, SetMembershipFilter, StepReport};
+pub use filter::{DETAILS, DIVERGENCE_FACTOR, SetEstimate, SetMembershipFilter, StepReport};
 pub use input::InputModel;
 pub use nonlinear::{NonlinearSetMembershipFilter, NonlinearSmfSettings, RemainderBounds};
 pub use observer::ObservedSetMembershipFilter;

@@ -24,6 +24,7 @@ __version__: Final[str]
 
 class EstimationError(Exception):
     row: int | None
+    kind: str
 
 class NumericalError(EstimationError): ...
 
@@ -302,6 +303,7 @@ class EstimatorRow(TypedDict):
     settings: str
     keywords: list[str]
     extra_measurements: int
+    details: dict[str, str]
 
 def estimators() -> list[EstimatorRow]: ...
 def solvers() -> list[str]: ...

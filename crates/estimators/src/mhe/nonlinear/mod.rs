@@ -46,10 +46,15 @@ use crate::kalman::GaussianEstimate;
 use crate::mhe::estimator::window_outcome;
 use crate::mhe::solve::WindowStatus;
 use crate::partial::{Measured, Subsets, classify};
-use crate::traits::{Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
+use crate::traits::{DetailField, Estimate, EstimateKind, Estimator, Setup, SolveOutcome, StepDetails, StepStatus};
 use crate::validate::{InitialData, check_initial, check_vec};
 
 pub use settings::{NonlinearArrival, NonlinearMheSettings, NonlinearPrior};
+
+/// The number a nonlinear moving-horizon update reports beyond its status (`port-est`'s column,
+/// Python's `details`; none before the first update).
+pub const DETAILS: &[DetailField] =
+    &[DetailField { name: "iterations", meaning: "Gauss-Newton iterations of the window's solve" }];
 
 /// What one update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -100,7 +105,7 @@ impl Estimate for NonlinearMheEstimate {
         })
     }
     fn details(&self) -> StepDetails {
-        StepDetails::NonlinearMovingHorizon(self.report)
+        StepDetails::new(DETAILS, &[self.report.map(|r| r.iterations as f64)])
     }
 }
 
@@ -612,7 +617,7 @@ impl From<&NonlinearMheEstimate> for GaussianEstimate {
             covariance: e.covariance.clone(),
             std_dev: e.covariance.diagonal().map(|v| v.max(0.0).sqrt()),
             status: e.status(),
-            details: StepDetails::None,
+            details: StepDetails::NONE,
         }
     }
 }
