@@ -12,7 +12,8 @@ use estimators::Setup;
 use std::hint::black_box;
 
 use bds_ins_dynamics::{InsErrorModel, InsNoise, InsParams, scenario, simulate_error_states};
-use estimators::{AdaptiveKalmanFilter, ConstantScaling, FuzzyScaling, KalmanFilter, ReceiverStatus};
+use estimators::adaptive::ReceiverStatus;
+use estimators::{AdaptiveKalmanFilter, ConstantScaling, FuzzyScaling, KalmanFilter};
 use fuzzy_inference::{Defuzzifier, FuzzySystem};
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};

@@ -59,7 +59,7 @@ pub enum EstimatorError {
         upper: f64,
     },
     /// An input given to a filter that treats the input as a bounded disturbance
-    /// ([`InputModel::BoundedDisturbance`](crate::InputModel::BoundedDisturbance), the Yang–Li
+    /// ([`InputModel::BoundedDisturbance`](crate::smf::InputModel::BoundedDisturbance), the Yang–Li
     /// reconstruction (a)) lies outside the declared box: the guarantee covers only inputs in
     /// the box, so the step is refused.
     #[error("input u[{index}] = {value} is outside the declared input box [{lower}, {upper}]")]

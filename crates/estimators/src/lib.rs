@@ -60,6 +60,10 @@
 //! * [`mhe`]: the robust min–max moving-horizon estimator of the car paper and plain MHE
 //!   (`docs/robust-mhe.md`), and [`NonlinearMhe`] with a UKF arrival cost (`docs/dp-vessel.md`).
 //!
+//! The crate root holds what a user names (the estimators, their settings, the traits, the status
+//! vocabulary, the errors); reports, solver internals and the registry's parts stay in their
+//! modules ([`smf`], [`czf`], [`ukf`], [`adaptive`], [`error`], [`registry`]).
+//!
 //! Every filter implements [`Estimator`] for the model capability it needs; [`registry`] builds
 //! any of them by name behind [`DynEstimator`] over `dyn` [`AnyModel`]. Equation numbers refer to
 //! `docs/carrier-smf.md` unless a module says otherwise.
@@ -88,27 +92,25 @@ mod validate;
 pub mod yang_li;
 
 pub use adaptive::{
-    AdaptiveError, AdaptiveKalmanFilter, AdaptiveStep, ConstantScaling, FuzzyKalmanFilter, FuzzyScaling, NoiseScaling,
-    ReceiverStatus, ScalingContext,
+    AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, FuzzyKalmanFilter, FuzzyScaling, NoiseScaling, ScalingContext,
 };
 pub use checks::{DataChecks, InnovationGate};
-pub use czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, ZonotopeEstimate, ZonotopeReport};
+pub use czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings};
 pub use ekf::ExtendedKalmanFilter;
-pub use error::{ErrorKind, EstimatorError, WorstOutput};
+pub use error::{ErrorKind, EstimatorError};
 pub use kalman::{GaussianEstimate, KalmanFilter};
 pub use mhe::{MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
 pub use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel, StepModel};
 /// The linear algebra of every signature (`DVector`, `DMatrix`, `dvector!`, `dmatrix!`).
 pub use nalgebra;
-pub use registry::{AnyEstimator, EstimatorEntry, EstimatorSettings, SettingsKind, SmfSolver};
+pub use registry::{AnyEstimator, SmfSolver};
 pub use smf::{
-    Consistency, FallbackReason, InconsistencyPolicy, Inflation, InputModel, NonlinearSetMembershipFilter,
-    NonlinearSmfSettings, RemainderBounds, SdpUpdateSolver, SetEstimate, SetMembershipFilter, StepReport, TAU_FLOOR,
-    TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus,
+    InconsistencyPolicy, NonlinearSetMembershipFilter, NonlinearSmfSettings, SdpUpdateSolver, SetEstimate,
+    SetMembershipFilter, TwoMultiplierSolver, UpdateSolver,
 };
 pub use traits::{
     DataCheck, DetailField, DynEstimator, Estimate, EstimateKind, Estimator, Guarantee, Setup, SolveOutcome,
     StepDetails, StepStatus,
 };
-pub use ukf::{UkfParams, UkfReport, UnscentedKalmanFilter};
+pub use ukf::{UkfParams, UnscentedKalmanFilter};
 pub use validate::SYMMETRY_TOLERANCE;

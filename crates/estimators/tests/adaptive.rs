@@ -6,9 +6,10 @@
 
 use bds_ins_dynamics::{DiscreteInsModel, InsErrorModel, InsNoise, InsParams, scenario, simulate_error_states};
 use counting_allocator::{Counting, count};
+use estimators::adaptive::ReceiverStatus;
 use estimators::{
     AdaptiveError, AdaptiveKalmanFilter, ConstantScaling, EstimatorError, FuzzyScaling, KalmanFilter, NoiseScaling,
-    ReceiverStatus, ScalingContext,
+    ScalingContext,
 };
 use estimators::{DataChecks, Setup};
 use fuzzy_inference::FuzzySystem;

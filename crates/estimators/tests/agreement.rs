@@ -8,10 +8,9 @@ mod common;
 
 use carrier_dynamics::{CarrierModel, CarrierParams};
 use estimators::Setup;
-use estimators::{
-    EstimatorError, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateProblem,
-    UpdateSolution, UpdateSolver,
-};
+use estimators::smf::UpdateProblem;
+use estimators::smf::UpdateSolution;
+use estimators::{EstimatorError, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver};
 use lmi::SolverSettings;
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
@@ -113,7 +112,7 @@ fn paper_degenerate_case_returns_the_measurement_ellipsoid() {
         y: DVector::from_vec(vec![3.0, -8.0, 2.0, 10.0]),
     };
     let e = one_step(&case, TwoMultiplierSolver::new());
-    assert_eq!(e.report.status, estimators::UpdateStatus::Solved);
+    assert_eq!(e.report.status, estimators::smf::UpdateStatus::Solved);
     assert!(e.report.tau[0] <= 2e-12 && e.report.tau[1] <= 2e-12, "{:?}", e.report.tau);
     assert!((&e.shape - &case.r).amax() < 1e-9, "{}", e.shape);
     assert!((&e.center - &case.y).amax() < 1e-9);

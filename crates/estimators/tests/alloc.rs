@@ -22,7 +22,7 @@ fn overflowing() -> common::FixedSolver {
     common::FixedSolver {
         l: 1e200,
         tau: [0.25, 0.25, 0.5],
-        status: estimators::UpdateStatus::Solved,
+        status: estimators::smf::UpdateStatus::Solved,
         iterations: 0,
         closed_form: true,
     }
@@ -128,7 +128,7 @@ fn steps_do_not_allocate_after_warm_up() {
         let (_, n) = count(|| {
             for y in &ys {
                 let e = bad.step(&model, &u, y).unwrap();
-                assert_eq!(e.report.fallback, Some(estimators::FallbackReason::InvalidSolution));
+                assert_eq!(e.report.fallback, Some(estimators::smf::FallbackReason::InvalidSolution));
             }
         });
         assert_eq!(n, 0, "re-certification with the fallback allocated (m = {m})");

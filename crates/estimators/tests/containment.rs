@@ -19,9 +19,8 @@ use estimators::Setup;
 
 use std::time::Duration;
 
-use estimators::{
-    FallbackReason, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver, yang_li,
-};
+use estimators::smf::FallbackReason;
+use estimators::{SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver, yang_li};
 use models::{Noise, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 
@@ -193,7 +192,7 @@ fn never_converges() -> FixedSolver {
     FixedSolver {
         l: f64::NAN,
         tau: [0.9, 0.9, 0.9],
-        status: estimators::UpdateStatus::IterationLimit,
+        status: estimators::smf::UpdateStatus::IterationLimit,
         iterations: 100,
         closed_form: false,
     }
@@ -220,7 +219,7 @@ fn fallback_path_contains_the_true_state() {
         assert_eq!(fb, 100);
         assert_eq!(
             f.estimate().report.fallback,
-            Some(FallbackReason::Status(estimators::UpdateStatus::IterationLimit))
+            Some(FallbackReason::Status(estimators::smf::UpdateStatus::IterationLimit))
         );
         total += 100;
         worst = worst.max(w);
@@ -263,7 +262,7 @@ fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
             // `Solved` with a finite but unusable (L, τ), claiming L is the closed-form gain (so the
             // filter certifies it as it is).
             let solver =
-                FixedSolver { l, tau, status: estimators::UpdateStatus::Solved, iterations: 1, closed_form: true };
+                FixedSolver { l, tau, status: estimators::smf::UpdateStatus::Solved, iterations: 1, closed_form: true };
             let mut f = SetMembershipFilter::with_solver(
                 Setup {
                     x0: sys.x_hat0.clone(),
@@ -281,7 +280,7 @@ fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
             let report = &f.estimate().report;
             assert_eq!(report.fallback, Some(FallbackReason::InvalidSolution), "{what}, system {i}");
             let t = report.tau;
-            assert!(t[0] >= estimators::TAU_FLOOR && t[1] >= estimators::TAU_FLOOR && t[2] >= 0.0, "{t:?}");
+            assert!(t[0] >= estimators::smf::TAU_FLOOR && t[1] >= estimators::smf::TAU_FLOOR && t[2] >= 0.0, "{t:?}");
             assert!(t[0] + t[1] + t[2] <= 1.0, "{t:?}");
             worst = worst.max(w);
         }

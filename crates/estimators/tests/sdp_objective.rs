@@ -19,9 +19,11 @@ mod common;
 use std::cell::RefCell;
 use std::rc::Rc;
 
+use estimators::smf::UpdateProblem;
+use estimators::smf::UpdateSolution;
 use estimators::{
     EstimatorError, InconsistencyPolicy, SdpUpdateSolver, SetMembershipFilter, Setup, SmfSolver, StepModel,
-    TwoMultiplierSolver, UpdateProblem, UpdateSolution, UpdateSolver,
+    TwoMultiplierSolver, UpdateSolver,
 };
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};

@@ -98,7 +98,7 @@ pub fn backends(settings: lmi::SolverSettings) -> Vec<(String, Box<dyn lmi::SdpB
 pub struct FixedSolver {
     pub l: f64,
     pub tau: [f64; 3],
-    pub status: estimators::UpdateStatus,
+    pub status: estimators::smf::UpdateStatus,
     pub iterations: u32,
     pub closed_form: bool,
 }
@@ -112,9 +112,9 @@ impl estimators::UpdateSolver for FixedSolver {
     }
     fn solve(
         &mut self,
-        _: &estimators::UpdateProblem<'_>,
+        _: &estimators::smf::UpdateProblem<'_>,
         _: [f64; 3],
-        out: &mut estimators::UpdateSolution,
+        out: &mut estimators::smf::UpdateSolution,
     ) -> Result<(), estimators::EstimatorError> {
         out.l.fill(self.l);
         out.tau = self.tau;

@@ -9,7 +9,8 @@ use std::time::Instant;
 use bds_ins_dynamics::{
     BdsSimulator, DiscreteInsModel, InsErrorModel, InsNoise, InsParams, Zone, idx, scenario, simulate_error_states,
 };
-use estimators::{AdaptiveError, AdaptiveKalmanFilter, FuzzyScaling, NoiseScaling, ReceiverStatus, ScalingContext};
+use estimators::adaptive::ReceiverStatus;
+use estimators::{AdaptiveError, AdaptiveKalmanFilter, FuzzyScaling, NoiseScaling, ScalingContext};
 use models::{Xoshiro256StarStar, splitmix64};
 use nalgebra::DVector;
 use serde::Serialize;
