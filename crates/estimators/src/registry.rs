@@ -32,272 +32,27 @@
 
 use nalgebra::DVector;
 
-use fuzzy_inference::FuzzySystem;
-use lmi::SolverSettings;
 use models::{AnyModel, Capability, DifferentiableModel, Dims, DiscreteModel, LinearModel, SecondOrderModel};
 
 use crate::adaptive::{AdaptiveKalmanFilter, FuzzyScaling};
 use crate::checks::DataChecks;
-use crate::czf::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings};
+use crate::czf::ConstrainedZonotopeFilter;
 use crate::ekf::ExtendedKalmanFilter;
 use crate::error::EstimatorError;
 use crate::kalman::KalmanFilter;
-use crate::mhe::{MheCost, MheSettings, MovingHorizonEstimator, NonlinearMhe, NonlinearMheSettings};
+use crate::mhe::{MheCost, MheSettings, MovingHorizonEstimator, NonlinearMhe};
 use crate::smf::{
     InconsistencyPolicy, NonlinearSetMembershipFilter, ObservedSetMembershipFilter, SdpUpdateSolver,
     SetMembershipFilter, TwoMultiplierSolver,
 };
 use crate::traits::{DetailField, DynEstimator, Estimate, EstimateKind, Setup};
-use crate::ukf::{UkfParams, UnscentedKalmanFilter};
+use crate::ukf::UnscentedKalmanFilter;
 use crate::yang_li;
 
-/// How a set-membership filter solves (29), parsed from a name in one place
-/// ([`SmfSolver::by_name`]).
-#[derive(Debug, Clone, PartialEq, Default)]
-#[non_exhaustive]
-pub enum SmfSolver {
-    /// The exact two-multiplier method (the default; microseconds per step).
-    #[default]
-    TwoMultiplier,
-    /// An SDP backend of `lmi` on LMI (28).
-    Sdp {
-        /// The backend's name ([`lmi::backend_names`]).
-        backend: &'static str,
-        /// Its settings.
-        settings: SolverSettings,
-    },
-}
-
-impl SmfSolver {
-    /// The name of the two-multiplier method.
-    pub const TWO_MULTIPLIER: &'static str = "two-multiplier";
-
-    /// The names this build accepts: the two-multiplier method, then the SDP backends.
-    #[must_use]
-    pub fn names() -> Vec<&'static str> {
-        let mut v = vec![Self::TWO_MULTIPLIER];
-        v.extend(lmi::backend_names());
-        v
-    }
-
-    /// The solver called `name`. An SDP backend gets [`SmfSolver::sdp_settings`]: it
-    /// warm-starts from the previous step (a filter's SDPs at consecutive steps are nearby
-    /// problems; the filter certifies its set whatever the solver returns).
-    ///
-    /// # Errors
-    /// [`EstimatorError::UnknownSolver`] naming the known ones.
-    pub fn by_name(name: &str) -> Result<Self, EstimatorError> {
-        if name == Self::TWO_MULTIPLIER {
-            return Ok(SmfSolver::TwoMultiplier);
-        }
-        match lmi::backend_names().into_iter().find(|b| *b == name) {
-            Some(backend) => Ok(SmfSolver::Sdp { backend, settings: Self::sdp_settings() }),
-            None => Err(EstimatorError::UnknownSolver { name: name.to_owned(), known: Self::names().join(", ") }),
-        }
-    }
-
-    /// The settings of an SDP-backed filter ([`SmfSolver::by_name`]): warm start from the previous
-    /// step, and duality-gap tolerances of `1e-9`, ten times tighter than `lmi`'s default.
-    ///
-    /// The filter keeps only the SDP's `τ`, and the trace of the set it publishes is not flat in
-    /// `τ` when the optimum of (29) lies on the boundary of the simplex. With `n = m` it often
-    /// does: `τ = (0, 0, 1)`, the measurement's own ellipsoid. There an interior-point iterate
-    /// stopped at a gap of `10⁻⁸` still has `τ₁, τ₂ ≈ 10⁻⁶`, and the published trace moves
-    /// linearly with them: on 768 steps of random systems (`tests/sdp_objective.rs`) three first
-    /// steps of `faer-ipm` were `1.1–3.0·10⁻⁶` relative above the exact solver's. With gap
-    /// tolerances of `10⁻⁹` the worst is `1.9·10⁻⁷`, for 7 % more iterations (7.09 → 7.60 per
-    /// step on that test). Tightening the feasibility tolerance too costs more for less; `10⁻¹⁰`
-    /// doubles the iterations.
-    #[must_use]
-    pub fn sdp_settings() -> SolverSettings {
-        SolverSettings { warm_start: true, tol_gap_rel: 1e-9, tol_gap_abs: 1e-9, ..SolverSettings::default() }
-    }
-
-    /// The solver's name.
-    #[must_use]
-    pub fn name(&self) -> &'static str {
-        match self {
-            SmfSolver::TwoMultiplier => Self::TWO_MULTIPLIER,
-            SmfSolver::Sdp { backend, .. } => backend,
-        }
-    }
-
-    /// One line for `--help`.
-    #[must_use]
-    pub fn summary(name: &str) -> &'static str {
-        if name == Self::TWO_MULTIPLIER { "exact two-multiplier method (fastest)" } else { "SDP backend on LMI (28)" }
-    }
-}
-
-/// Settings of the set-membership filters.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SetMembershipSettings {
-    /// How (29) is solved.
-    pub solver: SmfSolver,
-    /// What a step does with data that contradict the noise bounds (default: an error).
-    pub inconsistency: InconsistencyPolicy,
-    /// `(lower, upper)`: bounds the true state always respects (length `n` each, ±∞ where none).
-    /// They cut the published interval: `smf-nl`'s (N1') ([`NonlinearSetMembershipFilter::with_state_bounds`],
-    /// docs/nonlinear-smf.md), the linear filters' through their interval observer (which they
-    /// then need).
-    pub state_bounds: Option<(DVector<f64>, DVector<f64>)>,
-    /// The linear filters (`smf`, `yang-li*`): run the interval observer beside the ellipsoid
-    /// ([`ObservedSetMembershipFilter`], docs/carrier-smf.md §4.8), so that the published interval
-    /// is never wider than an interval observer's. Default `true`; `false` publishes the paper's
-    /// filter alone (the reproduction does). `smf-nl` always runs its own.
-    pub interval_observer: bool,
-}
-
-impl Default for SetMembershipSettings {
-    fn default() -> Self {
-        Self {
-            solver: SmfSolver::default(),
-            inconsistency: InconsistencyPolicy::default(),
-            state_bounds: None,
-            interval_observer: true,
-        }
-    }
-}
-
-/// The known range of the input, `lower ≤ u ≤ upper` componentwise.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InputBox {
-    /// Lower bounds (length `p`).
-    pub lower: DVector<f64>,
-    /// Upper bounds (length `p`).
-    pub upper: DVector<f64>,
-}
-
-/// Settings of the fuzzy-adaptive Kalman filter.
-#[derive(Debug, Clone)]
-pub struct FuzzyAdaptiveSettings {
-    /// The Mamdani system with inputs `[N, RTK, d]`.
-    pub system: FuzzySystem,
-    /// The two outputs whose innovation forms `d_k`.
-    pub horizontal: [usize; 2],
-}
-
-impl Default for FuzzyAdaptiveSettings {
-    /// The digest's 45-rule system ([`FuzzySystem::bds_ins_default`]), `d` from outputs 0 and 1.
-    fn default() -> Self {
-        Self { system: FuzzySystem::bds_ins_default(), horizontal: [0, 1] }
-    }
-}
-
-/// The settings an estimator takes beyond its [`Setup`]; the variant is the row's
-/// [`SettingsKind`].
-#[derive(Debug, Clone)]
-#[non_exhaustive]
-pub enum EstimatorSettings {
-    /// None (Kalman and extended Kalman filters).
-    None,
-    /// A set-membership filter's solver and inconsistency policy.
-    SetMembership(SetMembershipSettings),
-    /// The same, and the known input box (the Yang–Li reconstruction (a)).
-    SetMembershipInputBox(SetMembershipSettings, InputBox),
-    /// The (robust) moving-horizon estimators.
-    MovingHorizon(Box<MheSettings>),
-    /// The unscented filter's sigma points.
-    Unscented(UkfParams),
-    /// The nonlinear moving-horizon estimator.
-    NonlinearMovingHorizon(Box<NonlinearMheSettings>),
-    /// The fuzzy-adaptive filter's system.
-    FuzzyAdaptive(Box<FuzzyAdaptiveSettings>),
-    /// The constrained-zonotope filters' reduction limits, policy, bounds and divergence rule.
-    ConstrainedZonotope(ConstrainedZonotopeSettings),
-}
-
-impl EstimatorSettings {
-    /// Which kind of settings this is.
-    #[must_use]
-    pub fn kind(&self) -> SettingsKind {
-        match self {
-            EstimatorSettings::None => SettingsKind::None,
-            EstimatorSettings::SetMembership(_) => SettingsKind::SetMembership,
-            EstimatorSettings::SetMembershipInputBox(..) => SettingsKind::SetMembershipInputBox,
-            EstimatorSettings::MovingHorizon(_) => SettingsKind::MovingHorizon,
-            EstimatorSettings::Unscented(_) => SettingsKind::Unscented,
-            EstimatorSettings::NonlinearMovingHorizon(_) => SettingsKind::NonlinearMovingHorizon,
-            EstimatorSettings::FuzzyAdaptive(_) => SettingsKind::FuzzyAdaptive,
-            EstimatorSettings::ConstrainedZonotope(_) => SettingsKind::ConstrainedZonotope,
-        }
-    }
-}
-
-/// Which [`EstimatorSettings`] variant a row takes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum SettingsKind {
-    /// [`EstimatorSettings::None`].
-    None,
-    /// [`EstimatorSettings::SetMembership`].
-    SetMembership,
-    /// [`EstimatorSettings::SetMembershipInputBox`].
-    SetMembershipInputBox,
-    /// [`EstimatorSettings::MovingHorizon`].
-    MovingHorizon,
-    /// [`EstimatorSettings::Unscented`].
-    Unscented,
-    /// [`EstimatorSettings::NonlinearMovingHorizon`].
-    NonlinearMovingHorizon,
-    /// [`EstimatorSettings::FuzzyAdaptive`].
-    FuzzyAdaptive,
-    /// [`EstimatorSettings::ConstrainedZonotope`].
-    ConstrainedZonotope,
-}
-
-impl SettingsKind {
-    /// What the settings are, in words.
-    #[must_use]
-    pub fn describe(self) -> &'static str {
-        match self {
-            SettingsKind::None => "no settings",
-            SettingsKind::SetMembership => "set-membership settings (solver, inconsistency policy)",
-            SettingsKind::SetMembershipInputBox => "set-membership settings and the input box",
-            SettingsKind::MovingHorizon => {
-                "moving-horizon settings (horizon, blocks, noise boxes W and V, lambda_v, solver)"
-            }
-            SettingsKind::Unscented => "sigma-point parameters (alpha, beta, kappa)",
-            SettingsKind::NonlinearMovingHorizon => "nonlinear moving-horizon settings",
-            SettingsKind::FuzzyAdaptive => "a fuzzy system with inputs [N, RTK, d]",
-            SettingsKind::ConstrainedZonotope => {
-                "constrained-zonotope settings (order, max_constraints, inconsistency policy, state bounds, \
-                 divergence factor)"
-            }
-        }
-    }
-
-    /// The default settings, `None` when they depend on data only the user has (the input box,
-    /// the noise boxes).
-    #[must_use]
-    pub fn default_settings(self) -> Option<EstimatorSettings> {
-        match self {
-            SettingsKind::None => Some(EstimatorSettings::None),
-            SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(SetMembershipSettings::default())),
-            SettingsKind::SetMembershipInputBox | SettingsKind::MovingHorizon => None,
-            SettingsKind::Unscented => Some(EstimatorSettings::Unscented(UkfParams::default())),
-            SettingsKind::NonlinearMovingHorizon => {
-                // The paper's settings with sigma points valid for every n (the paper's κ = −2
-                // needs n > 2).
-                let settings = NonlinearMheSettings {
-                    arrival: crate::mhe::NonlinearArrival::Ukf(UkfParams::default()),
-                    ..NonlinearMheSettings::paper()
-                };
-                Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(settings)))
-            }
-            SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::default())),
-            SettingsKind::ConstrainedZonotope => {
-                Some(EstimatorSettings::ConstrainedZonotope(ConstrainedZonotopeSettings::default()))
-            }
-        }
-    }
-
-    /// Whether the settings include a solver of (29) (`--solver`).
-    #[must_use]
-    pub fn uses_smf_solver(self) -> bool {
-        matches!(self, SettingsKind::SetMembership | SettingsKind::SetMembershipInputBox)
-    }
-}
+mod settings;
+pub use settings::{
+    EstimatorSettings, FuzzyAdaptiveSettings, InputBox, Keyword, SetMembershipSettings, SettingsKind, SmfSolver,
+};
 
 /// A registered estimator.
 #[derive(Debug)]

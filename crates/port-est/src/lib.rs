@@ -218,6 +218,9 @@ pub fn write_estimators(w: &mut dyn Write) -> io::Result<()> {
             notes.push(format!("{} extra measurement columns", e.extra_measurements));
         }
         writeln!(w, "  {:width$}  {} [{}]", e.name, e.summary, notes.join("; "))?;
+        for k in e.settings.keywords() {
+            writeln!(w, "  {:width$}    setting {}: {}", "", k.name, k.meaning)?;
+        }
         for d in e.details {
             writeln!(w, "  {:width$}    column {}: {}", "", d.name, d.meaning)?;
         }

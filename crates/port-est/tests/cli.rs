@@ -43,6 +43,9 @@ fn estimators_lists_the_registry_and_the_solvers() {
         for d in e.details {
             assert!(list.contains(&format!("column {}: {}", d.name, d.meaning)), "{}: {}", e.name, d.name);
         }
+        for k in e.settings.keywords() {
+            assert!(list.contains(&format!("setting {}: {}", k.name, k.meaning)), "{}: {}", e.name, k.name);
+        }
     }
     for s in estimators::registry::SmfSolver::names() {
         assert!(list.contains(s), "{s}");

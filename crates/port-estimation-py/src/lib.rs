@@ -33,7 +33,8 @@ use pyo3::prelude::*;
 
 /// Every estimator of the registry: a list of dicts with its ``name``, ``kind`` (of estimate),
 /// ``summary``, what it ``needs`` of the model (``"linear"``, ``"differentiable"``, ``"discrete"``),
-/// its ``settings`` (in words), the keywords it takes (``keywords``), ``extra_measurements`` (the
+/// its ``settings`` (in words), the keywords it takes (``keywords``, with their meanings in
+/// ``keyword_help``), ``extra_measurements`` (the
 /// measurement columns beyond the model's outputs) and ``details`` (the numbers each step reports in
 /// ``Estimate.details`` and ``RunResult.details``, name to meaning, in order).
 #[pyfunction(name = "estimators")]
@@ -47,7 +48,12 @@ fn estimator_table(py: Python<'_>) -> PyResult<Vec<Bound<'_, pyo3::types::PyDict
             d.set_item("summary", e.summary)?;
             d.set_item("needs", e.needs.label())?;
             d.set_item("settings", e.settings.describe())?;
-            d.set_item("keywords", settings::setting_names(e.settings).to_vec())?;
+            d.set_item("keywords", settings::setting_names(e.settings))?;
+            let help = pyo3::types::PyDict::new(py);
+            for k in e.settings.keywords() {
+                help.set_item(k.name, k.meaning)?;
+            }
+            d.set_item("keyword_help", help)?;
             d.set_item("extra_measurements", e.extra_measurements)?;
             let details = pyo3::types::PyDict::new(py);
             for f in e.details {

@@ -35,55 +35,10 @@ pub struct FileSettings<'a> {
     pub source: Option<&'a port_est::Model>,
 }
 
-/// The keywords each kind of settings takes (for error messages and `estimators()`).
-pub fn setting_names(kind: SettingsKind) -> &'static [&'static str] {
-    match kind {
-        SettingsKind::None => &[],
-        SettingsKind::SetMembership => &["solver", "inconsistency", "x_lower", "x_upper", "interval_observer"],
-        SettingsKind::SetMembershipInputBox => {
-            &["solver", "inconsistency", "u_lower", "u_upper", "x_lower", "x_upper", "interval_observer"]
-        }
-        SettingsKind::MovingHorizon => &[
-            "w_lower",
-            "w_upper",
-            "v_lower",
-            "v_upper",
-            "horizon",
-            "preset",
-            "blocks",
-            "block_weighting",
-            "lambda_v",
-            "arrival",
-            "theta",
-            "prior_mean",
-            "window_solver",
-            "max_sweeps",
-            "tolerance",
-            "memory_limit",
-        ],
-        SettingsKind::Unscented => &["alpha", "beta", "kappa"],
-        SettingsKind::NonlinearMovingHorizon => &[
-            "horizon",
-            "max_iterations",
-            "real_time_iterations",
-            "tolerance",
-            "arrival",
-            "alpha",
-            "beta",
-            "kappa",
-            "prior",
-            "w_lower",
-            "w_upper",
-            "v_lower",
-            "v_upper",
-            "memory_limit",
-        ],
-        SettingsKind::FuzzyAdaptive => &["fis", "fis_toml", "horizontal"],
-        SettingsKind::ConstrainedZonotope => {
-            &["order", "max_constraints", "inconsistency", "x_lower", "x_upper", "divergence_factor"]
-        }
-        _ => &[],
-    }
+/// The keywords each kind of settings takes (for error messages and `estimators()`): the
+/// registry's ([`SettingsKind::keywords`]).
+pub fn setting_names(kind: SettingsKind) -> Vec<&'static str> {
+    kind.keywords().iter().map(|k| k.name).collect()
 }
 
 /// The keyword arguments, consumed one by one; what is left over is an error.

@@ -109,6 +109,21 @@ def test_a_model_per_call_is_a_time_varying_model():
     np.testing.assert_array_equal(e.center, f.center)
 
 
+def test_every_listed_keyword_is_read_and_no_other():
+    """The registry's keyword list (one per kind of settings) is what the keyword parser reads: a
+    listed keyword with a value of the wrong type is refused as that value, never as unknown."""
+    mf = pe.read_model(EXAMPLE / "model.toml")
+    for row in pe.estimators():
+        assert list(row["keyword_help"]) == row["keywords"] and all(row["keyword_help"].values())
+        for keyword in row["keywords"]:
+            with pytest.raises(ValueError) as info:
+                mf.estimator(row["name"], **{keyword: object()})
+            assert "unknown setting" not in str(info.value), (row["name"], keyword, str(info.value))
+        with pytest.raises(ValueError, match="unknown setting") as info:
+            mf.estimator(row["name"], not_a_setting=1.0)
+        assert ", ".join(row["keywords"]) in str(info.value) or not row["keywords"]
+
+
 def test_the_registry_is_listed_with_its_keywords():
     rows = {r["name"]: r for r in pe.estimators()}
     assert {"kf", "ekf", "ukf", "smf", "yang-li", "yang-li-with-input", "rmhe", "mhe", "mhe-ukf", "fkf"} <= set(rows)

@@ -1,4 +1,5 @@
 use super::*;
+use crate::ukf::UkfParams;
 use models::{ConstantModel, DifferentiableView, DiscreteView};
 use nalgebra::{DMatrix, dvector};
 

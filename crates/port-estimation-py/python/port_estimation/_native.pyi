@@ -302,6 +302,7 @@ class EstimatorRow(TypedDict):
     needs: Capability
     settings: str
     keywords: list[str]
+    keyword_help: dict[str, str]
     extra_measurements: int
     details: dict[str, str]
 
