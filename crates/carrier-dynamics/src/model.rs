@@ -60,7 +60,8 @@ impl CarrierModel {
     ///
     /// # Errors
     /// The validation error naming the offending parameter, or
-    /// [`DynamicsError::NonFiniteEntry`] if finite but extreme parameters overflow `A` or `B`.
+    /// [`DynamicsError::Model`] with [`models::ModelError::NonFiniteEntry`] if finite but extreme
+    /// parameters overflow `A` or `B`.
     pub fn new(params: CarrierParams) -> Result<Self, DynamicsError> {
         params.validate()?;
         let p = &params;
@@ -147,7 +148,8 @@ impl CarrierModel {
     /// `A_p = e^{A T_s}`, `B_p = ∫₀^{T_s} e^{Aτ} dτ B`, `C_p = C`.
     ///
     /// # Errors
-    /// [`DynamicsError::InvalidSamplingPeriod`] unless `ts` is positive and finite, or an
+    /// [`DynamicsError::Model`] with [`models::ModelError::InvalidSamplingPeriod`] unless `ts` is
+    /// positive and finite, or an
     /// exponential failure (see [`models::expm`]).
     pub fn discretize(&self, ts: f64) -> Result<DiscreteCarrier, DynamicsError> {
         let (a_p, b_p) = zoh_discretize_fixed(&self.a, &self.b, ts)?;

@@ -18,7 +18,7 @@
 //! a closure `|c: &ScalingContext| -> f64`, or [`ConstantScaling`]. Each step reports its `t_k` and
 //! `d_k` ([`AdaptiveStep`]). Without a fix the filter only predicts ([`AdaptiveKalmanFilter::predict`]).
 //!
-//! As an [`Estimator`] (so that it runs wherever any filter runs), the receiver status travels
+//! As an [`Estimator`](crate::Estimator) (so that it runs wherever any filter runs), the receiver status travels
 //! with its measurement: the measurement vector is the model's `m` outputs followed by the
 //! satellite count and the RTK code, `y = [y₁ … y_m, N, RTK]` (length `m + 2`,
 //! [`AdaptiveKalmanFilter::dims`]); an RTK code of 0 marks an epoch without a fix, whose step is a

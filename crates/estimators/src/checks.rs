@@ -31,9 +31,9 @@ use crate::error::{EstimatorError, WorstOutput};
 #[non_exhaustive]
 pub enum InconsistencyPolicy {
     /// Refuse the step with an error naming it
-    /// ([`EstimatorError::InconsistentData`](crate::EstimatorError::InconsistentData) or
-    /// [`EstimatorError::InconsistentWindow`](crate::EstimatorError::InconsistentWindow) for a proof,
-    /// [`EstimatorError::Outlier`](crate::EstimatorError::Outlier) for a failed gate); the estimator
+    /// ([`EstimatorError::InconsistentData`] or
+    /// [`EstimatorError::InconsistentWindow`] for a proof,
+    /// [`EstimatorError::Outlier`] for a failed gate); the estimator
     /// is unchanged (the default).
     #[default]
     Error,

@@ -235,7 +235,7 @@ impl StepDetails {
     /// No numbers beyond the status (the Kalman filters).
     pub const NONE: Self = Self { fields: &[], values: [None; MAX_DETAIL_FIELDS] };
 
-    /// The values `values` of `fields`, in order. Fields beyond [`MAX_DETAIL_FIELDS`] are not
+    /// The values `values` of `fields`, in order. Fields beyond `MAX_DETAIL_FIELDS` (4) are not
     /// representable: an estimator declaring more is a programming error caught by its tests
     /// (debug assertion; release builds keep the first ones).
     #[must_use]

@@ -18,7 +18,7 @@
 //! position in a bag is `BAG:ROW:COLUMN` of the table of rows the mapping makes: row 1 is the
 //! first step, column 1 is `k`, then the inputs, then the outputs.
 //!
-//! `--output est.mcap` writes the estimates as a bag ([`BagOutput`]): the estimate `x_{k+1}` of
+//! `--output est.mcap` writes the estimates as a bag (`BagOutput`): the estimate `x_{k+1}` of
 //! row `k` is stamped at the end of the row's window (`ros_bag::Row::end_ns`: `t_k + ts` at a
 //! fixed step, the next driving message's stamp per message), the time of the last measurement it
 //! could use. `--copy-topics` copies the input's topics beside it, interleaved by log time.

@@ -292,8 +292,8 @@ Examples:
 #[derive(Debug, Args)]
 #[command(after_long_help = FILE_FORMATS)]
 pub struct FilterArgs {
-    /// The model: a, b, c (or equations: [model], [f] or [dxdt], [h]), q, r, p0, x0 and optionally
-    /// u_lower, u_upper, an [mhe] and a [ukf] table (TOML); or a built-in vehicle, `builtin:carrier`,
+    /// The model: a, b, c (or equations: `[model]`, `[f]` or `[dxdt]`, `[h]`), q, r, p0, x0 and optionally
+    /// u_lower, u_upper, an `[mhe]` and a `[ukf]` table (TOML); or a built-in vehicle, `builtin:carrier`,
     /// `builtin:car`, `builtin:truck`, `builtin:vessel`, `builtin:bds-ins` (the compiled model with
     /// the noise of its file in examples/models/)
     #[arg(short, long, value_name = "MODEL.toml")]
@@ -343,7 +343,7 @@ pub struct FilterArgs {
     /// at its row)
     #[arg(long, value_name = "N", default_value_t = crate::limits::DEFAULT_MAX_GAP)]
     pub max_gap: u64,
-    /// The most memory a moving-horizon estimator (rmhe, mhe) may take for its [mhe] horizon and
+    /// The most memory a moving-horizon estimator (rmhe, mhe) may take for its `[mhe]` horizon and
     /// blocks: bytes, or with K, M, G
     #[arg(long, value_name = "SIZE", default_value = "256MiB", value_parser = size)]
     pub mhe_memory_limit: u64,

@@ -10,7 +10,7 @@
 //! `filter` runs any estimator of [`estimators::registry`] (the set-membership filter `smf` by
 //! default, the Kalman filter `kf`, the Yang–Li reconstructions, the EKF, UKF and MHEs) over a
 //! model file ([`model`]: matrices, or equations compiled by `equation-models`)
-//! and a CSV log ([`data`]) and writes one estimate per step ([`filter`]) to an output that is
+//! and a CSV log ([`data`]) and writes one estimate per step ([`filter()`]) to an output that is
 //! published only when every step succeeded ([`output`]). Malformed files are reported at their
 //! `file:line:column` ([`Error`]). The binary is a thin layer over [`execute`], so that tests
 //! drive the same code.

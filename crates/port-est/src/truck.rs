@@ -12,7 +12,7 @@
 //! | `y1`, `y2`, `y3` | measured `V_x`, lateral acceleration `a_y`, yaw rate `γ` after the step | m/s, m/s², rad/s |
 //!
 //! `OUT.csv`: `k,vx,vy,gamma,beta,sd_vx,sd_vy,sd_gamma`, one row per step labelled `k+1`, with
-//! the sideslip angle `β = atan(V_y/V_x)` [rad] and one standard deviation of each state.
+//! the sideslip angle `β = atan(V_y/V_x)` \[rad\] and one standard deviation of each state.
 //!
 //! `--config FILE.toml` (optional) overrides the digest's settings: `ts` (sample period, s),
 //! `x0` (3), `p0`, `q`, `r` (3 × 3, arrays of rows; covariances). Without `x0` the filter starts

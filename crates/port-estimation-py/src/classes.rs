@@ -1,6 +1,6 @@
 //! The convenience classes: `KalmanFilter(model, ...)` is `Estimator(<the Kalman filter's
 //! registry name>, model, ...)` with the settings that estimator takes as named keywords (written once,
-//! by [`convenience_class!`], for the classes whose keywords are all named). The
+//! by `convenience_class!`, for the classes whose keywords are all named). The
 //! names come from `estimators::registry::names`; everything else is [`Estimator`]'s.
 
 use estimators::registry::names;

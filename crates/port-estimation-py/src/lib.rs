@@ -2,7 +2,7 @@
 //! binding layer over the workspace's estimators, in the style of polars and pydantic-core.
 //!
 //! * [`model`]: `Model` — a linear model from NumPy arrays or a vehicle model of the workspace,
-//!   behind `models::AnyModel`; [`file`]: the model files of `port-est`.
+//!   behind `models::AnyModel`; [`file`](mod@file): the model files of `port-est`.
 //! * [`estimator`]: `Estimator(name, model, x0=, P0=, Q=, R=, **settings)` — any row of
 //!   `estimators::registry::ESTIMATORS`, its keywords mapped to the row's settings by their
 //!   `SettingsKind` ([`settings`]); `predict`, `update`, `step` return an `Estimate`

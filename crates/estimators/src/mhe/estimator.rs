@@ -118,7 +118,7 @@ impl Estimate for MheEstimate {
 
 /// A moving-horizon estimator for linear models with box-bounded noise: the robust min–max MHE
 /// with disturbance blocking of the car paper (any blocks, either `λv`), or plain MHE
-/// ([`MheCost::LeastSquares`]); configured entirely by [`MheSettings`].
+/// ([`MheCost::LeastSquares`](super::MheCost::LeastSquares)); configured entirely by [`MheSettings`].
 ///
 /// A step consumes `u_k` and `y_{k+1}` (the workspace's convention) and returns `x̂_{k+1|k+1}`;
 /// [`MovingHorizonEstimator::measure_initial`] adds a measurement of `x_0` before the first

@@ -148,7 +148,7 @@ impl Default for FuzzyAdaptiveSettings {
     }
 }
 
-/// The settings an estimator takes beyond its [`Setup`]; the variant is the row's
+/// The settings an estimator takes beyond its [`Setup`](crate::Setup); the variant is the row's
 /// [`SettingsKind`].
 #[derive(Debug, Clone)]
 #[non_exhaustive]

@@ -30,7 +30,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::kernels::{Kernels, StepFns};
 
-/// Relative margin of [`check`]: inconsistency needs `g(d) > MARGIN · (dᵀe + Σ √(dᵀ Mᵢ d))`.
+/// Relative margin of the proof (`check`): inconsistency needs `g(d) > MARGIN · (dᵀe + Σ √(dᵀ Mᵢ d))`.
 pub const MARGIN: f64 = 1e-7;
 
 /// Fixed-point iterations of the search.

@@ -47,7 +47,7 @@ pub struct StepReport {
     /// Wall-clock time of the solver call.
     pub solve_time: Duration,
     /// Whether the step's measurement was consistent with the predicted set and the noise bounds
-    /// (module [`consistency`](super::consistency)).
+    /// (module [`super::consistency`]).
     pub consistency: Consistency,
     /// Whether the published set is guaranteed: `false` from the first inconsistent step on
     /// (with [`InconsistencyPolicy::FlagAndContinue`]; the default policy refuses such a step).

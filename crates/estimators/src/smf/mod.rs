@@ -8,7 +8,7 @@
 //!    used). Unless the solver declares its `L` to be the closed-form gain for its `τ`
 //!    ([`UpdateSolver::gain_is_closed_form`], true for the [`TwoMultiplierSolver`]), only `τ` is
 //!    kept: `L` is replaced by the closed-form gain (G1) for the clamped `τ` (module
-//!    [`two_multiplier`](crate::two_multiplier)), which for fixed `τ` minimises `Φ` below (in the
+//!    [`two_multiplier`]), which for fixed `τ` minimises `Φ` below (in the
 //!    Loewner order), so it is never worse than the solver's `L` and not sensitive to the
 //!    `1/τᵢ` amplification of an inexact `L` when a multiplier is tiny;
 //! 2. certification (below) recomputes `P_{k+1}` from `(L, τ)` and inflates it;
@@ -80,7 +80,7 @@
 //! happens if a finite `(L, τ)` that passed these checks gives a certified shape, centre or
 //! inflation that is not finite (an overflow): the certification is redone with the fallback
 //! `τ` and its gain ([`FallbackReason::InvalidSolution`]). Only if that fails too does the step
-//! return [`EstimatorError::NumericalFailure`], with the filter unchanged. A solver whose gain is
+//! return [`EstimatorError::NumericalFailure`](crate::EstimatorError::NumericalFailure), with the filter unchanged. A solver whose gain is
 //! closed-form but that returns `τ₃ = 0` (after clamping) with a non-zero `L` keeps its `τ` with
 //! `L = 0`, the closed-form gain for `τ₃ = 0`, also reported as
 //! [`FallbackReason::InvalidSolution`]. Every point of the simplex is feasible, so containment
@@ -89,7 +89,7 @@
 //! # Inputs
 //!
 //! With [`InputModel::BoundedDisturbance`] the guarantee covers only inputs in the declared box:
-//! an input outside it is refused with [`EstimatorError::InputOutsideBounds`] before anything
+//! an input outside it is refused with [`EstimatorError::InputOutsideBounds`](crate::EstimatorError::InputOutsideBounds) before anything
 //! changes.
 
 mod angles;

@@ -33,7 +33,7 @@ pub(super) struct SubsetFilter<S: UpdateSolver> {
 impl<S: UpdateSolver> SetMembershipFilter<S> {
     /// One step with the outputs where `measured` is true (the others' entries of `y` are not
     /// read and may be NaN): the step (13)–(29) with the measured rows of `C`, of `y` and the
-    /// sub-block `R_SS` (module [`partial`](self)); with every output measured, [`Self::step`];
+    /// sub-block `R_SS` (module `smf::partial`); with every output measured, [`Self::step`];
     /// with none, [`Self::predict`]. On error the filter is unchanged. Allocation-free after the
     /// first step with that many outputs measured.
     ///

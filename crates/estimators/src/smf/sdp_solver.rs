@@ -1,5 +1,5 @@
 //! Solving (29) with any [`lmi::SdpBackend`]: the filter SDP (28) of
-//! [`FilterSdp`](super::lmi28::FilterSdp) is built on the first step, its numbers rewritten at each
+//! [`super::lmi28::FilterSdp`] is built on the first step, its numbers rewritten at each
 //! later step, the backend set up once and called every step. Only `τ` is used (and `L`
 //! read back with [`FilterSdp::read_gain`] for diagnostics): the SDP's `L` is not the exact
 //! closed-form gain for its `τ` ([`UpdateSolver::gain_is_closed_form`] is `false`), so the filter

@@ -120,7 +120,7 @@ pub trait UpdateSolver {
     ) -> Result<(), EstimatorError>;
 
     /// Whether the returned `L` is the closed-form optimal gain (G1) for the returned `τ`
-    /// (module [`two_multiplier`](crate::two_multiplier)). If `false` (the default), the filter
+    /// (module [`two_multiplier`](super::two_multiplier)). If `false` (the default), the filter
     /// keeps only `τ` and replaces `L` by the closed-form gain for the clamped `τ`: optimal for
     /// that `τ`, so never worse than the solver's `L`, whose error would otherwise be amplified
     /// by `1/τᵢ` when a multiplier is tiny. If `true`, the solver's `L` is certified as it is.

@@ -13,9 +13,9 @@ pub const PROPOSED_VIA: &str = "improved SMF via ";
 /// Suffix of the same filter with every SDP solved from the backend's default start (the SDP
 /// filters warm-start each solve from the previous step's solution by default).
 pub const COLD_START: &str = ", cold start";
-/// Reconstruction (a) of [17]: the input is not used.
+/// Reconstruction (a) of \[17\]: the input is not used.
 pub const YANG_LI_NO_INPUT: &str = "[17] without input";
-/// Reconstruction (b) of [17]: the input in the predictor (the improved filter's update).
+/// Reconstruction (b) of \[17\]: the input in the predictor (the improved filter's update).
 pub const YANG_LI_WITH_INPUT: &str = "[17] with input";
 /// The Kalman filter.
 pub const KALMAN: &str = "Kalman filter";

@@ -73,10 +73,10 @@ pub struct ScenarioSummary {
     /// on the same data is tested in `estimators`).
     pub solver_agreement: Vec<(String, f64)>,
     /// Fraction of (step, state) pairs where the improved filter's interval lies inside the
-    /// interval of the [17]-style filter without input.
+    /// interval of the \[17\]-style filter without input.
     pub proposed_inside_reference17: f64,
     /// Mean over (step, state) of the improved filter's interval width divided by that of the
-    /// [17]-style filter without input (1 means the bounds coincide).
+    /// \[17\]-style filter without input (1 means the bounds coincide).
     pub width_ratio_reference17: f64,
     /// Figures written, `(file, caption)`.
     pub figures: Vec<(String, String)>,

@@ -34,7 +34,7 @@ pub struct Scenario {
     pub q: DMatrix<f64>,
     /// Measurement-noise shape given to the filters (a covariance for the Kalman filter).
     pub r: DMatrix<f64>,
-    /// Known input range `[lo, hi]` per input (used by the [17]-style filter without input).
+    /// Known input range `[lo, hi]` per input (used by the \[17\]-style filter without input).
     pub input_range: InputRange,
     /// Whether the SDP backends run on every step (else only on the first `sdp_steps`).
     pub sdp_steps: usize,

@@ -47,7 +47,7 @@ pub struct NonlinearMheSettings {
     /// converged, by design); the covariance comes from the Gauss–Newton matrix at the last
     /// linearisation point instead of one more linearisation at the published window. `None`
     /// (default): iterate to `tolerance` (or `max_iterations`). At most
-    /// [`MAX_REAL_TIME_ITERATIONS`]; docs/dp-vessel.md measures the distance to the converged
+    /// `MAX_REAL_TIME_ITERATIONS` (10); docs/dp-vessel.md measures the distance to the converged
     /// windows.
     pub real_time_iterations: Option<usize>,
     /// The prior mean of a new window start (default: the paper's smoothed estimate).
