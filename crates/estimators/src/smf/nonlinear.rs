@@ -76,6 +76,13 @@ struct Work {
     point_h: TaylorEnclosure,
     box_h: TaylorEnclosure,
     boxed: Vec<Interval>,
+    /// The point about which an enclosure is taken (`enclose_about`).
+    centre: Vec<Interval>,
+    /// The box over which `box_h` holds `h`'s enclosure after (N4)–(N5), and whether `point_h`
+    /// then holds `h`'s values alone at the predicted centre: (N8) reuses them when its box and
+    /// its point are the same bits (the same call, so the same enclosure).
+    h_box: Vec<Interval>,
+    h_values_at_centre: bool,
     radius: DVector<f64>,
     lin: StepMatrices,
     one: DVector<f64>,
@@ -151,6 +158,13 @@ fn largest(v: &DVector<f64>) -> f64 {
     v.iter().copied().fold(0.0, |a, b| if b.is_nan() || b > a { b } else { a })
 }
 
+/// Whether two boxes are the same bits (so that a model's enclosure over one is its enclosure
+/// over the other).
+fn same_bits(a: &[Interval], b: &[Interval]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| x.lo().to_bits() == y.lo().to_bits() && x.hi().to_bits() == y.hi().to_bits())
+}
+
 /// The midpoint of a bounded interval.
 fn mid(v: Interval) -> f64 {
     0.5 * v.lo() + 0.5 * v.hi()
@@ -201,7 +215,7 @@ fn enclose_about<E, V>(
     what: &str,
     centre_name: &str,
     (centre, radius, bounds): (&DVector<f64>, &mut DVector<f64>, &[Interval]),
-    boxes: &mut [Interval],
+    (boxes, centre_box): (&mut [Interval], &mut [Interval]),
     (point, boxed): (&mut TaylorEnclosure, &mut TaylorEnclosure),
     enclose: E,
     enclose_value: V,
@@ -241,15 +255,15 @@ where
             ),
         ));
     }
-    for (b, c) in boxes.iter_mut().zip(centre.iter()) {
+    for (b, c) in centre_box.iter_mut().zip(centre.iter()) {
         *b = Interval::point(*c);
     }
     let at_centre = boxed.hessian_valid();
     let bounded = if at_centre {
-        enclose(boxes, point)?;
+        enclose(centre_box, point)?;
         point.is_bounded()
     } else {
-        enclose_value(boxes, point)?;
+        enclose_value(centre_box, point)?;
         point.values_bounded()
     };
     if !bounded {
@@ -313,6 +327,9 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             point_h: TaylorEnclosure::new(m, n),
             box_h: TaylorEnclosure::new(m, n),
             boxed: vec![Interval::ZERO; n],
+            centre: vec![Interval::ZERO; n],
+            h_box: vec![Interval::ZERO; n],
+            h_values_at_centre: false,
             radius: DVector::zeros(n),
             lin: StepMatrices { a: DMatrix::zeros(n, n), b: DMatrix::zeros(n, 1), c: DMatrix::zeros(m, n) },
             one: DVector::from_element(1, 1.0),
@@ -439,7 +456,7 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             "f",
             "the set's centre",
             (&est.center, &mut ws.radius, &self.bounds),
-            &mut ws.boxed,
+            (&mut ws.boxed, &mut ws.centre),
             (&mut ws.point_f, &mut ws.box_f),
             |x, out| model.f_enclosure(x, u, out),
             |x, out| model.f_value_enclosure(x, u, out),
@@ -514,11 +531,13 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
             "h",
             "the predicted centre",
             (&ws.xbar, &mut ws.radius, &self.bounds),
-            &mut ws.boxed,
+            (&mut ws.boxed, &mut ws.centre),
             (&mut ws.point_h, &mut ws.box_h),
             |x, out| model.h_enclosure(x, u, out),
             |x, out| model.h_value_enclosure(x, u, out),
         )?;
+        ws.h_box.copy_from_slice(&ws.boxed);
+        ws.h_values_at_centre = !at_centre;
         let jacobian = if at_centre { &ws.point_h } else { &ws.box_h };
         for i in 0..m {
             let value = ws.point_h.value(i);
@@ -723,11 +742,18 @@ impl<S: UpdateSolver> NonlinearSetMembershipFilter<S> {
     ) -> Result<bool, EstimatorError> {
         let (n, m) = (self.dims.states, self.dims.outputs);
         let ws = &mut self.ws;
-        model.h_enclosure(&ws.obs, u, &mut ws.box_h)?;
+        // `box_h` and `point_h` still hold (N4)–(N5)'s enclosures: where the observer's box, or its
+        // midpoint, is the same bits as theirs, the same call would return the same enclosure.
+        if !same_bits(&ws.obs, &ws.h_box) {
+            model.h_enclosure(&ws.obs, u, &mut ws.box_h)?;
+        }
         for k in 0..n {
             ws.obs_point[k] = Interval::point(mid(ws.obs[k]));
         }
-        model.h_value_enclosure(&ws.obs_point, u, &mut ws.point_h)?;
+        let at_centre = ws.obs_point.iter().zip(ws.xbar.iter()).all(|(p, x)| p.lo().to_bits() == x.to_bits());
+        if !(ws.h_values_at_centre && at_centre) {
+            model.h_value_enclosure(&ws.obs_point, u, &mut ws.point_h)?;
+        }
         if !ws.box_h.is_bounded() || !ws.point_h.values_bounded() {
             return Ok(false);
         }
