@@ -232,11 +232,12 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// As [`KalmanFilter::new`] (wrapped in [`AdaptiveError::Filter`]), and
     /// [`AdaptiveError::HorizontalComponents`] for fewer than two outputs.
     pub fn new(setup: Setup, scaling: S) -> Result<Self, AdaptiveError> {
-        let mut kf = KalmanFilter::new(setup)?;
-        kf.set_details(StepDetails::new(DETAILS, &[None, None]));
+        let kf = KalmanFilter::new(setup)?;
         let r_scaled = kf.measurement_noise().clone();
         let outputs = DVector::zeros(r_scaled.nrows());
-        Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, last_step: None, outputs }.with_horizontal([0, 1])
+        let mut f = Self { kf, scaling, r_scaled, horizontal: [0, 1], updates: 0, last_step: None, outputs };
+        f.publish_step(None);
+        f.with_horizontal([0, 1])
     }
 
     /// Chooses which two innovation components form `d_k = √(r_i² + r_j²)`.
@@ -302,9 +303,15 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
     /// Counts a published update and reports its scale.
     fn commit_scale(&mut self, report: AdaptiveStep) -> AdaptiveStep {
         self.updates += 1;
-        self.last_step = Some(report);
-        self.kf.set_details(StepDetails::new(DETAILS, &[Some(report.scale), Some(report.distance)]));
+        self.publish_step(Some(report));
         report
+    }
+
+    /// Records `t_k`, `d_k` of the step (`None`: no update) and writes them into the estimate's
+    /// details: the one place both are set.
+    fn publish_step(&mut self, step: Option<AdaptiveStep>) {
+        self.last_step = step;
+        self.kf.set_details(StepDetails::new(DETAILS, &[step.map(|s| s.scale), step.map(|s| s.distance)]));
     }
 
     /// The prediction (no fix this epoch, or the first half of a step): `x⁻ = A x + B u`,
@@ -318,8 +325,7 @@ impl<S: NoiseScaling> AdaptiveKalmanFilter<S> {
         u: &DVector<f64>,
     ) -> Result<&GaussianEstimate, EstimatorError> {
         self.kf.predict(model, u)?;
-        self.last_step = None;
-        self.kf.set_details(StepDetails::new(DETAILS, &[None, None]));
+        self.publish_step(None);
         Ok(self.kf.estimate())
     }
 

@@ -52,8 +52,8 @@ impl Snapshot {
                 _ => None,
             },
             fallback: e.status().outcome == SolveOutcome::FallbackUsed,
-            // A set-membership step's solver iterations (a count, so exact in f64).
-            iterations: d.get("tau1").and(d.get("iterations")).flatten().map(|i| i as u32),
+            // The solver's iterations, where the estimator reports them (a count, so exact in f64).
+            iterations: d.get("iterations").flatten().map(|i| i as u32),
         }
     }
 }
