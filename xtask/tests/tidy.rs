@@ -318,12 +318,6 @@ const ACCEPTED_FILE_CYCLES: &[(&str, &[&str], &str)] = &[
          vocabulary of outcomes in two files",
     ),
     (
-        "port-est",
-        &["bag", "blame", "data", "error", "filter", "limits", "mhe_table", "model", "output", "run"],
-        "the command's files share its error type, which names the places (file, line, row) that \
-         the readers define: one command, one error vocabulary",
-    ),
-    (
         "svg-plot",
         &["clip", "layout", "legend", "render"],
         "a plot's parts lay themselves out with the renderer's primitives, which draws them",

@@ -49,7 +49,12 @@ use crate::traits::{DetailField, DynEstimator, Estimate, EstimateKind, Setup};
 use crate::ukf::UnscentedKalmanFilter;
 use crate::yang_li;
 
+mod keywords;
 mod settings;
+pub use keywords::{
+    DEFAULT_MEMORY_LIMIT, KeywordContext, KeywordSource, MAX_WINDOW_ITERATIONS, read_moving_horizon, read_settings,
+    read_sigma_points, show_bytes,
+};
 pub use settings::{
     EstimatorSettings, FuzzyAdaptiveSettings, InputBox, Keyword, SetMembershipSettings, SettingsKind, SmfSolver,
 };

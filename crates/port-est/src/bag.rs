@@ -23,12 +23,8 @@
 //! fixed step, the next driving message's stamp per message), the time of the last measurement it
 //! could use. `--copy-topics` copies the input's topics beside it, interleaved by log time.
 
-use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
-
-use serde::Deserialize;
-use toml::Spanned;
 
 use crate::data::{DataRow, RowSource};
 use crate::error::{Error, Location};
@@ -36,103 +32,6 @@ use crate::model::Model;
 
 /// MCAP's magic bytes.
 const MAGIC: &[u8] = b"\x89MCAP0\r\n";
-
-/// The `[log]` table as written.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct LogTable {
-    ts: Option<Spanned<f64>>,
-    driving: Option<Spanned<String>>,
-    stamps: Option<Spanned<String>>,
-    reorder_window: Option<Spanned<f64>>,
-    fields: Option<Spanned<BTreeMap<String, Spanned<FieldSource>>>>,
-}
-
-/// One mapping: a topic and a field path in its messages.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FieldSource {
-    topic: String,
-    field: String,
-}
-
-type Span = std::ops::Range<usize>;
-
-impl LogTable {
-    /// The reading of a bag this table asks for, for a model with these input and output names;
-    /// an error at the span of the key it is about (`whole`: the table's).
-    pub(crate) fn spec(
-        &self,
-        whole: Span,
-        inputs: &[String],
-        outputs: &[String],
-    ) -> Result<ros_bag::LogSpec, (Span, String)> {
-        let mut spec = match (&self.ts, &self.driving) {
-            (Some(ts), None) => {
-                let v = *ts.get_ref();
-                if !(v.is_finite() && v > 0.0) {
-                    return Err((ts.span(), format!("`ts` = {v}: the step must be a positive number of seconds")));
-                }
-                ros_bag::LogSpec::fixed_step(v)
-            }
-            (None, Some(topic)) => ros_bag::LogSpec::per_message(topic.get_ref().clone()),
-            _ => {
-                return Err((
-                    whole,
-                    "[log]: give one of `ts` (a fixed step, seconds) or `driving` (a topic: one step per message)"
-                        .into(),
-                ));
-            }
-        };
-        if let Some(s) = &self.stamps {
-            spec = spec.stamps(match s.get_ref().as_str() {
-                "log" => ros_bag::Stamps::LogTime,
-                "header" => ros_bag::Stamps::Header,
-                other => {
-                    return Err((s.span(), format!("`stamps` = {other:?}: \"log\" (the log time) or \"header\"")));
-                }
-            });
-        }
-        if let Some(w) = &self.reorder_window {
-            let v = *w.get_ref();
-            if !(v.is_finite() && v >= 0.0) {
-                return Err((w.span(), format!("`reorder_window` = {v}: a number of seconds, at least 0")));
-            }
-            spec = spec.reorder_window(v);
-        }
-        let Some(fields) = &self.fields else {
-            return Err((
-                whole,
-                "[log]: a table `[log.fields]` maps each input and output to `{ topic, field }`".into(),
-            ));
-        };
-        let known: Vec<&str> = inputs.iter().chain(outputs).map(String::as_str).collect();
-        for (name, source) in fields.get_ref() {
-            if !known.contains(&name.as_str()) {
-                let message = format!(
-                    "[log.fields]: `{name}` is not an input or output of the model (they are: {})",
-                    known.join(", ")
-                );
-                return Err((source.span(), message));
-            }
-        }
-        let find = |name: &String| {
-            fields.get_ref().get(name).map(Spanned::get_ref).ok_or_else(|| {
-                let message = format!("[log.fields]: no topic for `{name}` (every input and output is mapped)");
-                (fields.span(), message)
-            })
-        };
-        for name in inputs {
-            let f = find(name)?;
-            spec = spec.input(name.clone(), f.topic.clone(), f.field.clone());
-        }
-        for name in outputs {
-            let f = find(name)?;
-            spec = spec.output(name.clone(), f.topic.clone(), f.field.clone());
-        }
-        Ok(spec)
-    }
-}
 
 /// Whether `path` is an MCAP file: its extension `.mcap`, or a regular file whose first bytes are
 /// MCAP's magic (a pipe is never peeked at: its bytes would be gone).
@@ -157,7 +56,7 @@ fn bag_error(path: &Path, e: ros_bag::Error) -> Error {
 }
 
 /// Opens a bag, a directory refused by name (memory-mapping one fails obscurely).
-fn open(path: &Path) -> Result<ros_bag::Bag, Error> {
+pub(crate) fn open(path: &Path) -> Result<ros_bag::Bag, Error> {
     if path.is_dir() {
         return Err(Error::File { path: path.to_owned(), message: "is a directory, not an MCAP bag".into() });
     }
@@ -165,7 +64,7 @@ fn open(path: &Path) -> Result<ros_bag::Bag, Error> {
 }
 
 /// The model's `[log]` mapping, or an error saying that a bag needs one.
-fn log_spec<'m>(model: &'m Model, path: &Path) -> Result<&'m ros_bag::LogSpec, Error> {
+pub(crate) fn log_spec<'m>(model: &'m Model, path: &Path) -> Result<&'m ros_bag::LogSpec, Error> {
     model.log.as_ref().ok_or_else(|| Error::File {
         path: model.path().to_owned(),
         message: format!(
@@ -178,7 +77,7 @@ fn log_spec<'m>(model: &'m Model, path: &Path) -> Result<&'m ros_bag::LogSpec, E
 }
 
 /// The rows `spec` makes of `bag` (read from `path`), as a [`RowSource`].
-fn bag_rows<'b>(bag: &'b ros_bag::Bag, spec: &ros_bag::LogSpec, path: &Path) -> Result<BagRows<'b>, Error> {
+pub(crate) fn bag_rows<'b>(bag: &'b ros_bag::Bag, spec: &ros_bag::LogSpec, path: &Path) -> Result<BagRows<'b>, Error> {
     let rows = bag.rows(spec).map_err(|e| bag_error(path, e))?;
     let mut columns = vec!["k".to_owned()];
     columns.extend(spec.input_keys().into_iter().chain(spec.output_keys()).map(str::to_owned));
@@ -398,54 +297,4 @@ pub fn inspect(path: &Path, out: &mut dyn Write) -> Result<(), Error> {
         },
         None => Ok(()),
     }
-}
-
-/// `port-est filter --input run.mcap --output est.mcap`: the run of [`crate::filter()`], its
-/// estimates written as a bag ([`BagOutput`]) with the input's topics copied beside them as
-/// `--copy-topics` asks, published only if every step succeeded.
-///
-/// # Errors
-/// As [`crate::filter()`]; an input that is not a bag, an output that is the input or the
-/// model, `--on-error keep-partial` (a bag output keeps nothing), a topic to copy that the input
-/// does not have.
-pub(crate) fn filter_to_bag(
-    options: &crate::FilterOptions,
-    entry: &'static estimators::registry::EstimatorEntry,
-    solver: Option<estimators::registry::SmfSolver>,
-) -> Result<crate::FilterSummary, Error> {
-    let refuse = |message: String| Error::Output { path: options.output.clone(), message };
-    if !is_bag(&options.input) {
-        return Err(refuse("estimates are written as a bag (.mcap) only from a bag input (their time stamps)".into()));
-    }
-    if options.on_error == crate::OnError::KeepPartial {
-        return Err(refuse(
-            "--on-error keep-partial keeps CSV rows; a bag output is written whole or not at all".into(),
-        ));
-    }
-    for (role, input) in [("input", &options.input), ("model", &options.model)] {
-        if crate::output::same_file(&options.output, input) {
-            return Err(refuse(format!("is the {role}")));
-        }
-    }
-    let model = crate::model::read_model_with(&options.model, &options.limits)?;
-    let spec = log_spec(&model, &options.input)?;
-    let bag = open(&options.input)?;
-    let mut out = BagOutput::create(&options.output, &model, entry.kind, &bag, &options.copy_topics)?;
-    let mut tally = crate::StatusTally::default();
-    let policy = (options.status, options.checks);
-    let mut rows = bag_rows(&bag, spec, &options.input)?;
-    let mut csv = std::io::sink();
-    crate::filter::run_filter_into(
-        &model,
-        &mut rows,
-        entry,
-        solver,
-        policy,
-        &mut csv,
-        &options.output,
-        &mut tally,
-        Some(&mut out),
-    )?;
-    out.finish()?;
-    Ok(crate::FilterSummary { estimator: entry.name, tally, ignored_columns: Vec::new() })
 }

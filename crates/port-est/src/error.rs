@@ -106,7 +106,7 @@ pub enum Error {
     #[error(
         "{}: larger than {}, the limit for a {what} (raise it with --max-file-size)",
         path.display(),
-        crate::limits::show_bytes(u128::from(*limit))
+        estimators::registry::show_bytes(u128::from(*limit))
     )]
     TooLarge {
         /// The file.
@@ -209,6 +209,18 @@ pub(crate) fn echo(s: &str) -> String {
 
 /// How many characters of a cell an error message shows.
 pub const ECHO_CHARS: usize = 40;
+
+/// 1-based line and column (in characters) of a byte offset of `text`.
+pub(crate) fn line_col(text: &str, offset: usize) -> (u64, u64) {
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
+    let line = before.matches('\n').count() + 1;
+    let col = before[before.rfind('\n').map_or(0, |i| i + 1)..].chars().count() + 1;
+    (line as u64, col as u64)
+}
 
 #[cfg(test)]
 mod tests {

@@ -9,10 +9,8 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimators::registry::{
-    self, EstimatorEntry, EstimatorSettings, InputBox, SetMembershipSettings, SettingsKind, SmfSolver,
-};
-use estimators::{AnyEstimator, ConstrainedZonotopeSettings, DataChecks, EstimatorError};
+use estimators::registry::{self, EstimatorEntry, EstimatorSettings, SettingsKind, SmfSolver};
+use estimators::{AnyEstimator, DataChecks, EstimatorError};
 use nalgebra::DVector;
 
 use crate::blame::{self, LargestCell};
@@ -145,7 +143,7 @@ pub fn select(estimator: &str, solver: Option<&str>) -> Result<(&'static Estimat
 pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     let (entry, solver) = select(&options.estimator, options.solver.as_deref())?;
     if crate::bag::writes_bag(&options.output) {
-        return crate::bag::filter_to_bag(options, entry, solver);
+        return filter_to_bag(options, entry, solver);
     }
     if options.copy_topics != CopyTopics::None {
         return Err(Error::Usage(
@@ -197,6 +195,46 @@ pub fn filter(options: &FilterOptions) -> Result<FilterSummary, Error> {
     }
 }
 
+/// `port-est filter --input run.mcap --output est.mcap`: the run of [`crate::filter()`], its
+/// estimates written as a bag ([`BagOutput`](crate::bag::BagOutput)) with the input's topics copied beside them as
+/// `--copy-topics` asks, published only if every step succeeded.
+///
+/// # Errors
+/// As [`crate::filter()`]; an input that is not a bag, an output that is the input or the
+/// model, `--on-error keep-partial` (a bag output keeps nothing), a topic to copy that the input
+/// does not have.
+fn filter_to_bag(
+    options: &crate::FilterOptions,
+    entry: &'static estimators::registry::EstimatorEntry,
+    solver: Option<estimators::registry::SmfSolver>,
+) -> Result<crate::FilterSummary, Error> {
+    let refuse = |message: String| Error::Output { path: options.output.clone(), message };
+    if !crate::bag::is_bag(&options.input) {
+        return Err(refuse("estimates are written as a bag (.mcap) only from a bag input (their time stamps)".into()));
+    }
+    if options.on_error == crate::OnError::KeepPartial {
+        return Err(refuse(
+            "--on-error keep-partial keeps CSV rows; a bag output is written whole or not at all".into(),
+        ));
+    }
+    for (role, input) in [("input", &options.input), ("model", &options.model)] {
+        if crate::output::same_file(&options.output, input) {
+            return Err(refuse(format!("is the {role}")));
+        }
+    }
+    let model = crate::model::read_model_with(&options.model, &options.limits)?;
+    let spec = crate::bag::log_spec(&model, &options.input)?;
+    let bag = crate::bag::open(&options.input)?;
+    let mut out = crate::bag::BagOutput::create(&options.output, &model, entry.kind, &bag, &options.copy_topics)?;
+    let mut tally = crate::StatusTally::default();
+    let policy = (options.status, options.checks);
+    let mut rows = crate::bag::bag_rows(&bag, spec, &options.input)?;
+    let mut csv = std::io::sink();
+    run_filter_into(&model, &mut rows, entry, solver, policy, &mut csv, &options.output, &mut tally, Some(&mut out))?;
+    out.finish()?;
+    Ok(crate::FilterSummary { estimator: entry.name, tally, ignored_columns: Vec::new() })
+}
+
 /// The filter over one opened data stream: the column and gap options applied, then the run;
 /// the data's ignored columns.
 fn run_on<R: Read>(
@@ -227,58 +265,36 @@ pub fn why_not(model: &Model, entry: &EstimatorEntry) -> Option<String> {
     if let Some(why) = model.lacks(entry.needs) {
         return Some(why);
     }
+    let table = model.settings_table(entry.name);
     match entry.settings {
-        SettingsKind::SetMembershipInputBox if model.input_range.is_none() => {
+        SettingsKind::SetMembershipInputBox if model.input_range.is_none() && !table.has("u_lower") => {
             Some("needs the input range `u_lower`, `u_upper` in the model file".into())
         }
-        SettingsKind::MovingHorizon if model.mhe.is_none() => {
+        SettingsKind::MovingHorizon if model.mhe.is_none() && !table.has("w_lower") => {
             Some("needs an `[mhe]` table (at least the noise boxes `w_lower`, `w_upper`, `v_lower`, `v_upper`)".into())
         }
         _ => None,
     }
 }
 
-/// The settings of `entry` from the model file and the command line, in the model file's terms
-/// when something is missing (`None`: the row's defaults).
+/// The settings of `entry`: the model file's (its `[estimator.NAME]` table over its `[mhe]`,
+/// `[ukf]` and bounds) with the command line's `--solver` over them, read by the registry's one
+/// settings reader; in the model file's terms when something is missing.
 fn settings(
     model: &Model,
     entry: &EstimatorEntry,
-    solver: Option<SmfSolver>,
+    solver: Option<&SmfSolver>,
 ) -> Result<Option<EstimatorSettings>, Error> {
-    let needs = |what: &str| Error::File {
-        path: model.path().to_owned(),
-        message: format!("--estimator {} needs {what} in the model file (see README)", entry.name),
-    };
-    // The state's range is the vehicle's, like `u_lower`: every set-membership filter cuts its
-    // published interval by it.
-    let state_bounds = model.state_bounds.clone();
-    let smf =
-        SetMembershipSettings { solver: solver.unwrap_or_default(), state_bounds, ..SetMembershipSettings::default() };
-    Ok(match entry.settings {
-        SettingsKind::SetMembership => Some(EstimatorSettings::SetMembership(smf)),
-        SettingsKind::ConstrainedZonotope => {
-            Some(EstimatorSettings::ConstrainedZonotope(ConstrainedZonotopeSettings {
-                state_bounds: model.state_bounds.clone(),
-                ..ConstrainedZonotopeSettings::default()
-            }))
-        }
-        SettingsKind::Unscented => model.ukf.map(EstimatorSettings::Unscented),
-        SettingsKind::SetMembershipInputBox => {
-            let Some((lower, upper)) = model.input_range.clone() else {
-                return Err(needs("the input range `u_lower`, `u_upper`"));
-            };
-            Some(EstimatorSettings::SetMembershipInputBox(smf, InputBox { lower, upper }))
-        }
-        SettingsKind::MovingHorizon => match &model.mhe {
-            Some(s) => Some(EstimatorSettings::MovingHorizon(Box::new(s.clone()))),
-            None => {
-                return Err(needs(
-                    "an `[mhe]` table (at least the noise boxes `w_lower`, `w_upper`, `v_lower`, `v_upper`)",
-                ));
-            }
-        },
-        _ => None,
-    })
+    if let Some(why) = why_not(model, entry) {
+        return Err(Error::File {
+            path: model.path().to_owned(),
+            message: format!("--estimator {} {why} (see README)", entry.name),
+        });
+    }
+    let overrides: Vec<(&'static str, String)> = solver.map(|s| ("solver", s.name().to_owned())).into_iter().collect();
+    let table = model.settings_table(entry.name);
+    let name = format!("estimator {}", entry.name);
+    registry::read_settings(entry.settings, &name, &model.keyword_context(), &mut table.reader(&overrides))
 }
 
 /// Builds the estimator `entry` for `model` (the errors in the model file's terms).
@@ -290,7 +306,12 @@ fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver
             model.path().display()
         )));
     }
-    if let Some(SmfSolver::Sdp { backend, .. }) = &solver
+    let settings = settings(model, entry, solver.as_ref())?;
+    let sdp = match &settings {
+        Some(EstimatorSettings::SetMembership(s) | EstimatorSettings::SetMembershipInputBox(s, _)) => Some(&s.solver),
+        _ => None,
+    };
+    if let Some(SmfSolver::Sdp { backend, .. }) = sdp
         && model.states() > MAX_SDP_STATES
     {
         let (n, m) = (model.states(), model.outputs());
@@ -303,7 +324,6 @@ fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver
             SmfSolver::TWO_MULTIPLIER
         )));
     }
-    let settings = settings(model, entry, solver)?;
     entry.build(model.setup(entry.kind), settings).map_err(|e| match e {
         EstimatorError::Lmi(_)
         | EstimatorError::UnknownEstimator { .. }

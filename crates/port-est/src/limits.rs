@@ -23,14 +23,14 @@ pub const DEFAULT_MAX_FILE_BYTES: u64 = 16 << 20;
 /// [`crate::mhe_table::memory_estimate`]: 256 MiB. A window with `z` unknowns also costs about
 /// `z³/3` operations per inner iteration, so this bounds the time of a step too (seconds at the
 /// limit).
-pub const DEFAULT_MHE_MEMORY_BYTES: u64 = 256 << 20;
+pub const DEFAULT_MHE_MEMORY_BYTES: u64 = estimators::registry::DEFAULT_MEMORY_LIMIT;
 
 /// The most missing steps `--gaps bridge` fills at one gap (one predicted output row each).
 pub const DEFAULT_MAX_GAP: u64 = 10_000;
 
 /// The most sweeps (coordinate rotation) or Newton iterations (exact saddle) per window an
 /// `[mhe]` table may ask for.
-pub const MAX_MHE_SWEEPS: usize = 10_000;
+pub const MAX_MHE_SWEEPS: usize = estimators::registry::MAX_WINDOW_ITERATIONS;
 
 /// The limits of one run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -53,27 +53,7 @@ impl Default for Limits {
     }
 }
 
-/// `bytes` for people: `512 B`, `16 MiB`, `1.5 GiB`, `3.2e9 EiB`.
-#[must_use]
-pub fn show_bytes(bytes: u128) -> String {
-    const UNITS: [&str; 6] = ["KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    if bytes < 1024 {
-        return format!("{bytes} B");
-    }
-    let mut value = bytes as f64 / 1024.0;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < UNITS.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if value >= 1e4 {
-        format!("{value:.1e} {}", UNITS[unit])
-    } else if value.fract() == 0.0 {
-        format!("{value} {}", UNITS[unit])
-    } else {
-        format!("{value:.1} {}", UNITS[unit])
-    }
-}
+pub use estimators::registry::show_bytes;
 
 /// Parses a size: a whole number of bytes, optionally followed by `K`/`KiB`, `M`/`MiB`,
 /// `G`/`GiB` or `T`/`TiB` (powers of 1024; case-insensitive): `4096`, `64MiB`, `2G`.
@@ -117,7 +97,7 @@ pub(crate) fn read_text(path: &Path, what: &'static str, limit: u64) -> Result<S
         let good = e.utf8_error().valid_up_to();
         let prefix = String::from_utf8_lossy(&e.as_bytes()[..good]);
         let prefix = prefix.strip_prefix('\u{feff}').unwrap_or(&prefix);
-        let (line, column) = crate::model::line_col(prefix, prefix.len());
+        let (line, column) = crate::error::line_col(prefix, prefix.len());
         Error::at(Location::new(path, line, column), format!("not valid UTF-8 (the {what} must be UTF-8 TOML)"))
     })?;
     Ok(match text.strip_prefix('\u{feff}') {

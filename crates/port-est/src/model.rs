@@ -4,11 +4,13 @@
 //! initial estimate, read with `serde` and checked against the model's dimensions, every complaint
 //! at the `file:line:column` of the key's value.
 
+use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use equation_models::EquationModel;
+use estimators::registry::{self, KeywordContext};
 use estimators::{EstimateKind, EstimatorError, Setup, UkfParams};
 use models::{AnyModel, Capability, ConstantModel, DiscreteModel, LinearModel};
 use nalgebra::{DMatrix, DVector};
@@ -17,7 +19,8 @@ use serde::de::IgnoredAny;
 use toml::Spanned;
 
 use crate::builtin::Builtin;
-use crate::error::{Error, Location};
+use crate::error::{Error, Location, line_col};
+use crate::keyword_table::{KeywordTable, SpannedTable};
 use crate::limits::Limits;
 
 /// A `(lower, upper)` pair of bounds.
@@ -26,7 +29,7 @@ type Bounds = (DVector<f64>, DVector<f64>);
 /// The top-level keys of a model file that `port-est` reads itself; the rest of a model written
 /// as equations (`[model]`, `[parameters]`, `[definitions]`, `[f]` or `[dxdt]`, `[h]`) is read by
 /// `equation-models`.
-pub const NOISE_KEYS: [&str; 17] = [
+pub const NOISE_KEYS: [&str; 18] = [
     "x0",
     "p0",
     "q",
@@ -37,6 +40,7 @@ pub const NOISE_KEYS: [&str; 17] = [
     "x_upper",
     "mhe",
     "ukf",
+    "estimator",
     "x0_radius",
     "w_radius",
     "v_radius",
@@ -87,9 +91,10 @@ struct ModelFile {
     x0_generators: Option<Spanned<Vec<Vec<f64>>>>,
     w_generators: Option<Spanned<Vec<Vec<f64>>>>,
     v_generators: Option<Spanned<Vec<Vec<f64>>>>,
-    mhe: Option<Spanned<crate::mhe_table::MheTable>>,
-    ukf: Option<Spanned<UkfTable>>,
-    log: Option<Spanned<crate::bag::LogTable>>,
+    mhe: Option<Spanned<SpannedTable>>,
+    ukf: Option<Spanned<SpannedTable>>,
+    estimator: Option<Spanned<BTreeMap<String, Spanned<SpannedTable>>>>,
+    log: Option<Spanned<crate::log_table::LogTable>>,
     // The equation tables, read by `equation-models`.
     model: Option<Spanned<toml::Value>>,
     parameters: Option<IgnoredAny>,
@@ -107,15 +112,6 @@ enum SquareSpec {
     Number(f64),
     Diagonal(Vec<f64>),
     Full(Vec<Vec<f64>>),
-}
-
-/// The `[ukf]` table: the unscented filter's sigma-point parameters.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct UkfTable {
-    alpha: Option<f64>,
-    beta: Option<f64>,
-    kappa: Option<f64>,
 }
 
 /// What moves the state: the matrices of a linear model, or equations.
@@ -164,8 +160,10 @@ pub struct Model {
     pub mhe: Option<estimators::MheSettings>,
     /// The unscented filter's `[ukf]` table, if given (missing entries: the defaults).
     pub ukf: Option<UkfParams>,
-    /// How a ROS 2 bag is read as this model's log (the `[log]` table, module [`crate::bag`]).
+    /// How a ROS 2 bag is read as this model's log (the `[log]` table, read as module [`crate::bag`] describes).
     pub log: Option<ros_bag::LogSpec>,
+    /// The `[estimator.NAME]` tables: each estimator's settings by the registry's keywords.
+    estimator_tables: Vec<(&'static str, KeywordTable)>,
     /// The file it was read from and where each key's value starts, to report later complaints
     /// (an estimator rejecting `q`, say) at the right place.
     source: Source,
@@ -190,7 +188,9 @@ pub const MAX_GENERATOR_COLUMNS: usize = 1000;
 #[derive(Debug, Clone, Default)]
 struct Source {
     path: PathBuf,
-    keys: Vec<(&'static str, u64, u64)>,
+    keys: Vec<(String, u64, u64)>,
+    /// The limit of a moving-horizon window's memory (`--mhe-memory-limit`).
+    memory_limit: u64,
 }
 
 impl Model {
@@ -304,6 +304,31 @@ impl Model {
         Setup { x0: self.x0.clone(), p0, process_noise: q, measurement_noise: r, inputs: self.inputs() }
     }
 
+    /// The `[estimator.NAME]` table of the estimator `name` (an empty one when the file has
+    /// none): its settings by the registry's keywords, read with [`KeywordTable::reader`].
+    #[must_use]
+    pub fn settings_table(&self, name: &str) -> KeywordTable {
+        match self.estimator_tables.iter().find(|(n, _)| *n == name) {
+            Some((_, t)) => t.clone(),
+            None => KeywordTable::absent(&format!("estimator.{name}"), &self.source.path),
+        }
+    }
+
+    /// What the file gives every estimator's settings: its sizes, state and input bounds, `[mhe]`
+    /// and `[ukf]` tables, and the limit of a moving-horizon window's memory it was read with.
+    #[must_use]
+    pub fn keyword_context(&self) -> KeywordContext<'_> {
+        KeywordContext {
+            dims: models::Dims { states: self.states(), inputs: self.inputs(), outputs: self.outputs() },
+            state_bounds: self.state_bounds.as_ref(),
+            input_range: self.input_range.as_ref(),
+            mhe: self.mhe.as_ref(),
+            ukf: self.ukf,
+            memory_limit: self.source.memory_limit,
+            raise_memory: "--mhe-memory-limit",
+        }
+    }
+
     fn estimator_error_at(&self, e: EstimatorError) -> Error {
         let key = match &e {
             EstimatorError::NotSymmetric { what }
@@ -346,18 +371,6 @@ fn key_of(what: &str) -> Option<&'static str> {
         "x0" | "x₀" => "x0",
         _ => return None,
     })
-}
-
-/// 1-based line and column (in characters) of a byte offset of `text`.
-pub(crate) fn line_col(text: &str, offset: usize) -> (u64, u64) {
-    let mut end = offset.min(text.len());
-    while !text.is_char_boundary(end) {
-        end -= 1;
-    }
-    let before = &text[..end];
-    let line = before.matches('\n').count() + 1;
-    let col = before[before.rfind('\n').map_or(0, |i| i + 1)..].chars().count() + 1;
-    (line as u64, col as u64)
 }
 
 /// Reading context: the file's text and name.
@@ -564,37 +577,73 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         .chain(f.ukf.as_ref().map(|v| ("ukf", v.span())))
     {
         let (line, column) = line_col(text, span.start);
-        keys.push((k, line, column));
+        keys.push((k.to_owned(), line, column));
     }
+    let table = |name: &str, t: &Spanned<SpannedTable>| KeywordTable::new(name, path, text, t.span(), t.get_ref());
+    let mut tables = Vec::new();
+    let mut keyword_cx = KeywordContext {
+        dims,
+        state_bounds: state_bounds.as_ref(),
+        input_range: input_range.as_ref(),
+        mhe: None,
+        ukf: None,
+        memory_limit: limits.mhe_memory_bytes,
+        raise_memory: "--mhe-memory-limit",
+    };
     let mhe = match &f.mhe {
-        Some(table) => {
-            let (settings, spans) = table
-                .get_ref()
-                .settings(x0.len(), r.nrows(), p, limits)
-                .map_err(|(span, message)| Error::at(cx.at(span), message))?;
-            let (line, column) = line_col(text, table.span().start);
-            keys.push(("mhe", line, column));
-            for (k, span) in spans {
-                let (line, column) = line_col(text, span.start);
-                keys.push((k, line, column));
-            }
+        Some(t) => {
+            let t = table("mhe", t);
+            let settings =
+                registry::read_moving_horizon("the moving-horizon estimators", &keyword_cx, &mut t.reader(&[]))?;
+            tables.push(t);
             Some(settings)
         }
         None => None,
     };
-    let ukf = f.ukf.as_ref().map(|t| {
-        let (given, default) = (t.get_ref(), UkfParams::default());
-        UkfParams {
-            alpha: given.alpha.unwrap_or(default.alpha),
-            beta: given.beta.unwrap_or(default.beta),
-            kappa: given.kappa.unwrap_or(default.kappa),
+    let ukf = match &f.ukf {
+        Some(t) => {
+            let t = table("ukf", t);
+            let params = registry::read_sigma_points("the unscented filters", &mut t.reader(&[]))?;
+            params.weights(n).map_err(|e| t.error("", &e.to_string()))?;
+            tables.push(t);
+            Some(params)
         }
-    });
-    if let (Some(params), Some(t)) = (&ukf, &f.ukf) {
-        params.weights(n).map_err(|e| Error::at(cx.at(t.span()), format!("`ukf`: {e}")))?;
+        None => None,
+    };
+    (keyword_cx.mhe, keyword_cx.ukf) = (mhe.as_ref(), ukf);
+    let mut estimator_tables = Vec::new();
+    for (name, t) in f.estimator.iter().flat_map(|e| e.get_ref()) {
+        let t = table(&format!("estimator.{name}"), t);
+        let Some(entry) = registry::entry(name) else {
+            let known: Vec<&str> = registry::ESTIMATORS.iter().map(|e| e.name).collect();
+            return Err(t.error("", &format!("no estimator is called {name:?} (one of: {})", known.join(", "))));
+        };
+        // Read once here so that a mistake is found when the file is read, whatever runs.
+        registry::read_settings(entry.settings, &format!("estimator {name}"), &keyword_cx, &mut t.reader(&[]))?;
+        estimator_tables.push((entry.name, t));
     }
-    let source = Source { path: path.to_owned(), keys };
-    let mut model = Model { dynamics, q, r, p0, x0, input_range, state_bounds, boxes, mhe, ukf, log: None, source };
+    for t in tables.iter().chain(estimator_tables.iter().map(|(_, t)| t)) {
+        keys.push((t.name().to_owned(), t.at().line, t.at().column));
+        for (k, at) in t.locations() {
+            keys.push((k, at.line, at.column));
+        }
+    }
+    let source = Source { path: path.to_owned(), keys, memory_limit: limits.mhe_memory_bytes };
+    let mut model = Model {
+        dynamics,
+        q,
+        r,
+        p0,
+        x0,
+        input_range,
+        state_bounds,
+        boxes,
+        mhe,
+        ukf,
+        log: None,
+        estimator_tables,
+        source,
+    };
     if let Some(t) = &f.log {
         let named = |given: Option<&[String]>, prefix: &str, len: usize| -> Vec<String> {
             match given {

@@ -10,8 +10,7 @@ use nalgebra::DMatrix;
 use serde::de::DeserializeOwned;
 use toml::Spanned;
 
-use crate::error::{Error, Location};
-use crate::model::line_col;
+use crate::error::{Error, Location, line_col};
 
 /// A settings file as read: its name and text (both empty without a file: the defaults).
 #[derive(Debug, Clone, Default)]

@@ -87,7 +87,7 @@ fn bad_settings_point_at_their_key() {
         ("w_lower = [-1e-3, -1e-2]", "w_lower = [-1e-3]", ":12:11", "expected 2 entries"),
         ("blocks = [5, 1]", "preset = \"rmhe-xx\"", ":10:10", "unknown value"),
         ("lambda_v = 10.0", "lambda_v = 10.0\nsolver = \"newton\"", ":12:10", "unknown value"),
-        ("horizon = 6", "horizon = 6\nmystery = 1", ":", "unknown field"),
+        ("horizon = 6", "horizon = 6\nmystery = 1", ":", "unknown setting(s) mystery"),
     ];
     for (i, (from, to, at, words)) in cases.into_iter().enumerate() {
         let text = format!("{MODEL}{}", TABLE.replace(from, to));

@@ -9,7 +9,6 @@ use pyo3::types::PyDict;
 
 use crate::estimator::{Estimator, Initial};
 use crate::model::Model;
-use crate::settings::FileSettings;
 
 /// `Estimator(name, …)` with `settings`, as the base of a convenience class.
 fn base(
@@ -29,7 +28,7 @@ fn base(
             given.set_item(*key, v)?;
         }
     }
-    Estimator::create(py, name, model, initial, Some(&given), FileSettings::default())
+    Estimator::create(py, name, model, initial, Some(&given), None)
 }
 
 /// A convenience class `$class`: `Estimator($name, model, ...)` with the keywords `$kw` of its
@@ -214,7 +213,7 @@ convenience_class! {
 ///     ``w_lower``, ``w_upper`` (length n, may be infinite) and ``v_lower``, ``v_upper`` (length m):
 ///     the noise boxes (required); ``horizon`` (default 6), ``preset`` (``"rmhe"``, ``"rmhe-op"``,
 ///     ``"rmhe-of"``) or ``blocks``, ``lambda_v`` (default 10), ``block_weighting``, ``arrival``
-///     (``"kalman"``, ``"h-infinity"`` with ``theta``), ``prior_mean``, ``window_solver``
+///     (``"kalman"``, ``"h-infinity"`` with ``theta``), ``prior_mean``, ``solver``
 ///     (``"coordinate-rotation"``, ``"exact-saddle"``), ``max_sweeps`` (at most 10 000), ``tolerance``,
 ///     ``memory_limit`` (bytes the window may take, default 256 MiB; a larger horizon is refused
 ///     before anything is allocated).

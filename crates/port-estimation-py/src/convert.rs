@@ -57,6 +57,22 @@ fn check_finite(what: &str, values: &[f64]) -> PyResult<()> {
     }
 }
 
+/// The numbers of an array-like of one dimension (a scalar, a row or a column too), in order;
+/// `±inf` and NaN are returned as they are, for the caller to judge.
+pub fn numbers(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    let a = array(obj, what)?;
+    let shape = a.shape().to_vec();
+    let ok = match shape.as_slice() {
+        [] | [_] => true,
+        [r, c] => *r == 1 || *c == 1,
+        _ => false,
+    };
+    if !ok {
+        return Err(value_error(format!("{what} must be a vector (one dimension), got shape {}", shape_text(&shape))));
+    }
+    Ok(a.as_array().iter().copied().collect())
+}
+
 /// A vector of length `len`: shape `(len,)`, a column `(len, 1)` or a row `(1, len)` (filterpy's
 /// column vectors), or a scalar when `len` is 1. Finite entries only.
 pub fn vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<DVector<f64>> {

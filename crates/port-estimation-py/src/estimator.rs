@@ -18,7 +18,7 @@ use crate::errors::{Guarded, broken, estimator_error, guard, no_panic, panicked,
 use crate::estimate::Estimate;
 use crate::model::{Model, SharedModel};
 use crate::run::{MAX_RUN_VALUES, RunOutput, RunResult, SLICE, run_log};
-use crate::settings::{FileSettings, settings};
+use crate::settings::settings;
 
 /// A state estimator from the registry, by name (``estimators()`` lists them).
 ///
@@ -148,7 +148,7 @@ impl Estimator {
         model: &Bound<'_, Model>,
         initial: Initial<'_, '_>,
         given: Option<&Bound<'_, PyDict>>,
-        file: FileSettings<'_>,
+        file: Option<&port_est::Model>,
     ) -> PyResult<Self> {
         no_panic(|| Self::create_unguarded(py, name, model, initial, given, file))
     }
@@ -159,7 +159,7 @@ impl Estimator {
         model: &Bound<'_, Model>,
         initial: Initial<'_, '_>,
         given: Option<&Bound<'_, PyDict>>,
-        file: FileSettings<'_>,
+        file: Option<&port_est::Model>,
     ) -> PyResult<Self> {
         let entry = registry::lookup(name).map_err(|e| estimator_error(py, &e, None))?;
         let shared = model.get().shared();
@@ -176,8 +176,8 @@ impl Estimator {
         let settings = settings(py, entry, d, given, file)?;
         let built = py.detach(|| guard(|| entry.build(setup.clone(), settings)));
         let inner = match built {
-            Guarded::Ran(Err(e)) if crate::errors::is_bad_input(&e) && file.source.is_some() => {
-                let message = file.source.map(|f| f.estimator_error(e).to_string()).unwrap_or_default();
+            Guarded::Ran(Err(e)) if crate::errors::is_bad_input(&e) && file.is_some() => {
+                let message = file.map(|f| f.estimator_error(e).to_string()).unwrap_or_default();
                 return Err(value_error(message));
             }
             Guarded::Ran(r) => r.map_err(|e| estimator_error(py, &e, None))?,
@@ -343,7 +343,7 @@ impl Estimator {
         R: Option<&Bound<'_, PyAny>>,
         settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        Self::create(py, name, model, Initial { x0, P0, Q, R }, settings, FileSettings::default())
+        Self::create(py, name, model, Initial { x0, P0, Q, R }, settings, None)
     }
 
     /// Predicts with the input ``u`` (zeros when None): the estimate of ``x[k+1]`` before its

@@ -14,7 +14,6 @@ use crate::convert::{mat_out, vec_out};
 use crate::errors::value_error;
 use crate::estimator::{Estimator, Initial};
 use crate::model::Model;
-use crate::settings::FileSettings;
 
 /// A ``port-est`` model file: the model (matrices or equations) and the estimators' data.
 ///
@@ -62,9 +61,10 @@ impl ModelFile {
 #[pymethods]
 impl ModelFile {
     /// Builds the registry estimator ``name`` from the file: its ``x0``, ``p0``, ``q``, ``r``, its
-    /// input range and ``[mhe]`` table where the estimator takes them; ``settings`` add to or
-    /// override them (``solver="faer-ipm"``, ``horizon=8``...). The default is the improved
-    /// set-membership filter, as for ``port-est filter``.
+    /// bounds, ``[mhe]`` and ``[ukf]`` tables where the estimator takes them and its
+    /// ``[estimator.NAME]`` table over them; ``settings`` add to or override them
+    /// (``solver="faer-ipm"``, ``horizon=8``...), read by the same code as ``port-est``'s tables.
+    /// The default is the improved set-membership filter, as for ``port-est filter``.
     #[pyo3(signature = (name = registry::names::SMF, **settings))]
     fn estimator(&self, py: Python<'_>, name: &str, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Estimator> {
         // The file's initial data as the estimator's kind reads them (boxes for the
@@ -78,14 +78,7 @@ impl ModelFile {
             mat_out(py, &setup.measurement_noise)?.into_any(),
         );
         let initial = Initial { x0: Some(&x0), P0: Some(&p0), Q: Some(&q), R: Some(&r) };
-        let file = FileSettings {
-            input_range: self.file.input_range.as_ref(),
-            state_bounds: self.file.state_bounds.as_ref(),
-            mhe: self.file.mhe.as_ref(),
-            ukf: self.file.ukf,
-            source: Some(&self.file),
-        };
-        Estimator::create(py, name, self.model.bind(py), initial, settings, file)
+        Estimator::create(py, name, self.model.bind(py), initial, settings, Some(&self.file))
     }
 
     /// Reads a ROS 2 bag (MCAP) as the file's ``[log]`` table maps it (the table ``port-est filter

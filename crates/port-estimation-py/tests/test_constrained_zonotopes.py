@@ -86,3 +86,46 @@ x0 = [0.0, 0.0]
     assert np.sum(runs[0].upper - runs[0].lower) < np.sum(runs[1].upper - runs[1].lower)
     with pytest.raises(ValueError, match="not both"):
         pe.parse_model(skewed + "w_radius = [0.1, 0.1]\n")
+
+
+MODEL_WITH_TABLE = """\
+a = [[1.0, 0.1], [0.0, 1.0]]
+b = [[0.0], [0.1]]
+c = [[1.0, 0.0]]
+q = [[1e-4, 0.0], [0.0, 1e-4]]
+r = [[1e-2]]
+p0 = [[1.0, 0.0], [0.0, 1.0]]
+x0 = [0.0, 0.0]
+x0_radius = [0.5, 0.5]
+w_radius = [0.01, 0.01]
+v_radius = [0.05]
+
+[estimator.czf]
+order = 2
+max_constraints = 1
+"""
+
+
+def test_a_model_file_s_estimator_table_is_read_and_keywords_go_over_it():
+    us = np.sin(0.1 * np.arange(60))[:, None]
+    x, ys = np.array([0.3, -0.2]), np.zeros((60, 1))
+    for k in range(60):
+        x = np.array([x[0] + 0.1 * x[1], x[1] + 0.1 * us[k, 0]])
+        ys[k] = x[0] + (0.05 if k % 5 < 2 else -0.05)
+    def generators(est):
+        return est.run(us, ys).details["generators"]
+
+    table = pe.parse_model(MODEL_WITH_TABLE, "m.toml")
+    # The table's order 2: 2 n = 4 generators at most; a keyword over it: 6 per state.
+    assert max(generators(table.estimator("czf"))) <= 4
+    assert max(generators(table.estimator("czf", order=6))) > 4
+    untabled = pe.parse_model(MODEL_WITH_TABLE.split("[estimator.czf]")[0], "m.toml")
+    assert max(generators(untabled.estimator("czf"))) > 4
+    # A mistake in the table is at its line and column, as port-est says it.
+    with pytest.raises(ValueError, match=r"m.toml:13:9: `estimator.czf.order`: must be a non-negative integer"):
+        pe.parse_model(MODEL_WITH_TABLE.replace("order = 2", 'order = "two"'), "m.toml")
+    # A keyword's mistake names the keyword; an unknown one names what the estimator takes.
+    with pytest.raises(ValueError, match="setting order must be a non-negative integer"):
+        table.estimator("czf", order="one")
+    with pytest.raises(ValueError, match=r"unknown setting\(s\) horizon for estimator czf \(it takes: order,"):
+        table.estimator("czf", horizon=3)

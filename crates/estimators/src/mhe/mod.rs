@@ -36,6 +36,6 @@ pub use nonlinear::{
 };
 pub use settings::{
     AlphaMap, ArrivalRecursion, BlockWeighting, BlockingPreset, InnerSolver, MheCost, MheSettings, PriorMean,
-    WindowSolver,
+    WindowSolver, memory_estimate,
 };
 pub use solve::{SolveCounters, WindowStatus};

@@ -369,3 +369,26 @@ fn check_box(what: &str, b: &(DVector<f64>, DVector<f64>), len: usize, finite: b
 fn invalid(message: String) -> EstimatorError {
     EstimatorError::InvalidConfiguration { estimator: "mhe", message }
 }
+
+/// The bytes a moving-horizon estimator allocates for a model with `n` states, `m` outputs and
+/// `p` inputs, a horizon of `horizon` disturbances in `blocks` blocks: an estimate from above of
+/// its buffers — the condensed window maps and rows, the Hessian-sized matrices of the window and
+/// the box-QP's factor (three, counted as four; six with `clarabel`, whose QP copies them), the
+/// ring buffers of the last `N + 2` steps. `None` when the count overflows `u128`.
+#[must_use]
+pub fn memory_estimate(n: usize, m: usize, p: usize, horizon: usize, blocks: usize, clarabel: bool) -> Option<u128> {
+    let [n, m, p, horizon, blocks] = [n, m, p, horizon, blocks].map(|v| v as u128);
+    let mul = |a: u128, b: u128| a.checked_mul(b);
+    let add = |a: u128, b: u128| a.checked_add(b);
+    // Unknowns of a full window: x_s and one disturbance per block (at most N + 1 vectors).
+    let nz = mul(n, add(1, horizon.max(blocks))?)?;
+    let samples = add(horizon, 1)?;
+    let ring = add(horizon, 2)?;
+    let hessians = mul(if clarabel { 6 } else { 4 }, mul(nz, nz)?)?;
+    let window = mul(mul(samples, nz)?, add(n, m)?)?;
+    let per_step = add(add(mul(2, mul(n, n)?)?, mul(m, n)?)?, add(mul(3, n)?, add(p, mul(4, m)?)?)?)?;
+    let rings = mul(ring, per_step)?;
+    let vectors = add(mul(12, nz)?, mul(samples, add(mul(4, m)?, mul(2, n)?)?)?)?;
+    let f64s = add(add(hessians, window)?, add(rings, vectors)?)?;
+    mul(f64s, 8)
+}

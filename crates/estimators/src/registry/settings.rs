@@ -188,6 +188,15 @@ impl EstimatorSettings {
     }
 }
 
+/// The nonlinear moving-horizon estimator's default: the paper's settings with sigma points valid
+/// for every `n` (the paper's `κ = −2` needs `n > 2`).
+pub(super) fn nonlinear_mhe_default() -> NonlinearMheSettings {
+    NonlinearMheSettings {
+        arrival: crate::mhe::NonlinearArrival::Ukf(UkfParams::default()),
+        ..NonlinearMheSettings::paper()
+    }
+}
+
 /// One keyword of an estimator's settings ([`SettingsKind::keywords`]): its name and meaning.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Keyword {
@@ -250,13 +259,7 @@ impl SettingsKind {
             SettingsKind::SetMembershipInputBox | SettingsKind::MovingHorizon => None,
             SettingsKind::Unscented => Some(EstimatorSettings::Unscented(UkfParams::default())),
             SettingsKind::NonlinearMovingHorizon => {
-                // The paper's settings with sigma points valid for every n (the paper's κ = −2
-                // needs n > 2).
-                let settings = NonlinearMheSettings {
-                    arrival: crate::mhe::NonlinearArrival::Ukf(UkfParams::default()),
-                    ..NonlinearMheSettings::paper()
-                };
-                Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(settings)))
+                Some(EstimatorSettings::NonlinearMovingHorizon(Box::new(nonlinear_mhe_default())))
             }
             SettingsKind::FuzzyAdaptive => Some(EstimatorSettings::FuzzyAdaptive(Box::default())),
             SettingsKind::ConstrainedZonotope => {
@@ -314,10 +317,14 @@ impl SettingsKind {
             k("blocks", "disturbance block lengths, instead of a preset"),
             k("block_weighting", "a block's weight: length (default) or unit"),
             k("lambda_v", "weight of the measurement-noise term (default 10)"),
+            k("alpha", "the weight as alpha in (0, 1), instead of lambda_v (lambda_v = 1/(1 - alpha))"),
+            k("alpha_map", "how alpha gives lambda_v: one-over-one-minus-alpha (default) or one-over-alpha"),
+            k("output_constraint", "also constrain each window's output residuals to V (default false)"),
             k("arrival", "the arrival cost's recursion: kalman (default) or h-infinity"),
             k("theta", "the h-infinity arrival cost's level (default 0.9)"),
             k("prior_mean", "the arrival cost's mean: smoothed (default) or filtered"),
-            k("window_solver", "coordinate-rotation (default) or exact-saddle"),
+            k("solver", "how the window is solved: coordinate-rotation (default) or exact-saddle"),
+            k("inner", "the coordinate rotation's inner QP solver: active-set (default) or clarabel"),
             k("max_sweeps", "most min/max sweeps of the coordinate rotation (default 10)"),
             TOLERANCE,
             MEMORY,

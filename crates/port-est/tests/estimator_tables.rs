@@ -1,0 +1,156 @@
+//! `[estimator.NAME]` tables of a model file: each estimator's settings by the registry's
+//! keywords, read by the registry's one settings reader (the one that reads Python's keyword
+//! arguments), every mistake at the key's `file:line:column`.
+
+use std::path::{Path, PathBuf};
+
+use estimators::registry::{self, EstimatorSettings};
+use port_est::{FilterOptions, filter, read_model};
+
+const MODEL: &str = "\
+a  = [[1.0, 0.1], [0.0, 1.0]]
+b  = [[0.0], [0.1]]
+c  = [[1.0, 0.0]]
+q  = [[1e-4, 0.0], [0.0, 1e-4]]
+r  = [[1e-2]]
+p0 = [[1.0, 0.0], [0.0, 1.0]]
+x0 = [0.0, 0.0]
+";
+
+fn dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-estimator-tables").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn model_error(name: &str, text: &str) -> String {
+    let d = dir(name);
+    std::fs::write(d.join("m.toml"), text).unwrap();
+    read_model(&d.join("m.toml")).unwrap_err().to_string()
+}
+
+/// Runs `estimator` over 60 steps of a simulated run (the output measured with noise on the
+/// boundary of `±0.05`); the output file's text.
+fn run(name: &str, model: &str, estimator: &str, solver: Option<&str>) -> Result<String, String> {
+    let d = dir(name);
+    let mut data = String::from("k,u1,y1\n");
+    let mut x = [0.3, -0.2];
+    for k in 0..60 {
+        let u = (0.1 * k as f64).sin();
+        x = [x[0] + 0.1 * x[1], x[1] + 0.1 * u];
+        let y = x[0] + if k % 5 < 2 { 0.05 } else { -0.05 };
+        data.push_str(&format!("{k},{u},{y}\n"));
+    }
+    std::fs::write(d.join("model.toml"), model).unwrap();
+    std::fs::write(d.join("data.csv"), data).unwrap();
+    let options = FilterOptions {
+        model: d.join("model.toml"),
+        input: d.join("data.csv"),
+        output: d.join("out.csv"),
+        estimator: estimator.into(),
+        solver: solver.map(Into::into),
+        gaps: port_est::GapPolicy::Error,
+        exact_columns: false,
+        status: port_est::StatusPolicy::Warn,
+        checks: None,
+        on_error: port_est::OnError::Discard,
+        limits: port_est::Limits::default(),
+        copy_topics: Default::default(),
+    };
+    filter(&options).map_err(|e| e.to_string())?;
+    Ok(std::fs::read_to_string(d.join("out.csv")).unwrap())
+}
+
+/// The values of the column `name` of an output file.
+fn column(out: &str, name: &str) -> Vec<f64> {
+    let mut lines = out.lines();
+    let j = lines.next().unwrap().split(',').position(|c| c == name).unwrap();
+    lines.map(|l| l.split(',').nth(j).unwrap().parse().unwrap()).collect()
+}
+
+#[test]
+fn every_keyword_of_every_estimator_is_read_from_its_table() {
+    // A value of no keyword's type (an inline table): refused as that key's value, at its line
+    // and column, never as an unknown setting.
+    let mut checked = 0;
+    for entry in registry::ESTIMATORS {
+        for keyword in entry.settings.keywords() {
+            // (The moving-horizon estimators' noise boxes from an `[mhe]` table.)
+            let mhe = "[mhe]\nw_lower = [-1.0, -1.0]\nw_upper = [1.0, 1.0]\nv_lower = [-1.0]\nv_upper = [1.0]\n";
+            let text = format!("{MODEL}{mhe}[estimator.{}]\n{} = {{ wrong = 1 }}\n", entry.name, keyword.name);
+            let e = model_error("keyword", &text);
+            let column = keyword.name.len() + 4;
+            let at = format!("m.toml:14:{column}: `estimator.{}.{}`: must be ", entry.name, keyword.name);
+            assert!(e.contains(&at), "{} {}: {e}", entry.name, keyword.name);
+            checked += 1;
+        }
+    }
+    assert!(checked > 40, "{checked}");
+}
+
+#[test]
+fn mistakes_in_a_table_are_at_their_key() {
+    let e = model_error("name", &format!("{MODEL}[estimator.czff]\norder = 3\n"));
+    assert!(e.contains("`estimator.czff`: no estimator is called \"czff\" (one of: "), "{e}");
+    assert!(e.contains("m.toml:8:1:"), "{e}");
+    let e = model_error("unknown", &format!("{MODEL}[estimator.czf]\norder = 3\nordr = 4\n"));
+    assert!(e.contains("m.toml:10:8: `estimator.czf.ordr`: unknown setting(s) ordr for estimator czf"), "{e}");
+    assert!(e.contains("(it takes: order, max_constraints,"), "{e}");
+    let e = model_error("choice", &format!("{MODEL}[estimator.smf]\ninconsistency = \"maybe\"\n"));
+    assert!(e.contains("m.toml:9:17: `estimator.smf.inconsistency`: unknown value \"maybe\" (one of: error,"), "{e}");
+    let e = model_error("length", &format!("{MODEL}[estimator.czf]\nx_lower = [0.0]\nx_upper = [1.0]\n"));
+    assert!(e.contains("m.toml:9:11: `estimator.czf.x_lower`: expected 2 entries, found 1"), "{e}");
+    let e = model_error("half", &format!("{MODEL}[estimator.czf]\nx_upper = [1.0, 1.0]\n"));
+    assert!(e.contains("m.toml:9:11: `estimator.czf.x_upper`: give both x_lower and x_upper, or neither"), "{e}");
+    let e = model_error("kf", &format!("{MODEL}[estimator.kf]\nhorizon = 3\n"));
+    assert!(e.contains("`estimator.kf.horizon`: unknown setting(s) horizon for estimator kf (it takes: no settings)"));
+}
+
+#[test]
+fn a_table_sets_its_estimator_and_the_command_line_solver_goes_over_it() {
+    let sets = "x0_radius = [0.5, 0.5]\nw_radius = [0.01, 0.01]\nv_radius = [0.05]\n";
+    let default = run("czf-default", &format!("{MODEL}{sets}"), "czf", None).unwrap();
+    let table = "[estimator.czf]\norder = 2\nmax_constraints = 1\n";
+    let order_two = run("czf-order", &format!("{MODEL}{sets}{table}"), "czf", None).unwrap();
+    let (many, few) = (column(&default, "generators"), column(&order_two, "generators"));
+    assert!(many.iter().any(|&g| g > 4.0), "{many:?}");
+    assert!(few.iter().all(|&g| g <= 4.0), "order 2 keeps 2 n = 4 generators: {few:?}");
+    // The table of another estimator changes nothing here.
+    let other = format!("{MODEL}{sets}{}", table.replace("czf", "czf-nl"));
+    let other = run("czf-other", &other, "czf", None).unwrap();
+    assert_eq!(other, default);
+    // `--solver` over the table's: an SDP backend named in the file, the exact method on the
+    // command line, gives the exact method's run bit for bit.
+    let exact = run("smf", MODEL, "smf", None).unwrap();
+    let table = format!("{MODEL}[estimator.smf]\nsolver = \"{}\"\n", registry::SmfSolver::names()[1]);
+    assert_eq!(run("smf-cli", &table, "smf", Some("two-multiplier")).unwrap(), exact);
+    // The paper's filter alone, without the interval observer: another run.
+    let alone = run("smf-alone", &format!("{MODEL}[estimator.smf]\ninterval_observer = false\n"), "smf", None);
+    assert_ne!(alone.unwrap(), exact);
+}
+
+#[test]
+fn a_moving_horizon_estimator_takes_its_boxes_from_its_own_table() {
+    let boxes = "w_lower = [-1e-2, -1e-2]\nw_upper = [1e-2, 1e-2]\nv_lower = [-0.06]\nv_upper = [0.06]\n";
+    let e = run("rmhe-none", MODEL, "rmhe", None).unwrap_err();
+    assert!(e.contains("needs an `[mhe]` table"), "{e}");
+    let shared = run("rmhe-mhe", &format!("{MODEL}[mhe]\n{boxes}horizon = 4\n"), "rmhe", None).unwrap();
+    let own = run("rmhe-own", &format!("{MODEL}[estimator.rmhe]\n{boxes}horizon = 4\n"), "rmhe", None).unwrap();
+    assert_eq!(own, shared);
+    // The estimator's table over the shared one.
+    let over = format!("{MODEL}[mhe]\n{boxes}horizon = 4\n[estimator.rmhe]\nhorizon = 5\n");
+    assert_ne!(run("rmhe-over", &over, "rmhe", None).unwrap(), shared);
+    // Read the same as Rust's typed settings.
+    let d = dir("typed");
+    std::fs::write(d.join("m.toml"), &over).unwrap();
+    let model = read_model(&d.join("m.toml")).unwrap();
+    let table = model.settings_table("rmhe");
+    let entry = registry::entry("rmhe").unwrap();
+    let read = registry::read_settings(entry.settings, "rmhe", &model.keyword_context(), &mut table.reader(&[]));
+    let Ok(Some(EstimatorSettings::MovingHorizon(s))) = read else { panic!("{read:?}") };
+    let mut expected = model.mhe.clone().unwrap();
+    expected.horizon = 5;
+    expected.blocks = vec![1; 5];
+    assert_eq!(*s, expected);
+}
