@@ -9,7 +9,7 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimators::registry::{self, EstimatorEntry, EstimatorSettings, SettingsKind, SmfSolver};
+use estimators::registry::{self, EstimatorEntry, EstimatorSettings, SmfSolver};
 use estimators::{AnyEstimator, DataChecks, EstimatorError};
 use nalgebra::DVector;
 
@@ -259,22 +259,16 @@ fn run_on<R: Read>(
 }
 
 /// Why `entry` cannot run on `model` (`None` when it can): a capability the model lacks, or
-/// settings the model file does not give.
+/// settings the model file does not give ([`SettingsKind::needs`](registry::SettingsKind::needs)).
 #[must_use]
 pub fn why_not(model: &Model, entry: &EstimatorEntry) -> Option<String> {
     if let Some(why) = model.lacks(entry.needs) {
         return Some(why);
     }
-    let table = model.settings_table(entry.name);
-    match entry.settings {
-        SettingsKind::SetMembershipInputBox if model.input_range.is_none() && !table.has("u_lower") => {
-            Some("needs the input range `u_lower`, `u_upper` in the model file".into())
-        }
-        SettingsKind::MovingHorizon if model.mhe.is_none() && !table.has("w_lower") => {
-            Some("needs an `[mhe]` table (at least the noise boxes `w_lower`, `w_upper`, `v_lower`, `v_upper`)".into())
-        }
-        _ => None,
-    }
+    let need = entry.settings.needs()?;
+    read_settings(model, entry, None)
+        .is_err()
+        .then(|| format!("needs {need} in the model file (or in its `[estimator.{}]` table)", entry.name))
 }
 
 /// The settings of `entry`: the model file's (its `[estimator.NAME]` table over its `[mhe]`,
@@ -288,9 +282,18 @@ fn settings(
     if let Some(why) = why_not(model, entry) {
         return Err(Error::File {
             path: model.path().to_owned(),
-            message: format!("--estimator {} {why} (see README)", entry.name),
+            message: format!("--estimator {} {why}", entry.name),
         });
     }
+    read_settings(model, entry, solver)
+}
+
+/// The settings of `entry` as [`settings`] reads them, without naming what is missing.
+fn read_settings(
+    model: &Model,
+    entry: &EstimatorEntry,
+    solver: Option<&SmfSolver>,
+) -> Result<Option<EstimatorSettings>, Error> {
     let overrides: Vec<(&'static str, String)> = solver.map(|s| ("solver", s.name().to_owned())).into_iter().collect();
     let table = model.settings_table(entry.name);
     let name = format!("estimator {}", entry.name);
@@ -510,7 +513,10 @@ mod tests {
     #[test]
     fn option_and_model_errors_say_what_to_change() {
         let e = run(MODEL, &ramp(3), "yang-li", None).unwrap_err().to_string();
-        assert!(e.starts_with("m.toml: --estimator yang-li needs the input range `u_lower`"), "{e}");
+        assert!(
+            e.starts_with("m.toml: --estimator yang-li needs the input range u_lower, u_upper in the model"),
+            "{e}"
+        );
         let e = run(MODEL, &ramp(3), "nope", None).unwrap_err().to_string();
         assert!(e.starts_with("unknown estimator \"nope\" (known: smf, kf"), "{e}");
         let e = run(MODEL, &ramp(3), "kf", Some("faer-ipm")).unwrap_err().to_string();

@@ -211,10 +211,8 @@ pub fn write_estimators(w: &mut dyn Write) -> io::Result<()> {
         if e.settings.uses_smf_solver() {
             notes.push("uses --solver".into());
         }
-        match e.settings {
-            registry::SettingsKind::SetMembershipInputBox => notes.push("needs u_lower, u_upper".into()),
-            registry::SettingsKind::MovingHorizon => notes.push("needs an [mhe] table".into()),
-            _ => {}
+        if let Some(need) = e.settings.needs() {
+            notes.push(format!("needs {need}"));
         }
         if e.extra_measurements > 0 {
             notes.push(format!("{} extra measurement columns", e.extra_measurements));

@@ -134,7 +134,7 @@ fn a_table_sets_its_estimator_and_the_command_line_solver_goes_over_it() {
 fn a_moving_horizon_estimator_takes_its_boxes_from_its_own_table() {
     let boxes = "w_lower = [-1e-2, -1e-2]\nw_upper = [1e-2, 1e-2]\nv_lower = [-0.06]\nv_upper = [0.06]\n";
     let e = run("rmhe-none", MODEL, "rmhe", None).unwrap_err();
-    assert!(e.contains("needs an `[mhe]` table"), "{e}");
+    assert!(e.contains("needs the noise boxes w_lower, w_upper, v_lower, v_upper in the model file"), "{e}");
     let shared = run("rmhe-mhe", &format!("{MODEL}[mhe]\n{boxes}horizon = 4\n"), "rmhe", None).unwrap();
     let own = run("rmhe-own", &format!("{MODEL}[estimator.rmhe]\n{boxes}horizon = 4\n"), "rmhe", None).unwrap();
     assert_eq!(own, shared);

@@ -74,7 +74,7 @@ fn both_moving_horizon_estimators_run_with_a_table() {
 #[test]
 fn a_missing_table_is_named() {
     let e = run("missing", MODEL, "rmhe").unwrap_err();
-    assert!(e.contains("needs an `[mhe]` table"), "{e}");
+    assert!(e.contains("needs the noise boxes w_lower, w_upper, v_lower, v_upper in the model file"), "{e}");
 }
 
 #[test]

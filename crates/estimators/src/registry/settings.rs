@@ -374,6 +374,17 @@ impl SettingsKind {
         }
     }
 
+    /// What these settings need that has no default (only the user knows it), in words with the
+    /// keywords that give it; `None` when every setting has a default.
+    #[must_use]
+    pub fn needs(self) -> Option<&'static str> {
+        match self {
+            SettingsKind::SetMembershipInputBox => Some("the input range u_lower, u_upper"),
+            SettingsKind::MovingHorizon => Some("the noise boxes w_lower, w_upper, v_lower, v_upper"),
+            _ => None,
+        }
+    }
+
     /// Whether the settings include a solver of (29) (`--solver`).
     #[must_use]
     pub fn uses_smf_solver(self) -> bool {
