@@ -413,7 +413,9 @@ mod tests {
         let cli =
             Cli::try_parse_from(["port-est", "filter", "-m", "m.toml", "--input", "d.csv", "-o", "o.csv"]).unwrap();
         let Command::Filter(a) = cli.command else { panic!("not filter") };
-        assert_eq!((a.estimator.as_str(), a.solver), ("smf", None));
+        assert_eq!((a.estimator.as_str(), a.solver.as_deref()), ("smf", None));
+        // The library's constructor has the command line's defaults.
+        assert_eq!(crate::FilterOptions::from(a), crate::FilterOptions::new("m.toml", "d.csv", "o.csv"));
         let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d", "-o", "o", "-e", "nope"]).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::InvalidValue);
         let e = Cli::try_parse_from(["port-est", "filter", "-m", "m", "-i", "d"]).unwrap_err();

@@ -54,6 +54,31 @@ pub struct FilterOptions {
     pub copy_topics: CopyTopics,
 }
 
+impl FilterOptions {
+    /// `port-est filter --model MODEL --input INPUT --output OUTPUT` with the command line's
+    /// defaults: the improved set-membership filter (`smf`) with its exact solver, a gap in `k`
+    /// an error, extra columns ignored, unclean steps a warning, the estimator's own data checks,
+    /// nothing kept on error, the default limits, no topics copied. Change a field with struct
+    /// update syntax: `FilterOptions { estimator: "czf".into(), ..FilterOptions::new(m, i, o) }`.
+    #[must_use]
+    pub fn new(model: impl Into<PathBuf>, input: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
+        Self {
+            model: model.into(),
+            input: input.into(),
+            output: output.into(),
+            estimator: registry::names::SMF.to_owned(),
+            solver: None,
+            gaps: GapPolicy::Error,
+            exact_columns: false,
+            status: StatusPolicy::Warn,
+            checks: None,
+            on_error: OnError::Discard,
+            limits: Limits::default(),
+            copy_topics: CopyTopics::None,
+        }
+    }
+}
+
 /// Which topics of the input bag `port-est filter` copies into its bag output (`--output
 /// est.mcap --copy-topics`), so that one file holds the data and the estimates.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use estimators::DataChecks;
-use port_est::{Error, FilterOptions, GapPolicy, Limits, OnError, StatusPolicy, filter};
+use port_est::{Error, FilterOptions, OnError, filter};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../ros-bag/tests/fixtures").join(name)
@@ -55,18 +55,9 @@ wz = { topic = "/speed_json", field = "gyro[2]" }
 
 fn options(d: &Path, input: PathBuf, output: &str, estimator: &str) -> FilterOptions {
     FilterOptions {
-        model: d.join("m.toml"),
-        input,
-        output: d.join(output),
         estimator: estimator.into(),
-        solver: None,
-        gaps: GapPolicy::Error,
-        exact_columns: false,
-        status: StatusPolicy::Warn,
         checks: Some(DataChecks::OFF),
-        on_error: OnError::Discard,
-        limits: Limits::default(),
-        copy_topics: Default::default(),
+        ..FilterOptions::new(d.join("m.toml"), input, d.join(output))
     }
 }
 

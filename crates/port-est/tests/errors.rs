@@ -25,20 +25,7 @@ fn setup(name: &str, model: &str, data: &str) -> (PathBuf, FilterOptions) {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("model.toml"), model).unwrap();
     std::fs::write(dir.join("data.csv"), data).unwrap();
-    let options = FilterOptions {
-        model: dir.join("model.toml"),
-        input: dir.join("data.csv"),
-        output: dir.join("out.csv"),
-        estimator: "smf".into(),
-        solver: None,
-        gaps: port_est::GapPolicy::Error,
-        exact_columns: false,
-        status: port_est::StatusPolicy::Warn,
-        checks: None,
-        on_error: port_est::OnError::Discard,
-        limits: port_est::Limits::default(),
-        copy_topics: Default::default(),
-    };
+    let options = FilterOptions::new(dir.join("model.toml"), dir.join("data.csv"), dir.join("out.csv"));
     (dir, options)
 }
 

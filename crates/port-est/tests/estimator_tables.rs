@@ -45,18 +45,9 @@ fn run(name: &str, model: &str, estimator: &str, solver: Option<&str>) -> Result
     std::fs::write(d.join("model.toml"), model).unwrap();
     std::fs::write(d.join("data.csv"), data).unwrap();
     let options = FilterOptions {
-        model: d.join("model.toml"),
-        input: d.join("data.csv"),
-        output: d.join("out.csv"),
         estimator: estimator.into(),
         solver: solver.map(Into::into),
-        gaps: port_est::GapPolicy::Error,
-        exact_columns: false,
-        status: port_est::StatusPolicy::Warn,
-        checks: None,
-        on_error: port_est::OnError::Discard,
-        limits: port_est::Limits::default(),
-        copy_topics: Default::default(),
+        ..FilterOptions::new(d.join("model.toml"), d.join("data.csv"), d.join("out.csv"))
     };
     filter(&options).map_err(|e| e.to_string())?;
     Ok(std::fs::read_to_string(d.join("out.csv")).unwrap())

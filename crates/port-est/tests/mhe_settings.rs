@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use port_est::{FilterOptions, GapPolicy, filter};
+use port_est::{FilterOptions, filter};
 
 const MODEL: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
 b  = [[0.0], [0.01]]
@@ -37,22 +37,10 @@ fn run(name: &str, model: &str, estimator: &str) -> Result<u64, String> {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/filter/data.csv");
     let output = d.join(format!("{name}.csv"));
     let _ = std::fs::remove_file(&output);
-    let r = filter(&FilterOptions {
-        model: model_path,
-        input: data,
-        output: output.clone(),
-        estimator: estimator.into(),
-        solver: None,
-        gaps: GapPolicy::Error,
-        exact_columns: false,
-        status: port_est::StatusPolicy::Warn,
-        checks: None,
-        on_error: port_est::OnError::Discard,
-        limits: port_est::Limits::default(),
-        copy_topics: Default::default(),
-    })
-    .map(|s| s.tally.steps)
-    .map_err(|e| e.to_string());
+    let r =
+        filter(&FilterOptions { estimator: estimator.into(), ..FilterOptions::new(model_path, data, output.clone()) })
+            .map(|s| s.tally.steps)
+            .map_err(|e| e.to_string());
     if r.is_err() {
         assert!(!output.exists(), "{name}: no output on error");
     }
@@ -119,18 +107,9 @@ fn a_measurement_outside_the_boxes_stops_the_run_at_its_line_or_is_flagged() {
     let model = d.join("outlier.toml");
     std::fs::write(&model, format!("{MODEL}{TABLE}")).unwrap();
     let options = |estimator: &str, checks: Option<estimators::DataChecks>| FilterOptions {
-        model: model.clone(),
-        input: input.clone(),
-        output: d.join(format!("outlier-{estimator}.csv")),
         estimator: estimator.into(),
-        solver: None,
-        gaps: GapPolicy::Error,
-        exact_columns: false,
-        status: port_est::StatusPolicy::Warn,
         checks,
-        on_error: port_est::OnError::Discard,
-        limits: port_est::Limits::default(),
-        copy_topics: Default::default(),
+        ..FilterOptions::new(model.clone(), input.clone(), d.join(format!("outlier-{estimator}.csv")))
     };
     for estimator in ["rmhe", "mhe"] {
         let e = filter(&options(estimator, None)).unwrap_err().to_string();

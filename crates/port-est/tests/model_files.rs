@@ -55,18 +55,13 @@ fn the_vessel_log_is_tracked_by_the_nonlinear_estimators_of_its_model_file() {
     for estimator in ["ekf", "ukf", "mhe-ukf"] {
         let output = dir.join(format!("{estimator}.csv"));
         let summary = filter(&FilterOptions {
-            model: root.join("examples/models/vessel.toml"),
-            input: root.join("examples/vessel/data.csv"),
-            output: output.clone(),
             estimator: estimator.to_owned(),
-            solver: None,
-            gaps: port_est::GapPolicy::Error,
-            exact_columns: false,
             status: port_est::StatusPolicy::Error,
-            checks: None,
-            on_error: port_est::OnError::Discard,
-            limits: port_est::Limits::default(),
-            copy_topics: Default::default(),
+            ..FilterOptions::new(
+                root.join("examples/models/vessel.toml"),
+                root.join("examples/vessel/data.csv"),
+                output.clone(),
+            )
         })
         .unwrap_or_else(|e| panic!("{estimator}: {e}"));
         assert_eq!(summary.tally.steps, truth.len() as u64, "{estimator}");
@@ -111,18 +106,13 @@ fn a_builtin_vehicle_is_its_compiled_model_with_its_files_noise() {
     let run = |model: &str, estimator: &str| {
         let output = dir.join(format!("{}-{estimator}.csv", model.replace([':', '/'], "-")));
         filter(&FilterOptions {
-            model: if model.starts_with("builtin:") { model.into() } else { root.join(model) },
-            input: root.join("examples/vessel/data.csv"),
-            output: output.clone(),
             estimator: estimator.to_owned(),
-            solver: None,
-            gaps: port_est::GapPolicy::Error,
-            exact_columns: false,
             status: port_est::StatusPolicy::Error,
-            checks: None,
-            on_error: port_est::OnError::Discard,
-            limits: port_est::Limits::default(),
-            copy_topics: Default::default(),
+            ..FilterOptions::new(
+                if model.starts_with("builtin:") { model.into() } else { root.join(model) },
+                root.join("examples/vessel/data.csv"),
+                output.clone(),
+            )
         })
         .unwrap_or_else(|e| panic!("{model} {estimator}: {e}"));
         csv(&output).1

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
 use port_est::truck::{TruckOptions, truck};
-use port_est::{Error, FilterOptions, GapPolicy, Limits, OnError, StatusPolicy, filter};
+use port_est::{Error, FilterOptions, Limits, OnError, StatusPolicy, filter};
 
 const MODEL: &str = include_str!("../../../examples/filter/model.toml");
 const DATA: &str = include_str!("../../../examples/filter/data.csv");
@@ -38,20 +38,7 @@ fn with_outlier(line: usize) -> String {
 }
 
 fn filter_options(d: &Path, on_error: OnError, status: StatusPolicy) -> FilterOptions {
-    FilterOptions {
-        model: d.join("m.toml"),
-        input: d.join("d.csv"),
-        output: d.join("out.csv"),
-        estimator: "smf".into(),
-        solver: None,
-        gaps: GapPolicy::Error,
-        exact_columns: false,
-        status,
-        checks: None,
-        on_error,
-        limits: Limits::default(),
-        copy_topics: Default::default(),
-    }
+    FilterOptions { status, on_error, ..FilterOptions::new(d.join("m.toml"), d.join("d.csv"), d.join("out.csv")) }
 }
 
 #[test]

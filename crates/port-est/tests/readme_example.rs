@@ -40,18 +40,13 @@ fn readme_filter_example_runs_for_every_estimator() {
         let label = format!("{}{}", info.name, solver.map_or(String::new(), |s| format!("-{s}")));
         let output = dir.join(format!("{label}.csv"));
         let summary = filter(&FilterOptions {
-            model: root.join("examples/filter/model.toml"),
-            input: root.join("examples/filter/data.csv"),
-            output: output.clone(),
             estimator: info.name.to_owned(),
             solver: solver.map(str::to_owned),
-            gaps: port_est::GapPolicy::Error,
-            exact_columns: false,
-            status: port_est::StatusPolicy::Warn,
-            checks: None,
-            on_error: port_est::OnError::Discard,
-            limits: port_est::Limits::default(),
-            copy_topics: Default::default(),
+            ..FilterOptions::new(
+                root.join("examples/filter/model.toml"),
+                root.join("examples/filter/data.csv"),
+                output.clone(),
+            )
         })
         .unwrap_or_else(|e| panic!("{label}: {e}"));
         assert_eq!(summary.tally.steps, 40, "{label}");

@@ -97,20 +97,7 @@ fn sums_and_sweeps_of_user_numbers_are_checked() {
 }
 
 fn filter_options(d: &Path, model: &Path, input: &Path, gaps: GapPolicy, limits: Limits) -> FilterOptions {
-    FilterOptions {
-        model: model.to_owned(),
-        input: input.to_owned(),
-        output: d.join("out.csv"),
-        estimator: "smf".into(),
-        solver: None,
-        gaps,
-        exact_columns: false,
-        status: StatusPolicy::Warn,
-        checks: None,
-        on_error: OnError::Discard,
-        limits,
-        copy_topics: Default::default(),
-    }
+    FilterOptions { gaps, limits, ..FilterOptions::new(model.to_owned(), input.to_owned(), d.join("out.csv")) }
 }
 
 #[test]

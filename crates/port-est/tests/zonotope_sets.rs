@@ -27,18 +27,8 @@ fn options(d: &Path, model: &str, data: &str) -> FilterOptions {
     std::fs::write(d.join("model.toml"), model).unwrap();
     std::fs::write(d.join("data.csv"), data).unwrap();
     FilterOptions {
-        model: d.join("model.toml"),
-        input: d.join("data.csv"),
-        output: d.join("out.csv"),
         estimator: "czf".into(),
-        solver: None,
-        gaps: port_est::GapPolicy::Error,
-        exact_columns: false,
-        status: port_est::StatusPolicy::Warn,
-        checks: None,
-        on_error: port_est::OnError::Discard,
-        limits: port_est::Limits::default(),
-        copy_topics: Default::default(),
+        ..FilterOptions::new(d.join("model.toml"), d.join("data.csv"), d.join("out.csv"))
     }
 }
 
