@@ -357,7 +357,7 @@ fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver
         | EstimatorError::UnknownEstimator { .. }
         | EstimatorError::MissingSetting { .. }
         | EstimatorError::WrongSettings { .. } => Error::Estimator(e),
-        e => model.estimator_error(e),
+        e => model.estimator_error_for(entry.name, e),
     })
 }
 

@@ -277,7 +277,15 @@ impl Model {
     /// file's terms: at the `file:line:column` of the key it is about when that can be told.
     #[must_use]
     pub fn estimator_error(&self, e: EstimatorError) -> Error {
-        self.estimator_error_at(e)
+        self.estimator_error_at(None, e)
+    }
+
+    /// As [`Model::estimator_error`] for the complaint of the estimator `name` while it was built:
+    /// a setting it refuses is reported at its key in `[estimator.NAME]` when the table gives it
+    /// (else in `[mhe]`).
+    #[must_use]
+    pub fn estimator_error_for(&self, name: &str, e: EstimatorError) -> Error {
+        self.estimator_error_at(Some(name), e)
     }
 
     /// The initial data an estimator of `kind` reads from the file. A constrained-zonotope
@@ -329,25 +337,35 @@ impl Model {
         }
     }
 
-    fn estimator_error_at(&self, e: EstimatorError) -> Error {
+    fn estimator_error_at(&self, estimator: Option<&str>, e: EstimatorError) -> Error {
         let key = match &e {
             EstimatorError::NotSymmetric { what }
             | EstimatorError::NotPositiveDefinite { what }
             | EstimatorError::NotPositiveSemidefinite { what }
             | EstimatorError::NonFinite { what, .. }
-            | EstimatorError::DimensionMismatch { what, .. } => key_of(what),
-            EstimatorError::InvalidInputBounds { .. } => Some("u_lower"),
+            | EstimatorError::DimensionMismatch { what, .. } => key_of(what).map(str::to_owned),
+            EstimatorError::InvalidInputBounds { .. } => Some("u_lower".to_owned()),
             _ => None,
         };
+        // A setting in the estimator's own table before the same setting in `[mhe]`.
+        let own = |key: &str| {
+            let setting = key.strip_prefix("mhe.").unwrap_or(key);
+            estimator.map(|name| format!("estimator.{name}.{setting}")).into_iter().chain([key.to_owned()])
+        };
         let key = match (&e, key) {
+            (EstimatorError::InvalidSetting { what, .. }, None) => {
+                // `UKF alpha` → `alpha`, `x_lower/x_upper` → `x_lower`.
+                let setting = what.rsplit(' ').next().unwrap_or(what).split('/').next().unwrap_or(what);
+                own(setting).find(|k| self.key_location(k).is_some())
+            }
             (EstimatorError::InvalidConfiguration { message, .. }, None) => crate::mhe_table::key_of_message(message)
                 .iter()
-                .copied()
-                .chain(["mhe"])
+                .flat_map(|k| own(k))
+                .chain(["mhe".to_owned()])
                 .find(|k| self.key_location(k).is_some()),
             (_, key) => key,
         };
-        match key.and_then(|k| self.key_location(k).map(|at| (k, at))) {
+        match key.and_then(|k| self.key_location(&k).map(|at| (k, at))) {
             Some((k, at)) => Error::At { at, message: format!("`{k}`: {e}") },
             None => Error::File {
                 path: self.source.path.clone(),

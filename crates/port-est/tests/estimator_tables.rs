@@ -145,3 +145,15 @@ fn a_moving_horizon_estimator_takes_its_boxes_from_its_own_table() {
     expected.blocks = vec![1; 5];
     assert_eq!(*s, expected);
 }
+
+#[test]
+fn a_setting_the_estimator_refuses_is_at_its_key() {
+    let sets = "x0_radius = [0.5, 0.5]\nw_radius = [0.01, 0.01]\nv_radius = [0.05]\n";
+    // Order 1 leaves no room for the default 8 constraints: the filter refuses it when built.
+    let text = format!("{MODEL}{sets}[estimator.czf]\nmax_constraints = 8\norder = 1\n");
+    let e = run("refused", &text, "czf", None).unwrap_err();
+    assert!(
+        e.contains("model.toml:12:19: `estimator.czf.max_constraints`: invalid setting max_constraints = 8"),
+        "{e}"
+    );
+}

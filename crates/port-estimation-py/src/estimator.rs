@@ -177,7 +177,7 @@ impl Estimator {
         let built = py.detach(|| guard(|| entry.build(setup.clone(), settings)));
         let inner = match built {
             Guarded::Ran(Err(e)) if crate::errors::is_bad_input(&e) && file.is_some() => {
-                let message = file.map(|f| f.estimator_error(e).to_string()).unwrap_or_default();
+                let message = file.map(|f| f.estimator_error_for(entry.name, e).to_string()).unwrap_or_default();
                 return Err(value_error(message));
             }
             Guarded::Ran(r) => r.map_err(|e| estimator_error(py, &e, None))?,

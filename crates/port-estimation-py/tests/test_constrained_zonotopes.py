@@ -129,3 +129,7 @@ def test_a_model_file_s_estimator_table_is_read_and_keywords_go_over_it():
         table.estimator("czf", order="one")
     with pytest.raises(ValueError, match=r"unknown setting\(s\) horizon for estimator czf \(it takes: order,"):
         table.estimator("czf", horizon=3)
+    # A setting of the table that the filter refuses when built: at its key too.
+    too_many = pe.parse_model(MODEL_WITH_TABLE.replace("max_constraints = 1", "max_constraints = 8"), "m.toml")
+    with pytest.raises(ValueError, match=r"m.toml:14:19: `estimator.czf.max_constraints`: invalid setting"):
+        too_many.estimator("czf")
