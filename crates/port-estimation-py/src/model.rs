@@ -214,6 +214,33 @@ impl Model {
         }
     }
 
+    /// A Jacobian with `rows` rows at `(x, u)` by `evaluate` (`F` or `H`); ValueError for a model
+    /// without Jacobians.
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        u: Option<&Bound<'py, PyAny>>,
+        rows: usize,
+        evaluate: impl FnOnce(
+            &dyn models::DifferentiableModel,
+            &DVector<f64>,
+            &DVector<f64>,
+            &mut DMatrix<f64>,
+        ) -> Result<(), models::ModelError>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        no_panic(|| {
+            let (x, u) = (self.state(x)?, self.input(u)?);
+            let m = self
+                .inner
+                .differentiable()
+                .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
+            let mut out = DMatrix::zeros(rows, self.model_dims().states);
+            evaluate(m, &x, &u, &mut out).map_err(model_error)?;
+            mat_out(py, &out)
+        })
+    }
+
     fn state(&self, x: &Bound<'_, PyAny>) -> PyResult<DVector<f64>> {
         vector(x, "x", self.model_dims().states)
     }
@@ -413,17 +440,7 @@ impl Model {
         x: &Bound<'py, PyAny>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        no_panic(|| {
-            let (x, u) = (self.state(x)?, self.input(u)?);
-            let d = self.model_dims();
-            let m = self
-                .inner
-                .differentiable()
-                .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
-            let mut out = DMatrix::zeros(d.states, d.states);
-            m.f_jacobian(&x, &u, &mut out).map_err(model_error)?;
-            mat_out(py, &out)
-        })
+        self.jacobian(py, x, u, self.model_dims().states, |m, x, u, out| m.f_jacobian(x, u, out))
     }
 
     /// The Jacobian ``H = dh/dx`` at ``(x, u)`` (m×n); ValueError for a model without Jacobians.
@@ -434,17 +451,7 @@ impl Model {
         x: &Bound<'py, PyAny>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        no_panic(|| {
-            let (x, u) = (self.state(x)?, self.input(u)?);
-            let d = self.model_dims();
-            let m = self
-                .inner
-                .differentiable()
-                .ok_or_else(|| value_error("this model has no Jacobians (capability \"discrete\")"))?;
-            let mut out = DMatrix::zeros(d.outputs, d.states);
-            m.h_jacobian(&x, &u, &mut out).map_err(model_error)?;
-            mat_out(py, &out)
-        })
+        self.jacobian(py, x, u, self.model_dims().outputs, |m, x, u, out| m.h_jacobian(x, u, out))
     }
 
     /// Rebuilds a model from its recipe (pickling).
