@@ -334,6 +334,7 @@ impl Model {
             ukf: self.ukf,
             memory_limit: self.source.memory_limit,
             raise_memory: "--mhe-memory-limit",
+            memory_ceiling: self.source.memory_limit,
         }
     }
 
@@ -607,6 +608,7 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         ukf: None,
         memory_limit: limits.mhe_memory_bytes,
         raise_memory: "--mhe-memory-limit",
+        memory_ceiling: limits.mhe_memory_bytes,
     };
     let mhe = match &f.mhe {
         Some(t) => {

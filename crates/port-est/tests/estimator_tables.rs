@@ -157,3 +157,18 @@ fn a_setting_the_estimator_refuses_is_at_its_key() {
         "{e}"
     );
 }
+
+#[test]
+fn a_file_cannot_lift_the_memory_limit_it_is_read_under() {
+    let boxes = "w_lower = [-1e-2, -1e-2]\nw_upper = [1e-2, 1e-2]\nv_lower = [-0.06]\nv_upper = [0.06]\n";
+    for table in ["mhe", "estimator.rmhe"] {
+        let text = format!("{MODEL}[{table}]\n{boxes}memory_limit = 1000000000000\nhorizon = 20000\n");
+        let e = model_error("ceiling", &text);
+        assert!(e.contains(&format!("m.toml:13:16: `{table}.memory_limit`: 1000000000000 bytes is above")), "{e}");
+        assert!(e.contains("the limit of 256 MiB this file is read under (raise that with --mhe-memory-limit)"), "{e}");
+    }
+    // Below the command line's limit it lowers it.
+    let text = format!("{MODEL}[mhe]\n{boxes}memory_limit = 1000\n");
+    let e = model_error("lowered", &text);
+    assert!(e.contains("more than the limit of 1000 B"), "{e}");
+}

@@ -163,9 +163,14 @@ pub fn settings(
             registry::read_settings(entry.settings, &name, &cx, &mut kwargs)
         }
         Some(model) => {
-            let cx = KeywordContext { raise_memory: RAISE_MEMORY, ..model.keyword_context() };
-            let table = model.settings_table(entry.name);
             let given = kwargs.unread();
+            // A caller's own memory_limit keyword is theirs to set; a file's stays under the limit
+            // the file is read with, as in port-est.
+            let mut cx = KeywordContext { raise_memory: RAISE_MEMORY, ..model.keyword_context() };
+            if given.iter().any(|k| k == "memory_limit") {
+                cx.memory_ceiling = u64::MAX;
+            }
+            let table = model.settings_table(entry.name);
             let mut source = OverFile { kwargs, given, file: table.reader(&[]) };
             registry::read_settings(entry.settings, &name, &cx, &mut source)
         }

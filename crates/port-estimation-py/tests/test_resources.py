@@ -126,3 +126,17 @@ def test_other_threads_run_and_read_while_a_long_run_goes_on():
     runner.join()
     centres = result["run"].center
     assert any(np.array_equal(x, c) for c in centres[: len(centres) // 2]), x
+
+
+def test_a_model_file_cannot_lift_its_memory_limit_but_a_keyword_can():
+    text = (ROOT / "examples" / "models" / "car.toml").read_text()
+    assert "[mhe]" in text
+    lifted = text.replace("[mhe]\n", "[mhe]\nmemory_limit = 1000000000000\n", 1)
+    with pytest.raises(ValueError, match=r"`mhe.memory_limit`: 1000000000000 bytes is above the limit of 256 MiB"):
+        pe.parse_model(lifted, "car.toml")
+    mf = pe.read_model(ROOT / "examples" / "models" / "car.toml")
+    with pytest.raises(ValueError, match="more than the limit of 256 MiB"):
+        mf.estimator("rmhe", horizon=800)
+    # The caller's keyword lifts it (refused here only by the window's own size, nothing built).
+    with pytest.raises(ValueError, match=r"more than the limit of 1 GiB"):
+        mf.estimator("rmhe", horizon=100_000, memory_limit=1 << 30)

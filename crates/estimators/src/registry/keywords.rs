@@ -105,6 +105,10 @@ pub struct KeywordContext<'a> {
     /// How the user raises the memory limit, for the refusal's message (`memory_limit=...`,
     /// `--mhe-memory-limit`).
     pub raise_memory: &'static str,
+    /// The most a `memory_limit` keyword may ask for: `u64::MAX` where the caller sets it
+    /// (Python's keyword arguments), the command line's limit for a file's tables, so that a
+    /// file cannot lift the limit its reader runs it under.
+    pub memory_ceiling: u64,
 }
 
 impl KeywordContext<'_> {
@@ -119,6 +123,7 @@ impl KeywordContext<'_> {
             ukf: None,
             memory_limit: DEFAULT_MEMORY_LIMIT,
             raise_memory: "the keyword memory_limit",
+            memory_ceiling: u64::MAX,
         }
     }
 }
@@ -312,10 +317,20 @@ pub fn show_bytes(bytes: u128) -> String {
 
 /// The `memory_limit` keyword, or the context's.
 fn memory_limit<S: KeywordSource>(source: &mut S, cx: &KeywordContext<'_>) -> Result<u64, S::Error> {
-    Ok(match source.count("memory_limit")? {
-        Some(v) => u64::try_from(v).unwrap_or(u64::MAX),
-        None => cx.memory_limit,
-    })
+    match source.count("memory_limit")? {
+        Some(v) => match u64::try_from(v) {
+            Ok(v) if v <= cx.memory_ceiling => Ok(v),
+            _ => Err(source.refuse(
+                "memory_limit",
+                format!(
+                    "{v} bytes is above the limit of {} this file is read under (raise that with {})",
+                    show_bytes(u128::from(cx.memory_ceiling)),
+                    cx.raise_memory
+                ),
+            )),
+        },
+        None => Ok(cx.memory_limit),
+    }
 }
 
 /// `inconsistency`: `error` (the default), `flag` or `restart`.
