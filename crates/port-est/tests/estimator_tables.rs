@@ -172,3 +172,13 @@ fn a_file_cannot_lift_the_memory_limit_it_is_read_under() {
     let e = model_error("lowered", &text);
     assert!(e.contains("more than the limit of 1000 B"), "{e}");
 }
+
+#[test]
+fn a_rule_file_named_in_a_table_is_read_beside_the_model_file() {
+    let d = dir("fis");
+    std::fs::write(d.join("m.toml"), format!("{MODEL}[estimator.fkf]\nfis = \"rules/none.toml\"\n")).unwrap();
+    let e = read_model(&d.join("m.toml")).unwrap_err().to_string();
+    let beside = d.join("rules/none.toml");
+    assert!(e.contains("m.toml:9:7: `estimator.fkf.fis`: "), "{e}");
+    assert!(e.contains(&beside.display().to_string()), "the path beside the model file: {e}");
+}
