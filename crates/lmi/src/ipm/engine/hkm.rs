@@ -254,7 +254,7 @@ impl Workspace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::{Block, Entry, SdpProblem};
+    use crate::problem::{Block, SdpProblem};
 
     /// The HKM Schur matrix (group by group, and with the whole-block grouping) against the
     /// definition `tr(Fᵢ Y Fⱼ X⁻¹)` summed over dense matrices.
@@ -262,21 +262,8 @@ mod tests {
     fn hkm_schur_matches_definition() {
         let n = 9;
         let m = 5;
-        let mut seed = 11u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
-        let mut entries = vec![];
-        for mat in 0..=m {
-            for col in 0..n {
-                for row in 0..=col {
-                    if (row * 3 + col * 5 + mat * 7) % (mat + 3) == 0 {
-                        entries.push(Entry { mat, block: 0, row, col, value: rnd() });
-                    }
-                }
-            }
-        }
+        let mut rnd = crate::ipm::engine::test_data::lcg(11);
+        let entries = crate::ipm::engine::test_data::sparse_entries(n, m, 3, &mut rnd);
         let p = SdpProblem::new(vec![Block::Psd(n)], vec![1.0; m], entries.clone()).unwrap();
         let mut ws = Workspace::new(&p, u128::MAX).unwrap();
         let unit = crate::scaling::Equilibration::IDENTITY;

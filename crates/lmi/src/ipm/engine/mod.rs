@@ -17,6 +17,37 @@ mod start;
 mod step_length;
 mod termination;
 
+/// Problems for the engine's unit tests.
+#[cfg(test)]
+mod test_data {
+    use crate::problem::Entry;
+
+    /// Pseudo-random numbers in `[−0.5, 0.5)` from a 64-bit linear congruential generator.
+    pub(super) fn lcg(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+    }
+
+    /// The upper-triangle entries of `F₀ … F_m` (one `n × n` block), sparse by a fixed pattern:
+    /// entry `(row, col)` of `F_mat` is present when `3 row + 5 col + 7 mat` is a multiple of
+    /// `mat + spacing`; values from `rnd`, drawn in the order mat, col, row.
+    pub(super) fn sparse_entries(n: usize, m: usize, spacing: usize, rnd: &mut impl FnMut() -> f64) -> Vec<Entry> {
+        let mut entries = vec![];
+        for mat in 0..=m {
+            for col in 0..n {
+                for row in 0..=col {
+                    if (row * 3 + col * 5 + mat * 7) % (mat + spacing) == 0 {
+                        entries.push(Entry { mat, block: 0, row, col, value: rnd() });
+                    }
+                }
+            }
+        }
+        entries
+    }
+}
+
 use std::time::Instant;
 
 use faer::dyn_stack::MemStack;

@@ -306,28 +306,15 @@ impl Workspace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::{Block, Entry, SdpProblem};
+    use crate::problem::{Block, SdpProblem};
 
     /// All three Schur strategies give the same matrix.
     #[test]
     fn schur_strategies_agree() {
         let n = 6;
-        let mut entries = vec![];
-        let mut seed = 7u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut rnd = crate::ipm::engine::test_data::lcg(7);
         let m = 5;
-        for mat in 0..=m {
-            for col in 0..n {
-                for row in 0..=col {
-                    if (row * 3 + col * 5 + mat * 7) % (mat + 2) == 0 {
-                        entries.push(Entry { mat, block: 0, row, col, value: rnd() });
-                    }
-                }
-            }
-        }
+        let entries = crate::ipm::engine::test_data::sparse_entries(n, m, 2, &mut rnd);
         let p = SdpProblem::new(vec![Block::Psd(n)], vec![1.0; m], entries).unwrap();
         let mut ws = Workspace::new(&p, u128::MAX).unwrap();
         let unit = crate::scaling::Equilibration::IDENTITY;
