@@ -302,6 +302,45 @@ fn only_the_registry_dispatches_on_estimator_names() {
     );
 }
 
+/// Lines of library code (before any `#[cfg(test)]`) that name a variant of the registry's
+/// settings types.
+fn settings_variants(text: &str) -> Vec<usize> {
+    let mut hits = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim_start();
+        if t.starts_with("#[cfg(test)]") {
+            break;
+        }
+        let code = t.split("//").next().unwrap_or("");
+        if code.contains("SettingsKind::") || code.contains("EstimatorSettings::") {
+            hits.push(i + 1);
+        }
+    }
+    hits
+}
+
+/// The command line and the Python package read every estimator's settings through the
+/// registry (`registry::read_settings`, `SettingsKind::needs`, `EstimatorSettings::smf_solver`):
+/// neither names a kind of settings, so a new kind touches the registry only. (`xtask` builds the
+/// papers' typed settings on purpose.)
+#[test]
+fn only_the_registry_matches_on_kinds_of_settings() {
+    let mut files = Vec::new();
+    for dir in ["crates/port-est/src", "crates/port-estimation-py/src"] {
+        rust_files(&root().join(dir), &mut files);
+    }
+    let hits: Vec<String> = files
+        .iter()
+        .flat_map(|f| {
+            let lines = settings_variants(&std::fs::read_to_string(f).unwrap());
+            lines.into_iter().map(move |l| format!("{}:{l}", f.display()))
+        })
+        .collect();
+    assert!(hits.is_empty(), "kinds of settings named outside the registry:\n{}", hits.join("\n"));
+    assert_eq!(settings_variants("let k = SettingsKind::None; // SettingsKind::Unscented\n"), vec![1]);
+    assert!(settings_variants("// EstimatorSettings::None\n#[cfg(test)]\nEstimatorSettings::None").is_empty());
+}
+
 #[test]
 fn the_name_scanner_sees_what_it_should() {
     let text = "fn a() {\n    let x = registry::build(\"kf\", s, None);\n    let p = \"kf_scripted\";\n    if id == names::KF {}\n    matches!(n, \"rmhe\" | \"mhe\");\n}\n#[cfg(test)]\nmod t { fn f() { build(\"kf\") } }\n";

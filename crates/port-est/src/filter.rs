@@ -335,10 +335,7 @@ fn build(model: &Model, entry: &'static EstimatorEntry, solver: Option<SmfSolver
         )));
     }
     let settings = settings(model, entry, solver.as_ref())?;
-    let sdp = match &settings {
-        Some(EstimatorSettings::SetMembership(s) | EstimatorSettings::SetMembershipInputBox(s, _)) => Some(&s.solver),
-        _ => None,
-    };
+    let sdp = settings.as_ref().and_then(|s| s.smf_solver());
     if let Some(SmfSolver::Sdp { backend, .. }) = sdp
         && model.states() > MAX_SDP_STATES
     {

@@ -172,6 +172,15 @@ pub enum EstimatorSettings {
 }
 
 impl EstimatorSettings {
+    /// How (29) is solved, for the settings of a set-membership filter; `None` for the others.
+    #[must_use]
+    pub fn smf_solver(&self) -> Option<&SmfSolver> {
+        match self {
+            EstimatorSettings::SetMembership(s) | EstimatorSettings::SetMembershipInputBox(s, _) => Some(&s.solver),
+            _ => None,
+        }
+    }
+
     /// Which kind of settings this is.
     #[must_use]
     pub fn kind(&self) -> SettingsKind {
