@@ -78,9 +78,20 @@ pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRang
     let mut e = vec![Interval::new(-1.0, 1.0); ng];
     let mut r = vec![Interval::ENTIRE; ng];
     let mut terms = vec![Interval::ZERO; ng];
+    // A row whose factors have not narrowed since its last visit began would imply what it
+    // implied then, which the ranges already hold: it is skipped (the same ranges, fewer visits).
+    // `tick` counts events; `seen[i]` is the tick at which row i's last visit began,
+    // `narrowed[j]` the tick at which `E_j` last narrowed (after the visit's start even when the
+    // visit itself narrowed it: its sums were taken before).
+    let (mut tick, mut narrowed, mut seen) = (1_usize, vec![1_usize; ng], vec![0_usize; nc]);
     for _ in 0..PROPAGATION_SWEEPS {
         let mut changed = false;
         for i in 0..nc {
+            if (0..ng).all(|k| narrowed[k] <= seen[i] || a[(i, k)] == 0.0) {
+                continue;
+            }
+            tick += 1;
+            seen[i] = tick;
             // Σ_k a_ik E_k as a lower and an upper sum of the terms' bounds.
             let (mut lo, mut hi) = (0.0, 0.0);
             for k in 0..ng {
@@ -105,6 +116,8 @@ pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRang
                 if e_new != e[j] {
                     changed = true;
                     e[j] = e_new;
+                    tick += 1;
+                    narrowed[j] = tick;
                 }
             }
         }
