@@ -7,7 +7,7 @@
 mod common;
 
 use carrier_dynamics::{CarrierModel, CarrierParams};
-use estimators::Setup;
+use common::LinearSystem;
 use estimators::smf::UpdateProblem;
 use estimators::smf::UpdateSolution;
 use estimators::{EstimatorError, SdpUpdateSolver, SetMembershipFilter, StepModel, TwoMultiplierSolver, UpdateSolver};
@@ -15,30 +15,22 @@ use lmi::SolverSettings;
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
 
+/// One step's problem: the system with its prior, the input and the measurement.
 struct Case {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    c: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    p: DMatrix<f64>,
-    x: DVector<f64>,
+    sys: LinearSystem,
     u: DVector<f64>,
     y: DVector<f64>,
 }
 
+impl std::ops::Deref for Case {
+    type Target = LinearSystem;
+    fn deref(&self) -> &LinearSystem {
+        &self.sys
+    }
+}
+
 fn one_step<S: UpdateSolver>(case: &Case, solver: S) -> estimators::SetEstimate {
-    let mut f = SetMembershipFilter::with_solver(
-        Setup {
-            x0: case.x.clone(),
-            p0: case.p.clone(),
-            process_noise: case.q.clone(),
-            measurement_noise: case.r.clone(),
-            inputs: case.u.len(),
-        },
-        solver,
-    )
-    .unwrap();
+    let mut f = SetMembershipFilter::with_solver(case.setup(), solver).unwrap();
     // Random data need not respect the noise bounds: this test compares solvers, not data.
     f.set_inconsistency_policy(estimators::InconsistencyPolicy::FlagAndContinue);
     f.step(&StepModel::new(&case.a, &case.b, &case.c), &case.u, &case.y).unwrap().clone()
@@ -46,13 +38,15 @@ fn one_step<S: UpdateSolver>(case: &Case, solver: S) -> estimators::SetEstimate 
 
 fn reference_case() -> Case {
     Case {
-        a: common::reference_a(),
-        b: DMatrix::zeros(4, 1),
-        c: common::reference_c(),
-        q: DMatrix::identity(4, 4) * 0.01,
-        r: DMatrix::identity(3, 3) * 0.05,
-        p: DMatrix::identity(4, 4) * 0.5,
-        x: DVector::zeros(4),
+        sys: LinearSystem {
+            a: common::reference_a(),
+            b: DMatrix::zeros(4, 1),
+            c: common::reference_c(),
+            q: DMatrix::identity(4, 4) * 0.01,
+            r: DMatrix::identity(3, 3) * 0.05,
+            p0: DMatrix::identity(4, 4) * 0.5,
+            x0: DVector::zeros(4),
+        },
         u: DVector::zeros(1),
         y: DVector::zeros(3),
     }
@@ -101,13 +95,15 @@ fn paper_degenerate_case_returns_the_measurement_ellipsoid() {
     let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
     let (a, b, c) = d.to_dynamic();
     let case = Case {
-        a,
-        b,
-        c,
-        q: DMatrix::identity(4, 4) * 5.0,
-        r: DMatrix::identity(4, 4) * 8.0,
-        p: DMatrix::identity(4, 4) * 10.0,
-        x: DVector::from_vec(vec![-3.0, -8.0, 2.0, 10.0]),
+        sys: LinearSystem {
+            a,
+            b,
+            c,
+            q: DMatrix::identity(4, 4) * 5.0,
+            r: DMatrix::identity(4, 4) * 8.0,
+            p0: DMatrix::identity(4, 4) * 10.0,
+            x0: DVector::from_vec(vec![-3.0, -8.0, 2.0, 10.0]),
+        },
         u: DVector::from_element(8, 0.1),
         y: DVector::from_vec(vec![3.0, -8.0, 2.0, 10.0]),
     };
@@ -169,10 +165,10 @@ impl UpdateSolver for KeepSolverGain {
 fn useless_measurement_gives_the_tau3_zero_edge() {
     // R huge: τ₃ = 0, L = 0, P = X₁/τ₁ + Q/τ₂ with the trace-optimal split.
     let mut case = reference_case();
-    case.r = DMatrix::identity(3, 3) * 1e8;
+    case.sys.r = DMatrix::identity(3, 3) * 1e8;
     let e = one_step(&case, TwoMultiplierSolver::new());
     assert_eq!(e.report.tau[2], 0.0, "{:?}", e.report);
-    let x1 = &case.a * &case.p * case.a.transpose();
+    let x1 = &case.a * &case.p0 * case.a.transpose();
     let (s1, s2) = (x1.trace().sqrt(), case.q.trace().sqrt());
     let t1 = s1 / (s1 + s2);
     assert!((e.report.tau[0] - t1).abs() < 1e-8);
@@ -192,13 +188,15 @@ fn random_systems_agree_with_every_sdp_backend() {
         let radius = if i % 2 == 0 { 0.9 } else { 1.3 };
         let (qc, rc) = if i % 4 < 2 { (3.0, 3.0) } else { (1e4, 1e3) };
         let case = Case {
-            a: common::random_a(&mut rng, n, radius),
-            b: common::gauss(&mut rng, n, 2),
-            c: common::gauss(&mut rng, m, n),
-            q: common::spd(&mut rng, n, 0.5, qc),
-            r: common::spd(&mut rng, m, 0.3, rc),
-            p: common::spd(&mut rng, n, 2.0, 10.0),
-            x: common::gauss(&mut rng, n, 1).column(0).into(),
+            sys: LinearSystem {
+                a: common::random_a(&mut rng, n, radius),
+                b: common::gauss(&mut rng, n, 2),
+                c: common::gauss(&mut rng, m, n),
+                q: common::spd(&mut rng, n, 0.5, qc),
+                r: common::spd(&mut rng, m, 0.3, rc),
+                p0: common::spd(&mut rng, n, 2.0, 10.0),
+                x0: common::gauss(&mut rng, n, 1).column(0).into(),
+            },
             u: common::gauss(&mut rng, 2, 1).column(0).into(),
             y: common::gauss(&mut rng, m, 1).column(0).into(),
         };
@@ -260,20 +258,10 @@ fn warm_started_sdp_solves_agree_with_cold_ones_in_fewer_iterations() {
     warm.prepare(4, 3).unwrap();
     cold.prepare(4, 3).unwrap();
     let (mut w_out, mut c_out) = (UpdateSolution::new(4, 3), UpdateSolution::new(4, 3));
-    let mut exact = SetMembershipFilter::with_solver(
-        Setup {
-            x0: case.x.clone(),
-            p0: case.p.clone(),
-            process_noise: case.q.clone(),
-            measurement_noise: case.r.clone(),
-            inputs: 1,
-        },
-        TwoMultiplierSolver::new(),
-    )
-    .unwrap();
+    let mut exact = SetMembershipFilter::with_solver(case.setup(), TwoMultiplierSolver::new()).unwrap();
     let model = StepModel::new(&case.a, &case.b, &case.c);
     let unit = |k: usize, n: usize| DVector::from_fn(n, |i, _| ((k * 5 + 3 * i) as f64 * 0.9).sin()).normalize();
-    let (mut x, mut p, mut x_hat) = (DVector::zeros(4), case.p.clone(), case.x.clone());
+    let (mut x, mut p, mut x_hat) = (DVector::zeros(4), case.p0.clone(), case.x0.clone());
     let (mut warm_iterations, mut cold_iterations) = (0, 0);
     for k in 0..40 {
         let x1 = &case.a * &p * case.a.transpose();

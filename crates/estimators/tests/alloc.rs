@@ -45,14 +45,7 @@ fn steps_do_not_allocate_after_warm_up() {
             DMatrix::identity(m, m) * 0.05,
         );
 
-        let mut kf = KalmanFilter::new(Setup {
-            x0: x0.clone(),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: 2,
-        })
-        .unwrap();
+        let mut kf = KalmanFilter::new(common::setup(&x0, &p0, &q, &r, 2)).unwrap();
         kf.step(&model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {
@@ -61,14 +54,7 @@ fn steps_do_not_allocate_after_warm_up() {
         });
         assert_eq!(n, 0, "Kalman step allocated (m = {m})");
 
-        let mut smf = SetMembershipFilter::new(Setup {
-            x0: x0.clone(),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: 2,
-        })
-        .unwrap();
+        let mut smf = SetMembershipFilter::new(common::setup(&x0, &p0, &q, &r, 2)).unwrap();
         smf.step(&model, &u, &ys[0]).unwrap();
         let (_, n) = count(|| {
             for y in &ys {
@@ -94,13 +80,7 @@ fn steps_do_not_allocate_after_warm_up() {
         let (_, n) = count(|| smf.step(&model, &u, &ys[1]).map(|e| e.report.fallback.is_some()));
         assert_eq!(n, 0, "fallback step allocated (m = {m})");
         let mut yl = yang_li::without_input(
-            Setup {
-                x0: x0.clone(),
-                p0: p0.clone(),
-                process_noise: q.clone(),
-                measurement_noise: r.clone(),
-                inputs: DVector::from_vec(vec![-1.0, -1.0]).len(),
-            },
+            common::setup(&x0, &p0, &q, &r, DVector::from_vec(vec![-1.0, -1.0]).len()),
             &DVector::from_vec(vec![-1.0, -1.0]),
             &DVector::from_vec(vec![1.0, 1.0]),
             TwoMultiplierSolver::new(),
@@ -153,13 +133,13 @@ fn sdp_step_with_the_default_backend_does_not_allocate_after_setup() {
         let settings = lmi::SolverSettings { warm_start, ..lmi::SolverSettings::default() };
         let solver = SdpUpdateSolver::by_name(lmi::DEFAULT_BACKEND, settings).unwrap();
         let mut smf = SetMembershipFilter::with_solver(
-            Setup {
-                x0: DVector::zeros(4),
-                p0: DMatrix::identity(4, 4) * 0.5,
-                process_noise: DMatrix::identity(4, 4) * 0.01,
-                measurement_noise: DMatrix::identity(3, 3) * 0.05,
-                inputs: 2,
-            },
+            common::setup(
+                &DVector::zeros(4),
+                &(DMatrix::identity(4, 4) * 0.5),
+                &(DMatrix::identity(4, 4) * 0.01),
+                &(DMatrix::identity(3, 3) * 0.05),
+                2,
+            ),
             solver,
         )
         .unwrap();
@@ -187,13 +167,7 @@ fn registry_estimators_and_noise_setters_do_not_allocate_after_warm_up() {
     let ys: Vec<DVector<f64>> = (0..50).map(|k| DVector::from_fn(3, |i, _| ((k * 7 + i) as f64).sin() * 0.1)).collect();
     let q = DMatrix::identity(4, 4) * 0.01;
     let r = DMatrix::identity(3, 3) * 0.05;
-    let setup = Setup {
-        x0: DVector::zeros(4),
-        p0: DMatrix::identity(4, 4) * 0.5,
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 2,
-    };
+    let setup = common::setup(&DVector::zeros(4), &(DMatrix::identity(4, 4) * 0.5), &q, &r, 2);
     for entry in registry::ESTIMATORS {
         // The nonlinear MHE allocates per update (its window problem), the constrained-zonotope
         // filters per step (their sets change size; their LPs are built per hull); every other
@@ -234,22 +208,9 @@ fn registry_estimators_and_noise_setters_do_not_allocate_after_warm_up() {
         assert_eq!(n, 0, "{} through the registry allocated", entry.name);
     }
     // In-place noise setters: no allocation, and a rejected matrix changes nothing.
-    let mut kf = KalmanFilter::new(Setup {
-        x0: DVector::zeros(4),
-        p0: DMatrix::identity(4, 4),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 2,
-    })
-    .unwrap();
-    let mut smf = SetMembershipFilter::new(Setup {
-        x0: DVector::zeros(4),
-        p0: DMatrix::identity(4, 4),
-        process_noise: q.clone(),
-        measurement_noise: r,
-        inputs: 2,
-    })
-    .unwrap();
+    let mut kf = KalmanFilter::new(common::setup(&DVector::zeros(4), &DMatrix::identity(4, 4), &q, &r, 2)).unwrap();
+    let mut smf =
+        SetMembershipFilter::new(common::setup(&DVector::zeros(4), &DMatrix::identity(4, 4), &q, &r, 2)).unwrap();
     let q2 = &q * 2.0;
     let r2 = DMatrix::identity(3, 3) * 0.07;
     let (ok, n) = count(|| kf.set_noise(&q2, &r2).is_ok() && smf.set_noise(&q2, &r2).is_ok());
@@ -272,13 +233,13 @@ fn ekf_step_on_the_truck_does_not_allocate() {
     let params = TruckParams::digest_preset();
     let model = TruckEkfModel::paper(params).unwrap();
     let v = 70.0 / 3.6;
-    let mut ekf = estimators::ExtendedKalmanFilter::new(Setup {
-        x0: DVector::from_vec(vec![v, 0.0, 0.0]),
-        p0: DMatrix::identity(3, 3) * 0.01,
-        process_noise: DMatrix::identity(3, 3) * 1e-7,
-        measurement_noise: DMatrix::identity(3, 3) * 1e-3,
-        inputs: model.dims().inputs,
-    })
+    let mut ekf = estimators::ExtendedKalmanFilter::new(common::setup(
+        &DVector::from_vec(vec![v, 0.0, 0.0]),
+        &(DMatrix::identity(3, 3) * 0.01),
+        &(DMatrix::identity(3, 3) * 1e-7),
+        &(DMatrix::identity(3, 3) * 1e-3),
+        model.dims().inputs,
+    ))
     .unwrap();
     let u = TruckInput::free_rolling(0.01, v, params.rolling_radius).to_dvector();
     let y = DVector::from_vec(vec![v, 0.1, 0.01]);
@@ -302,13 +263,13 @@ fn inconsistent_steps_do_not_allocate_under_any_policy() {
     let y = DVector::from_vec(vec![0.01, 0.0, -0.01]);
     let outlier = DVector::from_vec(vec![50.0, 0.0, 0.0]);
     for policy in [InconsistencyPolicy::Error, InconsistencyPolicy::FlagAndContinue, InconsistencyPolicy::Restart] {
-        let mut f = SetMembershipFilter::new(Setup {
-            x0: DVector::zeros(4),
-            p0: DMatrix::identity(4, 4) * 0.5,
-            process_noise: DMatrix::identity(4, 4) * 0.01,
-            measurement_noise: DMatrix::identity(3, 3) * 0.05,
-            inputs: 2,
-        })
+        let mut f = SetMembershipFilter::new(common::setup(
+            &DVector::zeros(4),
+            &(DMatrix::identity(4, 4) * 0.5),
+            &(DMatrix::identity(4, 4) * 0.01),
+            &(DMatrix::identity(3, 3) * 0.05),
+            2,
+        ))
         .unwrap();
         f.set_inconsistency_policy(policy);
         f.step(&model, &u, &y).unwrap();
@@ -323,13 +284,13 @@ fn nonlinear_set_membership_steps_do_not_allocate() {
     use models::DiscreteModel;
     use vessel_dynamics::{DiscreteVessel, VesselParams};
     let vessel = DiscreteVessel::paper(VesselParams::paper()).unwrap();
-    let mut smf = estimators::NonlinearSetMembershipFilter::new(Setup {
-        x0: DVector::zeros(6),
-        p0: DMatrix::identity(6, 6),
-        process_noise: DMatrix::identity(6, 6) * 1e-2,
-        measurement_noise: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1])),
-        inputs: vessel.dims().inputs,
-    })
+    let mut smf = estimators::NonlinearSetMembershipFilter::new(common::setup(
+        &DVector::zeros(6),
+        &DMatrix::identity(6, 6),
+        &(DMatrix::identity(6, 6) * 1e-2),
+        &DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1])),
+        vessel.dims().inputs,
+    ))
     .unwrap();
     let u = DVector::from_vec(vec![1e5, 0.0, 1e5]);
     let y = DVector::from_vec(vec![0.01, 0.0, 0.001]);

@@ -3,7 +3,6 @@
 
 mod common;
 
-use estimators::Setup;
 use estimators::{EstimatorError, KalmanFilter, SetMembershipFilter, StepModel};
 use nalgebra::{DMatrix, DVector};
 
@@ -12,24 +11,24 @@ fn system() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
 }
 
 fn smf() -> SetMembershipFilter {
-    SetMembershipFilter::new(Setup {
-        x0: DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
-        p0: DMatrix::identity(4, 4) * 0.5,
-        process_noise: DMatrix::identity(4, 4) * 0.01,
-        measurement_noise: DMatrix::identity(3, 3) * 0.05,
-        inputs: 2,
-    })
+    SetMembershipFilter::new(common::setup(
+        &DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
+        &(DMatrix::identity(4, 4) * 0.5),
+        &(DMatrix::identity(4, 4) * 0.01),
+        &(DMatrix::identity(3, 3) * 0.05),
+        2,
+    ))
     .unwrap()
 }
 
 fn kf() -> KalmanFilter {
-    KalmanFilter::new(Setup {
-        x0: DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
-        p0: DMatrix::identity(4, 4) * 0.5,
-        process_noise: DMatrix::identity(4, 4) * 0.01,
-        measurement_noise: DMatrix::identity(3, 3) * 0.05,
-        inputs: 2,
-    })
+    KalmanFilter::new(common::setup(
+        &DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
+        &(DMatrix::identity(4, 4) * 0.5),
+        &(DMatrix::identity(4, 4) * 0.01),
+        &(DMatrix::identity(3, 3) * 0.05),
+        2,
+    ))
     .unwrap()
 }
 
@@ -160,80 +159,26 @@ fn constructors_reject_bad_matrices_with_named_errors() {
     let i3 = DMatrix::identity(3, 3);
     let x = DVector::zeros(4);
     let not_pd = -DMatrix::identity(4, 4);
-    let e = SetMembershipFilter::new(Setup {
-        x0: x.clone(),
-        p0: not_pd.clone(),
-        process_noise: i4.clone(),
-        measurement_noise: i3.clone(),
-        inputs: 1,
-    })
-    .unwrap_err();
+    let e = SetMembershipFilter::new(common::setup(&x, &not_pd, &i4, &i3, 1)).unwrap_err();
     assert_eq!(e, EstimatorError::NotPositiveDefinite { what: "P0" });
-    let e = SetMembershipFilter::new(Setup {
-        x0: x.clone(),
-        p0: i4.clone(),
-        process_noise: not_pd.clone(),
-        measurement_noise: i3.clone(),
-        inputs: 1,
-    })
-    .unwrap_err();
+    let e = SetMembershipFilter::new(common::setup(&x, &i4, &not_pd, &i3, 1)).unwrap_err();
     assert_eq!(e, EstimatorError::NotPositiveDefinite { what: "Q" });
-    let e = SetMembershipFilter::new(Setup {
-        x0: x.clone(),
-        p0: i4.clone(),
-        process_noise: i4.clone(),
-        measurement_noise: DMatrix::zeros(3, 3),
-        inputs: 1,
-    })
-    .unwrap_err();
+    let e = SetMembershipFilter::new(common::setup(&x, &i4, &i4, &DMatrix::zeros(3, 3), 1)).unwrap_err();
     assert_eq!(e, EstimatorError::NotPositiveDefinite { what: "R" });
-    let e = SetMembershipFilter::new(Setup {
-        x0: x.clone(),
-        p0: DMatrix::identity(3, 3),
-        process_noise: i4.clone(),
-        measurement_noise: i3.clone(),
-        inputs: 1,
-    })
-    .unwrap_err();
+    let e = SetMembershipFilter::new(common::setup(&x, &DMatrix::identity(3, 3), &i4, &i3, 1)).unwrap_err();
     assert!(matches!(e, EstimatorError::DimensionMismatch { what: "P0", .. }), "{e}");
     let mut nan_q = i4.clone();
     nan_q[(2, 2)] = f64::NAN;
-    let e = KalmanFilter::new(Setup {
-        x0: x.clone(),
-        p0: i4.clone(),
-        process_noise: nan_q,
-        measurement_noise: i3.clone(),
-        inputs: 1,
-    })
-    .unwrap_err();
+    let e = KalmanFilter::new(common::setup(&x, &i4, &nan_q, &i3, 1)).unwrap_err();
     assert_eq!(e, EstimatorError::NonFinite { what: "Q", index: 10 });
-    let e = KalmanFilter::new(Setup {
-        x0: DVector::from_element(4, f64::NAN),
-        p0: i4.clone(),
-        process_noise: i4.clone(),
-        measurement_noise: i3.clone(),
-        inputs: 1,
-    })
-    .unwrap_err();
+    let e = KalmanFilter::new(common::setup(&DVector::from_element(4, f64::NAN), &i4, &i4, &i3, 1)).unwrap_err();
     assert_eq!(e, EstimatorError::NonFinite { what: "x0", index: 0 });
-    let e = SetMembershipFilter::new(Setup {
-        x0: DVector::zeros(0),
-        p0: DMatrix::zeros(0, 0),
-        process_noise: i4.clone(),
-        measurement_noise: i3.clone(),
-        inputs: 1,
-    });
+    let e = SetMembershipFilter::new(common::setup(&DVector::zeros(0), &DMatrix::zeros(0, 0), &i4, &i3, 1));
     assert!(matches!(e, Err(EstimatorError::EmptySystem(_))));
-    let e = SetMembershipFilter::new(Setup {
-        x0: x.clone(),
-        p0: i4.clone(),
-        process_noise: i4.clone(),
-        measurement_noise: i3.clone(),
-        inputs: 2,
-    })
-    .unwrap()
-    .with_input_bounds(&DVector::from_vec(vec![1.0, 0.0]), &DVector::from_vec(vec![0.0, 1.0]))
-    .unwrap_err();
+    let e = SetMembershipFilter::new(common::setup(&x, &i4, &i4, &i3, 2))
+        .unwrap()
+        .with_input_bounds(&DVector::from_vec(vec![1.0, 0.0]), &DVector::from_vec(vec![0.0, 1.0]))
+        .unwrap_err();
     assert!(matches!(e, EstimatorError::InvalidInputBounds { index: 0, .. }), "{e}");
 }
 
@@ -269,13 +214,13 @@ fn yang_li_refuses_an_input_outside_its_box_and_stays_unchanged() {
     let (lo, hi) = (DVector::from_vec(vec![-1.0, 0.0]), DVector::from_vec(vec![1.0, 0.5]));
     let make = || {
         estimators::yang_li::without_input(
-            Setup {
-                x0: DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
-                p0: DMatrix::identity(4, 4) * 0.5,
-                process_noise: DMatrix::identity(4, 4) * 0.01,
-                measurement_noise: DMatrix::identity(3, 3) * 0.05,
-                inputs: lo.len(),
-            },
+            common::setup(
+                &DVector::from_vec(vec![0.1, 0.2, -0.1, 0.0]),
+                &(DMatrix::identity(4, 4) * 0.5),
+                &(DMatrix::identity(4, 4) * 0.01),
+                &(DMatrix::identity(3, 3) * 0.05),
+                lo.len(),
+            ),
             &lo,
             &hi,
             estimators::TwoMultiplierSolver::new(),
@@ -323,37 +268,13 @@ fn badly_scaled_positive_definite_noise_is_accepted() {
     let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-12, 1e4]));
     let r = DMatrix::identity(1, 1);
     let p0 = DMatrix::identity(2, 2);
-    assert!(
-        KalmanFilter::new(Setup {
-            x0: DVector::zeros(2),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: 1
-        })
-        .is_ok()
-    );
-    let mut f = SetMembershipFilter::new(Setup {
-        x0: DVector::zeros(2),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
+    assert!(KalmanFilter::new(common::setup(&DVector::zeros(2), &p0, &q, &r, 1)).is_ok());
+    let mut f = SetMembershipFilter::new(common::setup(&DVector::zeros(2), &p0, &q, &r, 1)).unwrap();
     assert!(f.set_process_noise(&q).is_ok());
     let singular = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
     assert!(f.set_process_noise(&singular).is_err());
     // A Gaussian filter's Q is a covariance: singular is allowed, indefinite is not.
-    let kf = |q: &DMatrix<f64>| {
-        KalmanFilter::new(Setup {
-            x0: DVector::zeros(2),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: 1,
-        })
-    };
+    let kf = |q: &DMatrix<f64>| KalmanFilter::new(common::setup(&DVector::zeros(2), &p0, &q, &r, 1));
     assert!(kf(&singular).is_ok());
     assert!(kf(&DMatrix::zeros(2, 2)).is_ok());
     let indefinite = DMatrix::from_row_slice(2, 2, &[1.0, 1.0 + 1e-6, 1.0 + 1e-6, 1.0]);

@@ -4,31 +4,20 @@
 //! `FlagAndContinue` (every later step marked as not guaranteed). Data on the boundary of their
 //! sets are never flagged.
 
-use carrier_dynamics::{CarrierModel, CarrierParams};
+mod common;
+
+use common::LinearSystem;
 use estimators::{EstimatorError, InconsistencyPolicy, SetMembershipFilter, StepModel, yang_li};
 use models::{Noise, SimulationConfig, Trajectory, simulate_ltv};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
-struct Case {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    c: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    p0: DMatrix<f64>,
-}
-
-fn setup() -> Case {
-    let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
-    let (a, b, _) = d.to_dynamic();
-    let c = DMatrix::from_row_slice(3, 4, &[0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]);
-    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1.6e-7, 1e-6, 4e-10, 1e-6]));
-    let r = DMatrix::identity(3, 3) * 2e-5;
-    Case { a, b, c, q, r, p0: DMatrix::identity(4, 4) * 1e-2 }
+/// The carrier with no sideslip sensor (the last three states measured).
+fn setup() -> LinearSystem {
+    common::system::carrier(3)
 }
 
 /// A run with process and measurement noise on the boundary of their ellipsoids.
-fn boundary_run(s: &Case, steps: usize, seed: u64) -> Trajectory {
+fn boundary_run(s: &LinearSystem, steps: usize, seed: u64) -> Trajectory {
     let model = models::ConstantModel::new(s.a.clone(), s.b.clone(), s.c.clone()).unwrap();
     simulate_ltv(
         &model,
@@ -43,15 +32,8 @@ fn boundary_run(s: &Case, steps: usize, seed: u64) -> Trajectory {
     .unwrap()
 }
 
-fn filter(s: &Case) -> SetMembershipFilter {
-    SetMembershipFilter::new(estimators::Setup {
-        x0: DVector::zeros(4),
-        p0: s.p0.clone(),
-        process_noise: s.q.clone(),
-        measurement_noise: s.r.clone(),
-        inputs: 8,
-    })
-    .unwrap()
+fn filter(s: &LinearSystem) -> SetMembershipFilter {
+    SetMembershipFilter::new(s.setup()).unwrap()
 }
 
 #[test]
@@ -62,13 +44,7 @@ fn data_on_the_boundary_of_their_bounds_are_never_flagged() {
         let run = boundary_run(&s, 2000, seed);
         let mut f = filter(&s);
         let mut yl = yang_li::without_input(
-            estimators::Setup {
-                x0: DVector::zeros(4),
-                p0: s.p0.clone(),
-                process_noise: s.q.clone(),
-                measurement_noise: s.r.clone(),
-                inputs: DVector::from_element(8, -0.06).len(),
-            },
+            s.setup(),
             &DVector::from_element(8, -0.06),
             &DVector::from_element(8, 0.06),
             estimators::TwoMultiplierSolver::new(),
@@ -109,7 +85,7 @@ fn an_outlier_is_refused_at_its_step_and_the_filter_is_unchanged() {
 }
 
 /// The first step at which the filter refuses the data, or `None`.
-fn first_refusal(s: &Case, inputs: &[DVector<f64>], ys: &[DVector<f64>]) -> Option<u64> {
+fn first_refusal(s: &LinearSystem, inputs: &[DVector<f64>], ys: &[DVector<f64>]) -> Option<u64> {
     let model = StepModel::new(&s.a, &s.b, &s.c);
     let mut f = filter(s);
     for (u, y) in inputs.iter().zip(ys) {

@@ -318,7 +318,7 @@ fn an_unmeasured_random_walk_is_marked_diverging() {
         measurement_noise: DMatrix::identity(1, 1) * 1e-2,
         inputs: 1,
     };
-    let mut smf = estimators::SetMembershipFilter::new(s).unwrap();
+    let mut smf = estimators::SetMembershipFilter::new(s.clone()).unwrap();
     assert!(smf.estimate().status().is_clean());
     let mut marked = false;
     for _ in 0..200 {
@@ -330,13 +330,6 @@ fn an_unmeasured_random_walk_is_marked_diverging() {
     assert_eq!(smf.estimate().status().guarantee, Guarantee::Diverging);
     // smf-nl told |x₂| ≤ 3: marked exactly when the published interval spans [−3, 3], although it
     // is wider than twice its initial width (2) long before.
-    let s = Setup {
-        x0: dvector![0.0, 0.0],
-        p0: DMatrix::identity(2, 2),
-        process_noise: DMatrix::from_diagonal(&dvector![1e-4, 1e-2]),
-        measurement_noise: DMatrix::identity(1, 1) * 1e-2,
-        inputs: 1,
-    };
     let inf = f64::INFINITY;
     let mut nl = NonlinearSetMembershipFilter::new(s).unwrap().with_state_bounds(&[-inf, -3.0], &[inf, 3.0]).unwrap();
     let (mut wide_unmarked, mut marked) = (false, false);

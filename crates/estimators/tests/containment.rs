@@ -15,7 +15,6 @@
 mod common;
 
 use common::FixedSolver;
-use estimators::Setup;
 
 use std::time::Duration;
 
@@ -101,14 +100,7 @@ fn two_multiplier_path_contains_the_true_state() {
     let (mut total, mut worst, mut fb) = (0, 0.0f64, 0);
     for i in 0..40 {
         let sys = random_system(&mut rng, i);
-        let mut f = SetMembershipFilter::new(Setup {
-            x0: sys.x_hat0.clone(),
-            p0: sys.p0.clone(),
-            process_noise: sys.q.clone(),
-            measurement_noise: sys.r.clone(),
-            inputs: 2,
-        })
-        .unwrap();
+        let mut f = SetMembershipFilter::new(common::setup(&sys.x_hat0, &sys.p0, &sys.q, &sys.r, 2)).unwrap();
         let (w, f_) = run(&sys, &mut f, &mut rng, 300, gauss_u);
         total += 300;
         worst = worst.max(w);
@@ -127,13 +119,7 @@ fn yang_li_without_input_contains_the_true_state() {
     for i in 0..8 {
         let sys = random_system(&mut rng, i);
         let mut f = yang_li::without_input(
-            Setup {
-                x0: sys.x_hat0.clone(),
-                p0: sys.p0.clone(),
-                process_noise: sys.q.clone(),
-                measurement_noise: sys.r.clone(),
-                inputs: lo.len(),
-            },
+            common::setup(&sys.x_hat0, &sys.p0, &sys.q, &sys.r, lo.len()),
             &lo,
             &hi,
             TwoMultiplierSolver::new(),
@@ -160,13 +146,7 @@ fn sdp_path_contains_the_true_state() {
             let sys = random_system(&mut rng, i);
             let backend = common::backends(settings()).into_iter().find(|(n, _)| *n == name).unwrap().1;
             let mut f = SetMembershipFilter::with_solver(
-                Setup {
-                    x0: sys.x_hat0.clone(),
-                    p0: sys.p0.clone(),
-                    process_noise: sys.q.clone(),
-                    measurement_noise: sys.r.clone(),
-                    inputs: 2,
-                },
+                common::setup(&sys.x_hat0, &sys.p0, &sys.q, &sys.r, 2),
                 SdpUpdateSolver::new(backend),
             )
             .unwrap();
@@ -204,17 +184,9 @@ fn fallback_path_contains_the_true_state() {
     let (mut total, mut worst) = (0, 0.0f64);
     for i in 0..10 {
         let sys = random_system(&mut rng, i);
-        let mut f = SetMembershipFilter::with_solver(
-            Setup {
-                x0: sys.x_hat0.clone(),
-                p0: sys.p0.clone(),
-                process_noise: sys.q.clone(),
-                measurement_noise: sys.r.clone(),
-                inputs: 2,
-            },
-            never_converges(),
-        )
-        .unwrap();
+        let mut f =
+            SetMembershipFilter::with_solver(common::setup(&sys.x_hat0, &sys.p0, &sys.q, &sys.r, 2), never_converges())
+                .unwrap();
         let (w, fb) = run(&sys, &mut f, &mut rng, 100, gauss_u);
         assert_eq!(fb, 100);
         assert_eq!(
@@ -224,14 +196,7 @@ fn fallback_path_contains_the_true_state() {
         total += 100;
         worst = worst.max(w);
         // Zero time budget with the exact solver: every step falls back too.
-        let mut g = SetMembershipFilter::new(Setup {
-            x0: sys.x_hat0.clone(),
-            p0: sys.p0.clone(),
-            process_noise: sys.q.clone(),
-            measurement_noise: sys.r.clone(),
-            inputs: 2,
-        })
-        .unwrap();
+        let mut g = SetMembershipFilter::new(common::setup(&sys.x_hat0, &sys.p0, &sys.q, &sys.r, 2)).unwrap();
         g.set_time_budget(Some(Duration::ZERO));
         let (w, fb) = run(&sys, &mut g, &mut rng, 100, gauss_u);
         assert_eq!(fb, 100);
@@ -263,17 +228,9 @@ fn finite_but_unusable_solver_results_fall_back_and_stay_contained() {
             // filter certifies it as it is).
             let solver =
                 FixedSolver { l, tau, status: estimators::smf::UpdateStatus::Solved, iterations: 1, closed_form: true };
-            let mut f = SetMembershipFilter::with_solver(
-                Setup {
-                    x0: sys.x_hat0.clone(),
-                    p0: sys.p0.clone(),
-                    process_noise: sys.q.clone(),
-                    measurement_noise: sys.r.clone(),
-                    inputs: 2,
-                },
-                solver,
-            )
-            .unwrap();
+            let mut f =
+                SetMembershipFilter::with_solver(common::setup(&sys.x_hat0, &sys.p0, &sys.q, &sys.r, 2), solver)
+                    .unwrap();
             // `run` unwraps every step and asserts containment.
             let (w, fb) = run(&sys, &mut f, &mut rng, 60, gauss_u);
             assert_eq!(fb, 60, "{what}, system {i}");
@@ -336,13 +293,13 @@ fn adversarial_scalar_case_is_tight_and_contained() {
     let b = DMatrix::from_element(1, 1, 0.3);
     let c = DMatrix::from_element(1, 1, 1.0);
     let x_hat0 = DVector::from_element(1, 0.5);
-    let mut f = SetMembershipFilter::new(Setup {
-        x0: x_hat0.clone(),
-        p0: DMatrix::from_element(1, 1, p0),
-        process_noise: DMatrix::from_element(1, 1, q),
-        measurement_noise: DMatrix::from_element(1, 1, r),
-        inputs: 1,
-    })
+    let mut f = SetMembershipFilter::new(common::setup(
+        &x_hat0,
+        &DMatrix::from_element(1, 1, p0),
+        &DMatrix::from_element(1, 1, q),
+        &DMatrix::from_element(1, 1, r),
+        1,
+    ))
     .unwrap();
     let x0 = &x_hat0 + DVector::from_element(1, p0.sqrt());
     let d = adversarial_run(
@@ -377,14 +334,7 @@ fn adversarial_multidimensional_case_is_tight_and_contained() {
     let z = common::gauss(&mut rng, n, 1).column(0).into_owned();
     zs.push(&z / z.norm());
     for (i, z) in zs.iter().enumerate() {
-        let mut f = SetMembershipFilter::new(Setup {
-            x0: x_hat0.clone(),
-            p0: &d * 4.0,
-            process_noise: d.clone(),
-            measurement_noise: r.clone(),
-            inputs: 2,
-        })
-        .unwrap();
+        let mut f = SetMembershipFilter::new(common::setup(&x_hat0, &(&d * 4.0), &d, &r, 2)).unwrap();
         let w = &g * z;
         let x0 = &x_hat0 + &w * 2.0;
         let v = DVector::from_vec(vec![1e6, 0.0]);

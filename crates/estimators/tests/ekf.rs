@@ -3,15 +3,14 @@
 //! (`docs/truck-ekf.md`: a nominal β RMSE above about 0.1° signals a bug), recovering a wrong
 //! initial lateral speed, and refusing bad input with its state unchanged.
 
+mod common;
+
+use common::uniform as random;
 use estimators::Setup;
 use estimators::{EstimatorError, ExtendedKalmanFilter, KalmanFilter, StepModel};
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 use truck_dynamics::{Slalom, TruckEkfModel, TruckParams, TruthConfig, simulate_truth};
-
-fn random(rng: &mut Xoshiro256StarStar, r: usize, c: usize) -> DMatrix<f64> {
-    DMatrix::from_fn(r, c, |_, _| rng.uniform(-1.0, 1.0))
-}
 
 #[test]
 fn equals_the_kalman_filter_on_linear_models() {
@@ -19,25 +18,10 @@ fn equals_the_kalman_filter_on_linear_models() {
     let mut worst = 0.0f64;
     for trial in 0..20 {
         let (n, m, p) = (1 + trial % 5, 1 + trial % 3, 1 + trial % 2);
-        let a = random(&mut rng, n, n) * 0.7;
-        let b = random(&mut rng, n, p);
-        let c = random(&mut rng, m, n);
-        let g = random(&mut rng, n, n);
-        let q = &g * g.transpose() + DMatrix::identity(n, n) * 0.1;
-        let r = DMatrix::identity(m, m) * 0.3;
-        let p0 = DMatrix::identity(n, n) * 2.0;
-        let x0 = DVector::from_fn(n, |i, _| i as f64 * 0.1);
-        let mut kf = KalmanFilter::new(Setup {
-            x0: x0.clone(),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: p,
-        })
-        .unwrap();
-        let mut ekf =
-            ExtendedKalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: p }).unwrap();
-        let model = StepModel::new(&a, &b, &c);
+        let sys = common::random_linear_system(&mut rng, n, m, p);
+        let mut kf = KalmanFilter::new(sys.setup()).unwrap();
+        let mut ekf = ExtendedKalmanFilter::new(sys.setup()).unwrap();
+        let model = sys.model();
         for _ in 0..30 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
             let y = random(&mut rng, m, 1).column(0).into_owned();

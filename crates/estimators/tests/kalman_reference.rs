@@ -3,14 +3,12 @@
 //! systems, and the closed-form scalar random walk (whose steady-state variance solves
 //! `p² + q p − q r = 0`).
 
-use estimators::Setup;
+mod common;
+
+use common::uniform as random;
 use estimators::{Estimate, EstimateKind, Estimator, KalmanFilter, StepModel};
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
-
-fn random(rng: &mut Xoshiro256StarStar, r: usize, c: usize) -> DMatrix<f64> {
-    DMatrix::from_fn(r, c, |_, _| rng.uniform(-1.0, 1.0))
-}
 
 fn spd(rng: &mut Xoshiro256StarStar, n: usize, floor: f64) -> DMatrix<f64> {
     let g = random(rng, n, n);
@@ -32,14 +30,7 @@ fn matches_the_textbook_covariance_form_on_random_systems() {
         let r = spd(&mut rng, m, 0.1);
         let p0 = spd(&mut rng, n, 0.5);
         let x0 = random(&mut rng, n, 1).column(0).into_owned();
-        let mut kf = KalmanFilter::new(Setup {
-            x0: x0.clone(),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: p,
-        })
-        .unwrap();
+        let mut kf = KalmanFilter::new(common::setup(&x0, &p0, &q, &r, p)).unwrap();
         let (mut x, mut pp) = (x0, p0);
         for _ in 0..15 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
@@ -71,14 +62,8 @@ fn scalar_random_walk_converges_to_the_closed_form_steady_state() {
     let post = prior * r / (prior + r);
     let one = DMatrix::identity(1, 1);
     let zero_b = DMatrix::zeros(1, 1);
-    let mut kf = KalmanFilter::new(Setup {
-        x0: DVector::zeros(1),
-        p0: one.clone() * 10.0,
-        process_noise: one.clone() * q,
-        measurement_noise: one.clone() * r,
-        inputs: 1,
-    })
-    .unwrap();
+    let mut kf =
+        KalmanFilter::new(common::setup(&DVector::zeros(1), &(&one * 10.0), &(&one * q), &(&one * r), 1)).unwrap();
     let model = StepModel::new(&one, &zero_b, &one);
     for k in 0..200 {
         let y = DVector::from_element(1, (k as f64 * 0.37).sin());

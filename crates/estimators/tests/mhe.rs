@@ -6,7 +6,6 @@
 
 mod common;
 
-use estimators::Setup;
 use estimators::mhe::{
     ArrivalRecursion, ArrivalStatus, BlockingPreset, InnerSolver, MheCost, MheSettings, MovingHorizonEstimator,
     PriorMean, WindowSolver, WindowStatus,
@@ -109,14 +108,7 @@ fn unconstrained_mhe_with_the_kalman_arrival_cost_and_filtered_prior_is_the_kalm
         let mut s = settings(n, m, MheCost::LeastSquares, 4, f64::INFINITY, 1.0);
         s.w_box = (DVector::repeat(n, f64::NEG_INFINITY), DVector::repeat(n, f64::INFINITY));
         s.prior_mean = PriorMean::Filtered;
-        let mut kf = KalmanFilter::new(Setup {
-            x0: s.x0.clone(),
-            p0: s.p0.clone(),
-            process_noise: s.q.clone(),
-            measurement_noise: s.r.clone(),
-            inputs: 1,
-        })
-        .unwrap();
+        let mut kf = KalmanFilter::new(s.setup(1)).unwrap();
         let mut mhe = new_mhe(s, 1).unwrap();
         let model = StepModel::new(&a, &b, &c);
         let (us, ys) = data(&a, &b, &c, 25, 0.05, 0.3, seed);
@@ -137,14 +129,7 @@ fn full_information_least_squares_is_the_kalman_filter_whatever_the_prior_mean_r
     let (a, b, c) = system(4, 2, 11);
     let mut s = settings(4, 2, MheCost::LeastSquares, 30, f64::INFINITY, 1.0);
     s.w_box = (DVector::repeat(4, f64::NEG_INFINITY), DVector::repeat(4, f64::INFINITY));
-    let mut kf = KalmanFilter::new(Setup {
-        x0: s.x0.clone(),
-        p0: s.p0.clone(),
-        process_noise: s.q.clone(),
-        measurement_noise: s.r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
+    let mut kf = KalmanFilter::new(s.setup(1)).unwrap();
     let mut mhe = new_mhe(s, 1).unwrap();
     let model = StepModel::new(&a, &b, &c);
     let (us, ys) = data(&a, &b, &c, 30, 0.05, 0.3, 3);

@@ -7,7 +7,6 @@
 mod common;
 
 use counting_allocator::{Counting, count};
-use estimators::Setup;
 
 use estimators::mhe::{
     ArrivalRecursion, MheCost, MheSettings, MovingHorizonEstimator, NonlinearArrival, NonlinearMhe,
@@ -69,14 +68,7 @@ fn settings(n: usize, m: usize, horizon: usize, arrival: NonlinearArrival) -> Ca
 fn full_information_on_a_linear_model_is_the_kalman_filter() {
     let model = linear();
     let s = settings(3, 2, 40, NonlinearArrival::Ekf);
-    let mut kf = KalmanFilter::new(Setup {
-        x0: s.x0.clone(),
-        p0: s.p0.clone(),
-        process_noise: s.q.clone(),
-        measurement_noise: s.r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
+    let mut kf = KalmanFilter::new(s.setup(1)).unwrap();
     let mut mhe = new_mhe(s, 1).unwrap();
     let (us, ys) = data(&model, 30, 1);
     for (u, y) in us.iter().zip(&ys) {
@@ -296,14 +288,7 @@ fn with_the_arrival_filters_own_mean_and_the_ekf_arrival_it_is_the_kalman_filter
     let model = linear();
     let mut s = settings(3, 2, 4, NonlinearArrival::Ekf);
     s.prior = estimators::mhe::NonlinearPrior::ArrivalFilter;
-    let mut kf = KalmanFilter::new(Setup {
-        x0: s.x0.clone(),
-        p0: s.p0.clone(),
-        process_noise: s.q.clone(),
-        measurement_noise: s.r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
+    let mut kf = KalmanFilter::new(s.setup(1)).unwrap();
     let mut mhe = new_mhe(s.clone(), 1).unwrap();
     s.arrival = NonlinearArrival::Ukf(UkfParams::paper());
     let mut mhe_ukf = new_mhe(s, 1).unwrap();

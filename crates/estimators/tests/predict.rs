@@ -3,6 +3,8 @@
 //! are missing), the Kalman filter's prediction is `A x + B u`, `A P Aᵀ + Q`, the EKF's equals the
 //! Kalman filter's on a linear model, and bad input leaves the filters unchanged.
 
+mod common;
+
 use carrier_dynamics::{CarrierModel, CarrierParams};
 use estimators::Setup;
 use estimators::{DynEstimator, ExtendedKalmanFilter, KalmanFilter, LinearModel, SetMembershipFilter, StepModel};
@@ -30,14 +32,7 @@ fn sets_with_gaps_still_contain_the_truth_and_grow_while_blind() {
             },
         )
         .unwrap();
-        let mut f = SetMembershipFilter::new(Setup {
-            x0: DVector::zeros(4),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: 8,
-        })
-        .unwrap();
+        let mut f = SetMembershipFilter::new(common::setup(&DVector::zeros(4), &p0, &q, &r, 8)).unwrap();
         let mut worst = 0.0f64;
         let mut previous_trace = f64::INFINITY;
         for k in 0..run.steps() {
@@ -69,22 +64,8 @@ fn kalman_and_extended_kalman_predictions() {
     let x0 = DVector::from_vec(vec![1.0, -1.0]);
     let u = DVector::from_vec(vec![0.5]);
     let model = StepModel::new(&a, &b, &c);
-    let mut kf = KalmanFilter::new(Setup {
-        x0: x0.clone(),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
-    let mut ekf = ExtendedKalmanFilter::new(Setup {
-        x0: x0.clone(),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
+    let mut kf = KalmanFilter::new(common::setup(&x0, &p0, &q, &r, 1)).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(common::setup(&x0, &p0, &q, &r, 1)).unwrap();
     let e = kf.predict(&model, &u).unwrap().clone();
     assert!((&e.center - (&a * &x0 + &b * &u)).amax() < 1e-15);
     assert!((&e.covariance - (&a * &p0 * a.transpose() + &q)).amax() < 1e-15);

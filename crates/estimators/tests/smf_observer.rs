@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::LinearSystem;
 use estimators::registry::{self, EstimatorSettings, SetMembershipSettings, names};
 use estimators::smf::ObservedSetMembershipFilter;
 use estimators::{
@@ -15,31 +16,9 @@ use estimators::{
 use models::{Angles, ConstantModel, Noise, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector, dmatrix, dvector};
 
-struct Sys {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    c: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    p0: DMatrix<f64>,
-    x0: DVector<f64>,
-}
-
-impl Sys {
-    fn setup(&self) -> Setup {
-        Setup {
-            x0: self.x0.clone(),
-            p0: self.p0.clone(),
-            process_noise: self.q.clone(),
-            measurement_noise: self.r.clone(),
-            inputs: self.b.ncols(),
-        }
-    }
-}
-
 /// Random stable systems of 2–5 states; half of them measure some states one by one (unit rows
 /// of `C`, where the observer is exact), the others through random rows.
-fn random_system(rng: &mut Xoshiro256StarStar, i: usize) -> Sys {
+fn random_system(rng: &mut Xoshiro256StarStar, i: usize) -> LinearSystem {
     let n = 2 + i % 4;
     let m = 1 + (i / 4) % n;
     let c = if i % 2 == 0 {
@@ -47,7 +26,7 @@ fn random_system(rng: &mut Xoshiro256StarStar, i: usize) -> Sys {
     } else {
         common::gauss(rng, m, n)
     };
-    Sys {
+    LinearSystem {
         a: common::random_a(rng, n, [0.9, 0.99, 1.0][i % 3]),
         b: common::gauss(rng, n, 2),
         c,
@@ -320,7 +299,7 @@ struct PlainObserver {
 }
 
 impl PlainObserver {
-    fn step(&mut self, sys: &Sys, u: &DVector<f64>, y: &DVector<f64>) {
+    fn step(&mut self, sys: &LinearSystem, u: &DVector<f64>, y: &DVector<f64>) {
         use intervals::Interval;
         let n = self.o.len();
         let mut next = vec![Interval::ZERO; n];

@@ -3,21 +3,18 @@
 //! supply vessel, the positive-definiteness guard against an independent formula, bad input
 //! refused with the state unchanged, and no allocation per step.
 
+mod common;
+
+use common::uniform as random;
 use counting_allocator::{Counting, count};
 use estimators::Setup;
-use estimators::{
-    EstimatorError, ExtendedKalmanFilter, KalmanFilter, StepModel, UkfParams, UnscentedKalmanFilter, registry,
-};
+use estimators::{EstimatorError, ExtendedKalmanFilter, KalmanFilter, UkfParams, UnscentedKalmanFilter, registry};
 use models::{DifferentiableModel, Dims, DiscreteModel, ModelError, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
 use vessel_dynamics::{DiscreteVessel, VesselParams};
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-fn random(rng: &mut Xoshiro256StarStar, r: usize, c: usize) -> DMatrix<f64> {
-    DMatrix::from_fn(r, c, |_, _| rng.uniform(-1.0, 1.0))
-}
 
 #[test]
 fn equals_the_kalman_filter_on_linear_models() {
@@ -27,26 +24,10 @@ fn equals_the_kalman_filter_on_linear_models() {
         let (n, m, p) = (3 + trial % 4, 1 + trial % 3, 1 + trial % 2);
         // The paper's parameters (negative weights) and the default ones.
         let params = if trial % 2 == 0 { UkfParams::paper() } else { UkfParams::default() };
-        let a = random(&mut rng, n, n) * 0.7;
-        let b = random(&mut rng, n, p);
-        let c = random(&mut rng, m, n);
-        let g = random(&mut rng, n, n);
-        let q = &g * g.transpose() + DMatrix::identity(n, n) * 0.1;
-        let r = DMatrix::identity(m, m) * 0.3;
-        let p0 = DMatrix::identity(n, n) * 2.0;
-        let x0 = DVector::from_fn(n, |i, _| i as f64 * 0.1);
-        let mut kf = KalmanFilter::new(Setup {
-            x0: x0.clone(),
-            p0: p0.clone(),
-            process_noise: q.clone(),
-            measurement_noise: r.clone(),
-            inputs: p,
-        })
-        .unwrap();
-        let mut ukf =
-            UnscentedKalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: p }, params)
-                .unwrap();
-        let model = StepModel::new(&a, &b, &c);
+        let sys = common::random_linear_system(&mut rng, n, m, p);
+        let mut kf = KalmanFilter::new(sys.setup()).unwrap();
+        let mut ukf = UnscentedKalmanFilter::new(sys.setup(), params).unwrap();
+        let model = sys.model();
         for k in 0..30 {
             let u = random(&mut rng, p, 1).column(0).into_owned();
             let y = random(&mut rng, m, 1).column(0).into_owned();
@@ -114,19 +95,8 @@ fn close_to_the_ekf_on_a_mildly_nonlinear_model() {
     let p0 = DMatrix::identity(3, 3) * 1e-3;
     let q = DMatrix::identity(3, 3) * 1e-5;
     let r = DMatrix::identity(2, 2) * 1e-3;
-    let mut ekf = ExtendedKalmanFilter::new(Setup {
-        x0: x0.clone(),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 1,
-    })
-    .unwrap();
-    let mut ukf = UnscentedKalmanFilter::new(
-        Setup { x0: x0.clone(), p0, process_noise: q, measurement_noise: r, inputs: 1 },
-        UkfParams::paper(),
-    )
-    .unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(common::setup(&x0, &p0, &q, &r, 1)).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(common::setup(&x0, &p0, &q, &r, 1), UkfParams::paper()).unwrap();
     let mut rng = Xoshiro256StarStar::seed_from_u64(8);
     let mut x = x0;
     let (mut xn, mut y) = (DVector::zeros(3), DVector::zeros(2));
@@ -165,19 +135,8 @@ fn vessel_setup() -> (DVector<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
 fn tracks_the_vessel_like_the_ekf_without_the_guard() {
     let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
     let (x0, p0, q, r) = vessel_setup();
-    let mut ekf = ExtendedKalmanFilter::new(Setup {
-        x0: x0.clone(),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 3,
-    })
-    .unwrap();
-    let mut ukf = UnscentedKalmanFilter::new(
-        Setup { x0: x0.clone(), p0, process_noise: q, measurement_noise: r, inputs: 3 },
-        UkfParams::paper(),
-    )
-    .unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(common::setup(&x0, &p0, &q, &r, 3)).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(common::setup(&x0, &p0, &q, &r, 3), UkfParams::paper()).unwrap();
     assert_eq!(ukf.weights(), (-5.0, -2.25, 0.5));
     let mut rng = Xoshiro256StarStar::seed_from_u64(21);
     let mut x = x0;

@@ -4,6 +4,10 @@
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
 
+pub mod system;
+#[allow(unused_imports)]
+pub use system::{LinearSystem, setup};
+
 /// `A` of the `lmi` reference case (n = 4).
 pub fn reference_a() -> DMatrix<f64> {
     DMatrix::from_row_slice(
@@ -38,6 +42,30 @@ pub fn reference_c() -> DMatrix<f64> {
 /// A standard Gaussian `r × c` matrix.
 pub fn gauss(rng: &mut Xoshiro256StarStar, r: usize, c: usize) -> DMatrix<f64> {
     DMatrix::from_fn(r, c, |_, _| rng.standard_normal())
+}
+
+/// A uniform `r × c` matrix on `[-1, 1]`.
+pub fn uniform(rng: &mut Xoshiro256StarStar, r: usize, c: usize) -> DMatrix<f64> {
+    DMatrix::from_fn(r, c, |_, _| rng.uniform(-1.0, 1.0))
+}
+
+/// A random linear system of `n` states, `m` outputs and `p` inputs to compare filters on: `A`
+/// uniform times 0.7, `B`, `C` uniform, `Q = G Gᵀ + 0.1 I` (`G` uniform), `R = 0.3 I`,
+/// `P₀ = 2 I`, `x₀ = (0, 0.1, 0.2, …)`.
+pub fn random_linear_system(rng: &mut Xoshiro256StarStar, n: usize, m: usize, p: usize) -> LinearSystem {
+    let a = uniform(rng, n, n) * 0.7;
+    let b = uniform(rng, n, p);
+    let c = uniform(rng, m, n);
+    let g = uniform(rng, n, n);
+    LinearSystem {
+        a,
+        b,
+        c,
+        q: &g * g.transpose() + DMatrix::identity(n, n) * 0.1,
+        r: DMatrix::identity(m, m) * 0.3,
+        p0: DMatrix::identity(n, n) * 2.0,
+        x0: DVector::from_fn(n, |i, _| i as f64 * 0.1),
+    }
 }
 
 /// A random orthogonal matrix (QR of a Gaussian matrix).
