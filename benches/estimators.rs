@@ -12,50 +12,33 @@
 //! And the supply vessel's UKF step (paper's α, β, κ; 6 states, Euler at 0.1 s) beside its EKF
 //! step, and one NSAMPC control law.
 
-use estimators::Setup;
 use std::hint::black_box;
 
-use carrier_dynamics::{CarrierModel, CarrierParams};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use estimators::{KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel};
 use lmi::SolverSettings;
 use nalgebra::{DMatrix, DVector};
 
+#[path = "../crates/estimators/tests/common/system.rs"]
+mod system;
+
+use system::LinearSystem;
+
+/// The carrier, a constant input and the measurements of a long simulated run.
 struct Case {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    c: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    p0: DMatrix<f64>,
+    sys: LinearSystem,
     ys: Vec<DVector<f64>>,
     u: DVector<f64>,
 }
 
+/// The carrier with its last `m` states measured and a long simulated run with noise on the
+/// boundary of its sets (consistent with the bounds, as real data are); the benchmark cycles
+/// through it and restarts the filter at each wrap.
 fn case(m: usize) -> Case {
-    let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
-    let (a, b, _) = d.to_dynamic();
-    let c = DMatrix::from_fn(m, 4, |i, j| if j == 4 - m + i { 1.0 } else { 0.0 });
-    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1.6e-7, 1e-6, 4e-10, 1e-6]));
-    let r = DMatrix::identity(m, m) * 2e-5;
-    let p0 = DMatrix::identity(4, 4) * 1e-2;
-    // A long simulated run with noise on the boundary of its sets (consistent with the bounds, as
-    // real data are); the benchmark cycles through it and restarts the filter at each wrap.
+    let sys = system::carrier(m);
     let u = DVector::from_element(8, 0.01);
-    let model = models::ConstantModel::new(a.clone(), b.clone(), c.clone()).unwrap();
-    let run = models::simulate_ltv(
-        &model,
-        &models::SimulationConfig {
-            x0: DVector::zeros(4),
-            inputs: vec![u.clone(); RUN],
-            process_noise: models::Noise::ellipsoid_boundary(q.clone()).unwrap(),
-            measurement_noise: models::Noise::ellipsoid_boundary(r.clone()).unwrap(),
-            seed: 1,
-        },
-    )
-    .unwrap();
-    let ys = run.measurements[1..].to_vec();
-    Case { a, b, c, q, r, p0, ys, u }
+    let ys = system::boundary_measurements(&sys, &u, RUN, 1);
+    Case { sys, ys, u }
 }
 
 /// Steps of the simulated run the benchmarks cycle through.
@@ -71,18 +54,10 @@ fn steps(crit: &mut Criterion) {
     let mut group = crit.benchmark_group("filter_step");
     for m in [3, 4] {
         let cs = case(m);
-        let model = StepModel::new(&cs.a, &cs.b, &cs.c);
-        let x0 = DVector::zeros(4);
+        let model = cs.sys.model();
         let label = format!("n4m{m}");
 
-        let kf0 = KalmanFilter::new(Setup {
-            x0: x0.clone(),
-            p0: cs.p0.clone(),
-            process_noise: cs.q.clone(),
-            measurement_noise: cs.r.clone(),
-            inputs: 8,
-        })
-        .unwrap();
+        let kf0 = KalmanFilter::new(cs.sys.setup()).unwrap();
         let mut kf = kf0.clone();
         let mut k = 0;
         group.bench_function(BenchmarkId::new("kalman", &label), |b| {
@@ -94,14 +69,7 @@ fn steps(crit: &mut Criterion) {
             })
         });
 
-        let smf0 = SetMembershipFilter::new(Setup {
-            x0: x0.clone(),
-            p0: cs.p0.clone(),
-            process_noise: cs.q.clone(),
-            measurement_noise: cs.r.clone(),
-            inputs: 8,
-        })
-        .unwrap();
+        let smf0 = SetMembershipFilter::new(cs.sys.setup()).unwrap();
         let mut smf = smf0.clone();
         k = 0;
         group.bench_function(BenchmarkId::new("smf-two-multiplier", &label), |b| {
@@ -124,17 +92,7 @@ fn steps(crit: &mut Criterion) {
         for (name, warm_start) in variants {
             let settings = SolverSettings { warm_start, ..SolverSettings::default() };
             let solver = SdpUpdateSolver::by_name(name, settings).unwrap();
-            let mut f = SetMembershipFilter::with_solver(
-                Setup {
-                    x0: x0.clone(),
-                    p0: cs.p0.clone(),
-                    process_noise: cs.q.clone(),
-                    measurement_noise: cs.r.clone(),
-                    inputs: 8,
-                },
-                solver,
-            )
-            .unwrap();
+            let mut f = SetMembershipFilter::with_solver(cs.sys.setup(), solver).unwrap();
             k = 0;
             let id = if warm_start { format!("smf-{name}-warm") } else { format!("smf-{name}") };
             // An SDP step takes 0.1–0.5 ms: the run never wraps within a benchmark.
@@ -170,14 +128,7 @@ fn truck(crit: &mut Criterion) {
     let ys: Vec<DVector<f64>> =
         (0..64).map(|k| DVector::from_vec(vec![v + 0.01 * (k % 5) as f64, 0.3, 0.02])).collect();
     let mut group = crit.benchmark_group("truck_step");
-    let mut ekf = ExtendedKalmanFilter::new(Setup {
-        x0: x0.clone(),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 7,
-    })
-    .unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 7)).unwrap();
     let mut k = 0;
     group.bench_function("ekf", |b| {
         b.iter(|| {
@@ -203,7 +154,7 @@ fn truck(crit: &mut Criterion) {
     let a = DMatrix::identity(3, 3) * 0.999;
     let bm = DMatrix::from_element(3, 7, 1e-4);
     let c = DMatrix::identity(3, 3);
-    let mut kf = KalmanFilter::new(Setup { x0, p0, process_noise: q, measurement_noise: r, inputs: 7 }).unwrap();
+    let mut kf = KalmanFilter::new(system::setup(&x0, &p0, &q, &r, 7)).unwrap();
     // The synthetic measurements are not those of this linear model: without the innovation gate
     // (it would reject them), the step times the linear algebra only.
     kf.set_data_checks(estimators::DataChecks::OFF).unwrap();
@@ -234,51 +185,23 @@ fn vessel(crit: &mut Criterion) {
     let ys: Vec<DVector<f64>> =
         (0..64).map(|k| DVector::from_vec(vec![0.1 * k as f64, 0.05 * k as f64, 0.01 * (k % 7) as f64])).collect();
     let mut group = crit.benchmark_group("vessel_step");
-    let mut ukf = UnscentedKalmanFilter::new(
-        Setup { x0: x0.clone(), p0: p0.clone(), process_noise: q.clone(), measurement_noise: r.clone(), inputs: 3 },
-        UkfParams::paper(),
-    )
-    .unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3), UkfParams::paper()).unwrap();
     let mut k = 0;
     group.bench_function("ukf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
             if k == 0 {
-                ukf = UnscentedKalmanFilter::new(
-                    Setup {
-                        x0: x0.clone(),
-                        p0: p0.clone(),
-                        process_noise: q.clone(),
-                        measurement_noise: r.clone(),
-                        inputs: 3,
-                    },
-                    UkfParams::paper(),
-                )
-                .unwrap();
+                ukf = UnscentedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3), UkfParams::paper()).unwrap();
             }
             black_box(ukf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })
     });
-    let mut ekf = ExtendedKalmanFilter::new(Setup {
-        x0: x0.clone(),
-        p0: p0.clone(),
-        process_noise: q.clone(),
-        measurement_noise: r.clone(),
-        inputs: 3,
-    })
-    .unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3)).unwrap();
     group.bench_function("ekf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
             if k == 0 {
-                ekf = ExtendedKalmanFilter::new(Setup {
-                    x0: x0.clone(),
-                    p0: p0.clone(),
-                    process_noise: q.clone(),
-                    measurement_noise: r.clone(),
-                    inputs: 3,
-                })
-                .unwrap();
+                ekf = ExtendedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3)).unwrap();
             }
             black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })

@@ -15,10 +15,9 @@
 use std::hint::black_box;
 
 use adskalman::{KalmanFilterNoControl, ObservationModel, StateAndCovariance, TransitionModelLinearNoControl};
-use carrier_dynamics::{CarrierModel, CarrierParams};
 use criterion::{Criterion, criterion_group, criterion_main};
-use estimators::{KalmanFilter, Setup, StepModel};
-use nalgebra::{DMatrix, DVector, SMatrix, SVector, U3, U4};
+use estimators::KalmanFilter;
+use nalgebra::{DVector, SMatrix, SVector, U3, U4};
 
 const N: usize = 4;
 const P: usize = 8;
@@ -28,41 +27,26 @@ const RUN: usize = 20_000;
 /// Steps run at setup before the three filters are compared.
 const AGREEMENT_STEPS: usize = 300;
 
-/// The common data: model, noise covariances, initial covariance, inputs and measurements.
+#[path = "../crates/estimators/tests/common/system.rs"]
+mod system;
+
+use system::LinearSystem;
+
+/// The common data: the carrier (model, noise covariances, initial covariance), inputs and
+/// measurements.
 struct Case {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    c: DMatrix<f64>,
-    q: DMatrix<f64>,
-    r: DMatrix<f64>,
-    p0: DMatrix<f64>,
+    sys: LinearSystem,
     u: DVector<f64>,
     ys: Vec<DVector<f64>>,
 }
 
+/// The carrier with three of the four states measured (no sideslip sensor) and a simulated run
+/// with noise on the boundary of its sets.
 fn case() -> Case {
-    let d = CarrierModel::new(CarrierParams::paper_preset()).unwrap().discretize(1e-3).unwrap();
-    let (a, b, _) = d.to_dynamic();
-    // Three of the four states measured (no sideslip sensor).
-    let c = DMatrix::from_fn(M, N, |i, j| if j == N - M + i { 1.0 } else { 0.0 });
-    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1.6e-7, 1e-6, 4e-10, 1e-6]));
-    let r = DMatrix::identity(M, M) * 2e-5;
-    let p0 = DMatrix::identity(N, N) * 1e-2;
+    let sys = system::carrier(M);
     let u = DVector::from_element(P, 0.01);
-    let model = models::ConstantModel::new(a.clone(), b.clone(), c.clone()).unwrap();
-    let run = models::simulate_ltv(
-        &model,
-        &models::SimulationConfig {
-            x0: DVector::zeros(N),
-            inputs: vec![u.clone(); RUN],
-            process_noise: models::Noise::ellipsoid_boundary(q.clone()).unwrap(),
-            measurement_noise: models::Noise::ellipsoid_boundary(r.clone()).unwrap(),
-            seed: 1,
-        },
-    )
-    .unwrap();
-    let ys = run.measurements[1..].to_vec();
-    Case { a, b, c, q, r, p0, u, ys }
+    let ys = system::boundary_measurements(&sys, &u, RUN, 1);
+    Case { sys, u, ys }
 }
 
 /// A column-major slice as a fixed-size matrix.
@@ -149,24 +133,18 @@ fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 
 fn peers(crit: &mut Criterion) {
     let cs = case();
-    let model = StepModel::new(&cs.a, &cs.b, &cs.c);
-    let setup = || Setup {
-        x0: DVector::zeros(N),
-        p0: cs.p0.clone(),
-        process_noise: cs.q.clone(),
-        measurement_noise: cs.r.clone(),
-        inputs: P,
-    };
+    let model = cs.sys.model();
+    let setup = || cs.sys.setup();
     let kf0 = KalmanFilter::new(setup()).unwrap();
 
     let floor0 = Floor {
-        a: fixed(cs.a.as_slice()),
-        b: fixed(cs.b.as_slice()),
-        c: fixed(cs.c.as_slice()),
-        q: fixed(cs.q.as_slice()),
-        r: fixed(cs.r.as_slice()),
+        a: fixed(cs.sys.a.as_slice()),
+        b: fixed(cs.sys.b.as_slice()),
+        c: fixed(cs.sys.c.as_slice()),
+        q: fixed(cs.sys.q.as_slice()),
+        r: fixed(cs.sys.r.as_slice()),
         x: SVector::zeros(),
-        p: fixed(cs.p0.as_slice()),
+        p: fixed(cs.sys.p0.as_slice()),
     };
     let us: SVector<f64, P> = fixed(cs.u.as_slice());
     let ys: Vec<SVector<f64, M>> = cs.ys.iter().map(|y| fixed(y.as_slice())).collect();
