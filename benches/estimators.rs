@@ -19,6 +19,7 @@ use estimators::{KalmanFilter, SdpUpdateSolver, SetMembershipFilter, StepModel};
 use lmi::SolverSettings;
 use nalgebra::{DMatrix, DVector};
 
+mod common;
 #[path = "../crates/estimators/tests/common/system.rs"]
 mod system;
 
@@ -110,25 +111,12 @@ fn steps(crit: &mut Criterion) {
 fn truck(crit: &mut Criterion) {
     use estimators::ExtendedKalmanFilter;
     use models::{DifferentiableModel, DiscreteModel};
-    use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams};
-    let params = TruckParams::digest_preset();
-    let model = TruckEkfModel::paper(params).unwrap();
-    let v = 70.0 / 3.6;
-    let x0 = DVector::from_vec(vec![v, 0.05, 0.02]);
-    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-7, 1e-7, 1e-9]));
-    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![2.5e-3, 2.5e-3, 4e-6]));
-    let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-2, 1e-2, 1e-4]));
-    let inputs: Vec<DVector<f64>> = (0..64)
-        .map(|k| {
-            let mut u = TruckInput::free_rolling(0.02 * ((k as f64) * 0.3).sin(), v, params.rolling_radius);
-            u.omega[3] *= 1.002;
-            u.to_dvector()
-        })
-        .collect();
+    let (model, common::Cycle { setup, inputs, .. }) = common::truck();
+    let (x0, v) = (setup.x0.clone(), setup.x0[0]);
     let ys: Vec<DVector<f64>> =
         (0..64).map(|k| DVector::from_vec(vec![v + 0.01 * (k % 5) as f64, 0.3, 0.02])).collect();
     let mut group = crit.benchmark_group("truck_step");
-    let mut ekf = ExtendedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 7)).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(setup.clone()).unwrap();
     let mut k = 0;
     group.bench_function("ekf", |b| {
         b.iter(|| {
@@ -154,7 +142,7 @@ fn truck(crit: &mut Criterion) {
     let a = DMatrix::identity(3, 3) * 0.999;
     let bm = DMatrix::from_element(3, 7, 1e-4);
     let c = DMatrix::identity(3, 3);
-    let mut kf = KalmanFilter::new(system::setup(&x0, &p0, &q, &r, 7)).unwrap();
+    let mut kf = KalmanFilter::new(setup).unwrap();
     // The synthetic measurements are not those of this linear model: without the innovation gate
     // (it would reject them), the step times the linear algebra only.
     kf.set_data_checks(estimators::DataChecks::OFF).unwrap();
@@ -173,35 +161,26 @@ fn truck(crit: &mut Criterion) {
 fn vessel(crit: &mut Criterion) {
     use estimators::{ExtendedKalmanFilter, UkfParams, UnscentedKalmanFilter};
     use vessel_control::{Nsampc, NsampcParams, ReferenceSample};
-    use vessel_dynamics::{DiscreteVessel, VesselParams};
-    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
-    let x0 = DVector::zeros(6);
-    let p0 = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1, 0.1, 0.1, 0.01]));
-    let q = DMatrix::identity(6, 6) * 1e-2;
-    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1]));
-    let inputs: Vec<DVector<f64>> = (0..64)
-        .map(|k| DVector::from_vec(vec![1e5 * (k as f64 * 0.1).sin(), 3e4, 1e6 * (k as f64 * 0.2).cos()]))
-        .collect();
-    let ys: Vec<DVector<f64>> =
-        (0..64).map(|k| DVector::from_vec(vec![0.1 * k as f64, 0.05 * k as f64, 0.01 * (k % 7) as f64])).collect();
+    use vessel_dynamics::VesselParams;
+    let (model, common::Cycle { setup, inputs, ys }) = common::vessel();
     let mut group = crit.benchmark_group("vessel_step");
-    let mut ukf = UnscentedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3), UkfParams::paper()).unwrap();
+    let mut ukf = UnscentedKalmanFilter::new(setup.clone(), UkfParams::paper()).unwrap();
     let mut k = 0;
     group.bench_function("ukf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
             if k == 0 {
-                ukf = UnscentedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3), UkfParams::paper()).unwrap();
+                ukf = UnscentedKalmanFilter::new(setup.clone(), UkfParams::paper()).unwrap();
             }
             black_box(ukf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })
     });
-    let mut ekf = ExtendedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3)).unwrap();
+    let mut ekf = ExtendedKalmanFilter::new(setup.clone()).unwrap();
     group.bench_function("ekf", |b| {
         b.iter(|| {
             k = (k + 1) % ys.len();
             if k == 0 {
-                ekf = ExtendedKalmanFilter::new(system::setup(&x0, &p0, &q, &r, 3)).unwrap();
+                ekf = ExtendedKalmanFilter::new(setup.clone()).unwrap();
             }
             black_box(ekf.step(&model, &inputs[k], &ys[k]).unwrap().center[0])
         })

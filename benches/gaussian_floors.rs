@@ -13,17 +13,15 @@
 //! At setup, outside the timing, each pair runs the whole cycle and must agree to 1e-9
 //! (relative). `cargo bench --bench gaussian_floors`.
 
+mod common;
+
 use std::hint::black_box;
 
+use common::CYCLE;
 use criterion::{Criterion, criterion_group, criterion_main};
 use estimators::{ExtendedKalmanFilter, Setup, UkfParams, UnscentedKalmanFilter};
 use models::{DifferentiableModel, DiscreteModel};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
-use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams};
-use vessel_dynamics::{DiscreteVessel, VesselParams};
-
-/// Steps of each data cycle.
-const CYCLE: usize = 64;
 
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs())).max(1e-300);
@@ -187,33 +185,7 @@ impl<const N: usize, const Y: usize> UkfFloor<N, Y> {
 }
 
 fn truck_ekf(crit: &mut Criterion) {
-    let params = TruckParams::digest_preset();
-    let model = TruckEkfModel::paper(params).unwrap();
-    let v = 70.0 / 3.6;
-    let d = |v: [f64; 3]| DMatrix::from_diagonal(&DVector::from_row_slice(&v));
-    let setup = Setup {
-        x0: DVector::from_vec(vec![v, 0.05, 0.02]),
-        p0: d([1e-2, 1e-2, 1e-4]),
-        process_noise: d([1e-7, 1e-7, 1e-9]),
-        measurement_noise: d([2.5e-3, 2.5e-3, 4e-6]),
-        inputs: 7,
-    };
-    let inputs: Vec<DVector<f64>> = (0..CYCLE)
-        .map(|k| {
-            let mut u = TruckInput::free_rolling(0.02 * ((k as f64) * 0.3).sin(), v, params.rolling_radius);
-            u.omega[3] *= 1.002;
-            u.to_dvector()
-        })
-        .collect();
-    let (mut x, mut ys) = (setup.x0.clone(), Vec::with_capacity(CYCLE));
-    for u in &inputs {
-        let mut next = DVector::zeros(3);
-        model.f(&x, u, &mut next).unwrap();
-        x = next;
-        let mut y = DVector::zeros(3);
-        model.h(&x, u, &mut y).unwrap();
-        ys.push(y);
-    }
+    let (model, common::Cycle { setup, inputs, ys }) = common::truck();
     let mut ev = Evaluator::<_, 3, 3>::new(&model);
     {
         let (mut ours, mut floor) = (ExtendedKalmanFilter::new(setup.clone()).unwrap(), EkfFloor::<3, 3>::new(&setup));
@@ -262,19 +234,7 @@ fn truck_ekf(crit: &mut Criterion) {
 }
 
 fn vessel_ukf(crit: &mut Criterion) {
-    let model = DiscreteVessel::paper(VesselParams::paper()).unwrap();
-    let setup = Setup {
-        x0: DVector::zeros(6),
-        p0: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1, 0.1, 0.1, 0.01])),
-        process_noise: DMatrix::identity(6, 6) * 1e-2,
-        measurement_noise: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 0.1])),
-        inputs: 3,
-    };
-    let inputs: Vec<DVector<f64>> = (0..CYCLE)
-        .map(|k| DVector::from_vec(vec![1e5 * (k as f64 * 0.1).sin(), 3e4, 1e6 * (k as f64 * 0.2).cos()]))
-        .collect();
-    let ys: Vec<DVector<f64>> =
-        (0..CYCLE).map(|k| DVector::from_vec(vec![0.1 * k as f64, 0.05 * k as f64, 0.01 * (k % 7) as f64])).collect();
+    let (model, common::Cycle { setup, inputs, ys }) = common::vessel();
     let params = UkfParams::paper();
     let mut ev = Evaluator::<_, 6, 3>::new(&model);
     {

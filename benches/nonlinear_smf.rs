@@ -7,44 +7,15 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use estimators::{ExtendedKalmanFilter, NonlinearSetMembershipFilter, SetMembershipFilter, Setup, StepModel};
+use estimators::{ExtendedKalmanFilter, NonlinearSetMembershipFilter, SetMembershipFilter, StepModel};
 use models::{Interval, SecondOrderModel, TaylorEnclosure};
 use nalgebra::{DMatrix, DVector};
-use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams};
 
-fn diag(v: [f64; 3]) -> DMatrix<f64> {
-    DMatrix::from_diagonal(&DVector::from_row_slice(&v))
-}
+mod common;
 
 fn truck(crit: &mut Criterion) {
-    let params = TruckParams::digest_preset();
-    let model = TruckEkfModel::paper(params).unwrap();
-    let v = 70.0 / 3.6;
-    let setup = Setup {
-        x0: DVector::from_vec(vec![v, 0.05, 0.02]),
-        p0: diag([1e-2, 1e-2, 1e-4]),
-        process_noise: diag([1e-7, 1e-7, 1e-9]),
-        measurement_noise: diag([2.5e-3, 2.5e-3, 4e-6]),
-        inputs: 7,
-    };
-    let inputs: Vec<DVector<f64>> = (0..64)
-        .map(|k| {
-            let mut u = TruckInput::free_rolling(0.02 * ((k as f64) * 0.3).sin(), v, params.rolling_radius);
-            u.omega[3] *= 1.002;
-            u.to_dvector()
-        })
-        .collect();
-    // Measurements of the model itself along the inputs (consistent data for the set filters).
-    let mut ys = Vec::with_capacity(inputs.len());
-    let mut x = setup.x0.clone();
-    for u in &inputs {
-        let mut next = DVector::zeros(3);
-        models::DiscreteModel::f(&model, &x, u, &mut next).unwrap();
-        x = next;
-        let mut y = DVector::zeros(3);
-        models::DiscreteModel::h(&model, &x, u, &mut y).unwrap();
-        ys.push(y);
-    }
+    // The model's own measurements along the inputs: consistent data for the set filters.
+    let (model, common::Cycle { setup, inputs, ys }) = common::truck();
     let mut group = crit.benchmark_group("truck_certified_step");
     // The filters restart from the initial set each lap of the 64 steps.
     let nl0 = NonlinearSetMembershipFilter::new(setup.clone()).unwrap();
