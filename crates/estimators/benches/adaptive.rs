@@ -48,18 +48,17 @@ fn data() -> Data {
 fn steps(c: &mut Criterion) {
     let d = data();
     let u = DVector::zeros(0);
-    let x0 = DVector::zeros(13);
-    let status = ReceiverStatus::new(20.0, 4.0).unwrap_or_else(|e| panic!("{e}"));
-    let mut group = c.benchmark_group("bds_ins_step_13x3");
-    // Each iteration is one step; the filter runs on along the 1200 epochs and restarts.
-    let mut kf = KalmanFilter::new(Setup {
-        x0: x0.clone(),
+    let setup = Setup {
+        x0: DVector::zeros(13),
         p0: d.p0.clone(),
         process_noise: d.model.q.clone(),
         measurement_noise: d.r.clone(),
         inputs: 0,
-    })
-    .unwrap_or_else(|e| panic!("{e}"));
+    };
+    let status = ReceiverStatus::new(20.0, 4.0).unwrap_or_else(|e| panic!("{e}"));
+    let mut group = c.benchmark_group("bds_ins_step_13x3");
+    // Each iteration is one step; the filter runs on along the 1200 epochs and restarts.
+    let mut kf = KalmanFilter::new(setup.clone()).unwrap_or_else(|e| panic!("{e}"));
     let mut k = 0;
     group.bench_function("kalman", |b| {
         b.iter(|| {
@@ -67,17 +66,7 @@ fn steps(c: &mut Criterion) {
             k = (k + 1) % STEPS;
         })
     });
-    let mut constant = AdaptiveKalmanFilter::new(
-        Setup {
-            x0: x0.clone(),
-            p0: d.p0.clone(),
-            process_noise: d.model.q.clone(),
-            measurement_noise: d.r.clone(),
-            inputs: 0,
-        },
-        ConstantScaling(1.0),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let mut constant = AdaptiveKalmanFilter::new(setup.clone(), ConstantScaling(1.0)).unwrap_or_else(|e| panic!("{e}"));
     group.bench_function("adaptive_constant_scale", |b| {
         b.iter(|| {
             let _ = black_box(constant.step_with_status(&d.model, &u, &d.ys[k], &status));
@@ -91,17 +80,7 @@ fn steps(c: &mut Criterion) {
     ] {
         let system = FuzzySystem::bds_ins_default().with_defuzzifier(defuzz).unwrap_or_else(|e| panic!("{e}"));
         let scaling = FuzzyScaling::new(system).unwrap_or_else(|e| panic!("{e}"));
-        let mut f = AdaptiveKalmanFilter::new(
-            Setup {
-                x0: x0.clone(),
-                p0: d.p0.clone(),
-                process_noise: d.model.q.clone(),
-                measurement_noise: d.r.clone(),
-                inputs: 0,
-            },
-            scaling,
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
+        let mut f = AdaptiveKalmanFilter::new(setup.clone(), scaling).unwrap_or_else(|e| panic!("{e}"));
         group.bench_function(name, |b| {
             b.iter(|| {
                 let _ = black_box(f.step_with_status(&d.model, &u, &d.ys[k], &status));
