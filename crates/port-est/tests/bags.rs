@@ -4,6 +4,8 @@
 //! cells are unmeasured outputs); the mapping's errors are named at their key; `inspect` lists
 //! the topics and their fields.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use estimators::DataChecks;
@@ -14,10 +16,7 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-bags").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::fresh_dir("port-est-bags", name)
 }
 
 /// A model of the JSON fixture: input `v` from `/speed_json`, outputs `x`, `valid`, `wz`.

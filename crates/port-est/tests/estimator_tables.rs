@@ -2,26 +2,16 @@
 //! keywords, read by the registry's one settings reader (the one that reads Python's keyword
 //! arguments), every mistake at the key's `file:line:column`.
 
-use std::path::{Path, PathBuf};
+mod common;
 
+use std::path::PathBuf;
+
+use common::DOUBLE_INTEGRATOR as MODEL;
 use estimators::registry::{self, EstimatorSettings};
 use port_est::{FilterOptions, filter, read_model};
 
-const MODEL: &str = "\
-a  = [[1.0, 0.1], [0.0, 1.0]]
-b  = [[0.0], [0.1]]
-c  = [[1.0, 0.0]]
-q  = [[1e-4, 0.0], [0.0, 1e-4]]
-r  = [[1e-2]]
-p0 = [[1.0, 0.0], [0.0, 1.0]]
-x0 = [0.0, 0.0]
-";
-
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-estimator-tables").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::fresh_dir("port-est-estimator-tables", name)
 }
 
 fn model_error(name: &str, text: &str) -> String {

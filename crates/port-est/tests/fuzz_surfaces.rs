@@ -3,27 +3,16 @@
 //! `bds-ins`, and the truck and BDS/INS logs. No input panics or aborts; what is accepted stays
 //! within the limits (the `[mhe]` memory estimate under its limit), and every error says where.
 
+mod common;
+
 use std::path::Path;
 
+use common::OSCILLATOR_WITH_NOISE_BOXES as MODEL;
 use port_est::bds_ins::{self, RtkCoding};
 use port_est::data::DataReader;
 use port_est::mhe_table::memory_estimate;
 use port_est::{Error, Limits, StatusPolicy, parse_model_with, truck};
 use proptest::prelude::*;
-
-const MODEL: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
-b  = [[0.0], [0.01]]
-c  = [[1.0, 0.0]]
-q  = [[1e-6, 0.0], [0.0, 1e-4]]
-r  = [[4e-4]]
-p0 = [[0.25, 0.0], [0.0, 0.25]]
-x0 = [0.0, 0.0]
-[mhe]
-w_lower = [-1e-3, -1e-2]
-w_upper = [1e-3, 1e-2]
-v_lower = [-0.02]
-v_upper = [0.02]
-";
 
 const TRUCK_SETTINGS: &str = "ts = 0.001
 x0 = [10.0, 0.0, 0.0]

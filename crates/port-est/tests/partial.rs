@@ -2,6 +2,8 @@
 //! `OUT.partial.csv` (for `filter`, `truck` and `bds-ins`), SIGINT and SIGTERM remove the
 //! temporary output, and one left by a killed run is named by the next run.
 
+mod common;
+
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -15,10 +17,7 @@ const MODEL: &str = include_str!("../../../examples/filter/model.toml");
 const DATA: &str = include_str!("../../../examples/filter/data.csv");
 
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-partial").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::fresh_dir("port-est-partial", name)
 }
 
 fn names(d: &Path) -> Vec<String> {

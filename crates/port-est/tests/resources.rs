@@ -2,31 +2,17 @@
 //! jumps by billions under `--gaps bridge`, endless model, settings and rule files, and an absurd
 //! defuzzification resolution are refused quickly, at their place, naming the limit.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::OSCILLATOR_WITH_NOISE_BOXES as MODEL;
 use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
 use port_est::truck::{TruckOptions, truck};
 use port_est::{Error, FilterOptions, GapPolicy, Limits, OnError, StatusPolicy, filter, parse_model_with};
 
-const MODEL: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
-b  = [[0.0], [0.01]]
-c  = [[1.0, 0.0]]
-q  = [[1e-6, 0.0], [0.0, 1e-4]]
-r  = [[4e-4]]
-p0 = [[0.25, 0.0], [0.0, 0.25]]
-x0 = [0.0, 0.0]
-[mhe]
-w_lower = [-1e-3, -1e-2]
-w_upper = [1e-3, 1e-2]
-v_lower = [-0.02]
-v_upper = [0.02]
-";
-
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-resources").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::fresh_dir("port-est-resources", name)
 }
 
 #[global_allocator]

@@ -1,26 +1,16 @@
 //! The constrained-zonotope filters' sets in a model file: boxes (`*_radius`) or generator
 //! matrices (`*_generators`), one form per set; mistakes reported at `file:line:column`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::DOUBLE_INTEGRATOR as MODEL;
 use estimators::EstimateKind;
 use port_est::{FilterOptions, filter, read_model};
 
-const MODEL: &str = "\
-a  = [[1.0, 0.1], [0.0, 1.0]]
-b  = [[0.0], [0.1]]
-c  = [[1.0, 0.0]]
-q  = [[1e-4, 0.0], [0.0, 1e-4]]
-r  = [[1e-2]]
-p0 = [[1.0, 0.0], [0.0, 1.0]]
-x0 = [0.0, 0.0]
-";
-
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-zonotopes").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::fresh_dir("port-est-zonotopes", name)
 }
 
 fn options(d: &Path, model: &str, data: &str) -> FilterOptions {
