@@ -354,6 +354,18 @@ impl ErrorKind {
 }
 
 impl EstimatorError {
+    /// The keyword of the setting an [`EstimatorError::InvalidSetting`] is about, as the
+    /// registry's keywords spell it (`UKF alpha` → `alpha`, `x_lower/x_upper` → `x_lower`);
+    /// `None` for other errors.
+    #[must_use]
+    pub fn setting_keyword(&self) -> Option<&'static str> {
+        let EstimatorError::InvalidSetting { what, .. } = self else {
+            return None;
+        };
+        let last = what.rsplit(' ').next().unwrap_or(what);
+        last.split('/').next()
+    }
+
     /// Which kind of failure this is ([`ErrorKind`]).
     #[must_use]
     pub fn kind(&self) -> ErrorKind {

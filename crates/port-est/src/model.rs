@@ -354,10 +354,8 @@ impl Model {
             estimator.map(|name| format!("estimator.{name}.{setting}")).into_iter().chain([key.to_owned()])
         };
         let key = match (&e, key) {
-            (EstimatorError::InvalidSetting { what, .. }, None) => {
-                // `UKF alpha` → `alpha`, `x_lower/x_upper` → `x_lower`.
-                let setting = what.rsplit(' ').next().unwrap_or(what).split('/').next().unwrap_or(what);
-                own(setting).find(|k| self.key_location(k).is_some())
+            (EstimatorError::InvalidSetting { .. }, None) => {
+                e.setting_keyword().and_then(|setting| own(setting).find(|k| self.key_location(k).is_some()))
             }
             (EstimatorError::InvalidConfiguration { message, .. }, None) => crate::mhe_table::key_of_message(message)
                 .iter()

@@ -176,7 +176,12 @@ impl Estimator {
         let settings = settings(py, entry, d, given, file)?;
         let built = py.detach(|| guard(|| entry.build(setup.clone(), settings)));
         let inner = match built {
-            Guarded::Ran(Err(e)) if crate::errors::is_bad_input(&e) && file.is_some() => {
+            // A setting the caller gave as a keyword is the caller's, not the file's.
+            Guarded::Ran(Err(e))
+                if crate::errors::is_bad_input(&e)
+                    && file.is_some()
+                    && !e.setting_keyword().is_some_and(|k| given.is_some_and(|d| d.contains(k).unwrap_or(false))) =>
+            {
                 let message = file.map(|f| f.estimator_error_for(entry.name, e).to_string()).unwrap_or_default();
                 return Err(value_error(message));
             }

@@ -133,3 +133,7 @@ def test_a_model_file_s_estimator_table_is_read_and_keywords_go_over_it():
     too_many = pe.parse_model(MODEL_WITH_TABLE.replace("max_constraints = 1", "max_constraints = 8"), "m.toml")
     with pytest.raises(ValueError, match=r"m.toml:14:19: `estimator.czf.max_constraints`: invalid setting"):
         too_many.estimator("czf")
+    # The same value given as a keyword is the caller's: named as a setting, not at the file.
+    with pytest.raises(ValueError, match=r"^invalid setting max_constraints = 8") as info:
+        table.estimator("czf", max_constraints=8)
+    assert "m.toml" not in str(info.value)

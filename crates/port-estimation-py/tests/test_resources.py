@@ -140,3 +140,10 @@ def test_a_model_file_cannot_lift_its_memory_limit_but_a_keyword_can():
     # The caller's keyword lifts it (refused here only by the window's own size, nothing built).
     with pytest.raises(ValueError, match=r"more than the limit of 1 GiB"):
         mf.estimator("rmhe", horizon=100_000, memory_limit=1 << 30)
+
+
+def test_sigma_points_of_an_arrival_cost_that_has_none_are_refused():
+    for arrival in ("extended", "fixed"):
+        with pytest.raises(ValueError, match=r'setting kappa: kappa sets the sigma points of arrival = "unscented"'):
+            pe.NonlinearMHE(pe.Model.vessel(), arrival=arrival, kappa=1.0)
+    assert pe.NonlinearMHE(pe.Model.vessel(), arrival="unscented", kappa=1.0) is not None

@@ -535,8 +535,20 @@ fn nonlinear_moving_horizon<S: KeywordSource>(
         NonlinearArrival::Ukf(p) => p,
         _ => UkfParams::default(),
     };
-    let sigma = sigma_points(source, base)?;
-    match choice(source, "arrival", &[("unscented", 0u8), ("extended", 1), ("fixed", 2)])? {
+    let given = [source.number("alpha")?, source.number("beta")?, source.number("kappa")?];
+    let sigma = UkfParams {
+        alpha: given[0].unwrap_or(base.alpha),
+        beta: given[1].unwrap_or(base.beta),
+        kappa: given[2].unwrap_or(base.kappa),
+    };
+    let arrival = choice(source, "arrival", &[("unscented", 0u8), ("extended", 1), ("fixed", 2)])?;
+    if matches!(arrival, Some(1 | 2))
+        && let Some(i) = given.iter().position(Option::is_some)
+    {
+        let key = ["alpha", "beta", "kappa"][i];
+        return Err(source.refuse(key, format!("{key} sets the sigma points of arrival = \"unscented\" only")));
+    }
+    match arrival {
         Some(1) => s.arrival = NonlinearArrival::Ekf,
         Some(2) => s.arrival = NonlinearArrival::Fixed,
         _ => s.arrival = NonlinearArrival::Ukf(sigma),
