@@ -7,6 +7,8 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod ipm_common;
+
 use lmi::certificate::{CertificateFailure, CertificateKind, check_certificate};
 use lmi::{Block, Entry, SdpBackend, SdpProblem, SdpSolution, SolveStatus, SolverSettings};
 
@@ -24,15 +26,7 @@ fn scaled(p: &SdpProblem, s_obj: f64, s_con: f64) -> SdpProblem {
 
 /// `min (x₁ + x₂)/2  s.t.  [[x₁, 1], [1, x₂]] ⪰ 0, x₁ ≥ 1/4, x₂ ≥ 0`: optimum 1 at `x = (1, 1)`.
 fn two_by_two() -> SdpProblem {
-    let entries = vec![
-        e(1, 0, 0, 0, 1.0),
-        e(2, 0, 1, 1, 1.0),
-        e(0, 0, 0, 1, -1.0),
-        e(1, 1, 0, 0, 1.0),
-        e(0, 1, 0, 0, 0.25),
-        e(2, 1, 1, 1, 1.0),
-    ];
-    SdpProblem::new(vec![Block::Psd(2), Block::Nonneg(2)], vec![0.5, 0.5], entries).unwrap()
+    ipm_common::known_optimum(1.0, 1.0)
 }
 
 /// `min t  s.t.  t I − A ⪰ 0` with `A = [[0, 1, 0], [1, 0, 0], [0, 0, 1]]` (eigenvalues 1, 1,

@@ -1,4 +1,4 @@
-//! Problems shared by the `faer-ipm` tests.
+//! Problems shared by the `lmi` tests.
 
 #![allow(dead_code)]
 
@@ -84,4 +84,28 @@ pub fn filter_lmi() -> SdpProblem {
     }
     assert_eq!(big, 16);
     problem(vec![Block::Psd(big)], c, &ent)
+}
+
+/// A small feasible SDP with the closed-form optimum 1, its data multiplied by `s_obj` (the
+/// objective `c`) and `s_con` (every `Fᵢ`, `F₀` included):
+///
+/// ```text
+/// minimise (x₁ + x₂)/2   s.t.  [[x₁, 1], [1, x₂]] ⪰ 0,   x₁ ≥ 1/4,   x₂ ≥ 0
+/// ```
+///
+/// `x₁x₂ ≥ 1` with `x₁, x₂ > 0`, so `(x₁ + x₂)/2 ≥ √(x₁x₂) ≥ 1` with equality at `x = (1, 1)`
+/// (the bound `x₁ ≥ 1/4` is inactive). The dual `Y = [[½, −½], [−½, ½]] ⊕ 0` attains
+/// `tr(F₀Y) = 1`. Scaling every `Fᵢ` (and `F₀`) by the same factor leaves `x` and the optimum
+/// unchanged; scaling `c` scales the optimum.
+pub fn known_optimum(s_obj: f64, s_con: f64) -> SdpProblem {
+    let e = |mat, block, row, col, value: f64| Entry { mat, block, row, col, value: value * s_con };
+    let entries = vec![
+        e(1, 0, 0, 0, 1.0),
+        e(2, 0, 1, 1, 1.0),
+        e(0, 0, 0, 1, -1.0),
+        e(1, 1, 0, 0, 1.0),
+        e(0, 1, 0, 0, 0.25),
+        e(2, 1, 1, 1, 1.0),
+    ];
+    SdpProblem::new(vec![Block::Psd(2), Block::Nonneg(2)], vec![0.5 * s_obj, 0.5 * s_obj], entries).unwrap()
 }
