@@ -8,6 +8,11 @@ fn port_est(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_port-est")).args(args).output().unwrap()
 }
 
+/// `port-est filter -m model -i input -o output -e kf`.
+fn filter_kf(model: &Path, input: &str, output: &str) -> Output {
+    port_est(&["filter", "-m", model.to_str().unwrap(), "-i", input, "-o", output, "-e", "kf"])
+}
+
 fn text(bytes: &[u8]) -> String {
     String::from_utf8(bytes.to_vec()).unwrap()
 }
@@ -206,8 +211,7 @@ fn dash_reads_standard_input_and_writes_standard_output() {
     let model = root.join("examples/filter/model.toml");
     let data = std::fs::read_to_string(root.join("examples/filter/data.csv")).unwrap();
     let file_out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("port-est-cli-pipe.csv");
-    let by_file =
-        port_est(&["filter", "-m", model.to_str().unwrap(), "-i", "-", "-o", file_out.to_str().unwrap(), "-e", "kf"]);
+    let by_file = filter_kf(&model, "-", file_out.to_str().unwrap());
     // Without stdin attached the run sees an empty file.
     assert_eq!(by_file.status.code(), Some(1));
     assert!(text(&by_file.stderr).contains("<stdin>:1:1: empty file"), "{}", text(&by_file.stderr));
@@ -224,32 +228,12 @@ fn dash_reads_standard_input_and_writes_standard_output() {
     assert!(text(&piped.stderr).contains("written to standard output"), "{}", text(&piped.stderr));
     // The same rows as a run between files.
     let input = root.join("examples/filter/data.csv");
-    let ok = port_est(&[
-        "filter",
-        "-m",
-        model.to_str().unwrap(),
-        "-i",
-        input.to_str().unwrap(),
-        "-o",
-        file_out.to_str().unwrap(),
-        "-e",
-        "kf",
-    ]);
+    let ok = filter_kf(&model, input.to_str().unwrap(), file_out.to_str().unwrap());
     assert!(ok.status.success());
     assert_eq!(text(&piped.stdout), std::fs::read_to_string(&file_out).unwrap());
     // `/dev/stdout` on a pipe (it resolves to `/proc/self/fd/1`, `pipe:[…]`, which names no file).
     if Path::new("/dev/stdout").exists() {
-        let out = port_est(&[
-            "filter",
-            "-m",
-            model.to_str().unwrap(),
-            "-i",
-            input.to_str().unwrap(),
-            "-o",
-            "/dev/stdout",
-            "-e",
-            "kf",
-        ]);
+        let out = filter_kf(&model, input.to_str().unwrap(), "/dev/stdout");
         assert!(out.status.success(), "{}", text(&out.stderr));
         assert_eq!(text(&out.stdout), text(&piped.stdout));
     }
