@@ -19,15 +19,10 @@ use std::time::Instant;
 use mcap::records::MessageHeader;
 use ros_bag::{Bag, LogSpec};
 
-/// `sensor_msgs/msg/Imu` and what it uses (the standard definitions without their comments).
-const IMU: &str = "std_msgs/Header header
-geometry_msgs/Quaternion orientation
-float64[9] orientation_covariance
-geometry_msgs/Vector3 angular_velocity
-float64[9] angular_velocity_covariance
-geometry_msgs/Vector3 linear_acceleration
-float64[9] linear_acceleration_covariance
-================================================================================
+/// The definitions a message's `std_msgs/Header` brings into its schema.
+macro_rules! header_definitions {
+    () => {
+        "================================================================================
 MSG: std_msgs/Header
 builtin_interfaces/Time stamp
 string frame_id
@@ -35,7 +30,22 @@ string frame_id
 MSG: builtin_interfaces/Time
 int32 sec
 uint32 nanosec
-================================================================================
+"
+    };
+}
+
+/// `sensor_msgs/msg/Imu` and what it uses (the standard definitions without their comments).
+const IMU: &str = concat!(
+    "std_msgs/Header header
+geometry_msgs/Quaternion orientation
+float64[9] orientation_covariance
+geometry_msgs/Vector3 angular_velocity
+float64[9] angular_velocity_covariance
+geometry_msgs/Vector3 linear_acceleration
+float64[9] linear_acceleration_covariance
+",
+    header_definitions!(),
+    "================================================================================
 MSG: geometry_msgs/Quaternion
 float64 x 0
 float64 y 0
@@ -46,10 +56,12 @@ MSG: geometry_msgs/Vector3
 float64 x
 float64 y
 float64 z
-";
+"
+);
 
 /// `sensor_msgs/msg/NavSatFix` and what it uses.
-const NAV_SAT_FIX: &str = "std_msgs/Header header
+const NAV_SAT_FIX: &str = concat!(
+    "std_msgs/Header header
 sensor_msgs/NavSatStatus status
 float64 latitude
 float64 longitude
@@ -57,20 +69,15 @@ float64 altitude
 float64[9] position_covariance
 uint8 COVARIANCE_TYPE_UNKNOWN = 0
 uint8 position_covariance_type
-================================================================================
-MSG: std_msgs/Header
-builtin_interfaces/Time stamp
-string frame_id
-================================================================================
-MSG: builtin_interfaces/Time
-int32 sec
-uint32 nanosec
-================================================================================
+",
+    header_definitions!(),
+    "================================================================================
 MSG: sensor_msgs/NavSatStatus
 int8 STATUS_FIX = 0
 int8 status
 uint16 service
-";
+"
+);
 
 const MODEL: &str = r#"# A point moving along a line: position p, speed v, yaw rate w; the IMU's acceleration drives
 # v, its gyro measures w, the GNSS latitude (scaled) measures p.
