@@ -14,6 +14,18 @@ import port_estimation as pe
 ROOT = Path(__file__).resolve().parents[3]
 
 
+# A double integrator (position measured, acceleration as input) as a model file.
+DOUBLE_INTEGRATOR = """\
+a = [[1.0, 0.1], [0.0, 1.0]]
+b = [[0.0], [0.1]]
+c = [[1.0, 0.0]]
+q = [[1e-4, 0.0], [0.0, 1e-4]]
+r = [[1e-2]]
+p0 = [[1.0, 0.0], [0.0, 1.0]]
+x0 = [0.0, 0.0]
+"""
+
+
 def test_a_linear_model_with_boxes_holds_the_truth_on_the_boundary():
     rng = np.random.default_rng(4)
     a = np.array([[0.95, 0.2], [-0.15, 0.9]])
@@ -58,15 +70,7 @@ def test_cora_six_tank_from_its_model_file_beats_cora_s_published_widths():
 
 
 def test_a_model_file_s_generator_matrices_are_the_filter_s_sets():
-    base = """
-a = [[1.0, 0.1], [0.0, 1.0]]
-b = [[0.0], [0.1]]
-c = [[1.0, 0.0]]
-q = [[1e-4, 0.0], [0.0, 1e-4]]
-r = [[1e-2]]
-p0 = [[1.0, 0.0], [0.0, 1.0]]
-x0 = [0.0, 0.0]
-"""
+    base = DOUBLE_INTEGRATOR
     skewed = base + "x0_radius = [0.5, 0.5]\nw_generators = [[0.01, 0.004], [-0.004, 0.01]]\nv_radius = [0.05]\n"
     boxed = base + "x0_radius = [0.5, 0.5]\nw_radius = [0.014, 0.014]\nv_radius = [0.05]\n"
     rng = np.random.default_rng(5)
@@ -88,14 +92,7 @@ x0 = [0.0, 0.0]
         pe.parse_model(skewed + "w_radius = [0.1, 0.1]\n")
 
 
-MODEL_WITH_TABLE = """\
-a = [[1.0, 0.1], [0.0, 1.0]]
-b = [[0.0], [0.1]]
-c = [[1.0, 0.0]]
-q = [[1e-4, 0.0], [0.0, 1e-4]]
-r = [[1e-2]]
-p0 = [[1.0, 0.0], [0.0, 1.0]]
-x0 = [0.0, 0.0]
+MODEL_WITH_TABLE = DOUBLE_INTEGRATOR + """\
 x0_radius = [0.5, 0.5]
 w_radius = [0.01, 0.01]
 v_radius = [0.05]
