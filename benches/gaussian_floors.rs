@@ -19,9 +19,16 @@ use std::hint::black_box;
 
 use common::CYCLE;
 use criterion::{Criterion, criterion_group, criterion_main};
-use estimators::{ExtendedKalmanFilter, Setup, UkfParams, UnscentedKalmanFilter};
+use estimators::{ExtendedKalmanFilter, GaussianEstimate, Setup, UkfParams, UnscentedKalmanFilter};
 use models::{DifferentiableModel, DiscreteModel};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+/// Asserts that the floor's mean `x` and covariance `p` are the filter's estimate `e` to 1e-9
+/// (relative).
+fn assert_floor_agrees(what: &str, e: &GaussianEstimate, x: &[f64], p: &[f64]) {
+    let (dx, dp) = (rel_diff(e.center.as_slice(), x), rel_diff(e.covariance.as_slice(), p));
+    assert!(dx < 1e-9 && dp < 1e-9, "{what} floor disagrees: mean {dx:e}, covariance {dp:e}");
+}
 
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs())).max(1e-300);
@@ -193,10 +200,7 @@ fn truck_ekf(crit: &mut Criterion) {
             ours.step(&model, u, y).unwrap();
             floor.step(&mut ev, u, y);
         }
-        let e = ours.estimate();
-        let (dx, dp) =
-            (rel_diff(e.center.as_slice(), floor.x.as_slice()), rel_diff(e.covariance.as_slice(), floor.p.as_slice()));
-        assert!(dx < 1e-9 && dp < 1e-9, "truck EKF floor disagrees: mean {dx:e}, covariance {dp:e}");
+        assert_floor_agrees("truck EKF", ours.estimate(), floor.x.as_slice(), floor.p.as_slice());
     }
     let mut group = crit.benchmark_group("truck_ekf_floor");
     let mut ours = ExtendedKalmanFilter::new(setup.clone()).unwrap();
@@ -244,10 +248,7 @@ fn vessel_ukf(crit: &mut Criterion) {
             ours.step(&model, u, y).unwrap();
             floor.step(&mut ev, u, y);
         }
-        let e = ours.estimate();
-        let (dx, dp) =
-            (rel_diff(e.center.as_slice(), floor.x.as_slice()), rel_diff(e.covariance.as_slice(), floor.p.as_slice()));
-        assert!(dx < 1e-9 && dp < 1e-9, "vessel UKF floor disagrees: mean {dx:e}, covariance {dp:e}");
+        assert_floor_agrees("vessel UKF", ours.estimate(), floor.x.as_slice(), floor.p.as_slice());
     }
     let mut group = crit.benchmark_group("vessel_ukf_floor");
     let fresh = || UnscentedKalmanFilter::new(setup.clone(), params).unwrap();
