@@ -98,14 +98,14 @@ pub fn filter_lmi() -> SdpProblem {
 /// `tr(F₀Y) = 1`. Scaling every `Fᵢ` (and `F₀`) by the same factor leaves `x` and the optimum
 /// unchanged; scaling `c` scales the optimum.
 pub fn known_optimum(s_obj: f64, s_con: f64) -> SdpProblem {
-    let e = |mat, block, row, col, value: f64| Entry { mat, block, row, col, value: value * s_con };
-    let entries = vec![
-        e(1, 0, 0, 0, 1.0),
-        e(2, 0, 1, 1, 1.0),
-        e(0, 0, 0, 1, -1.0),
-        e(1, 1, 0, 0, 1.0),
-        e(0, 1, 0, 0, 0.25),
-        e(2, 1, 1, 1, 1.0),
-    ];
-    SdpProblem::new(vec![Block::Psd(2), Block::Nonneg(2)], vec![0.5 * s_obj, 0.5 * s_obj], entries).unwrap()
+    let entries = [
+        (1, 0, 0, 0, 1.0),
+        (2, 0, 1, 1, 1.0),
+        (0, 0, 0, 1, -1.0),
+        (1, 1, 0, 0, 1.0),
+        (0, 1, 0, 0, 0.25),
+        (2, 1, 1, 1, 1.0),
+    ]
+    .map(|(mat, block, row, col, value)| (mat, block, row, col, value * s_con));
+    problem(vec![Block::Psd(2), Block::Nonneg(2)], vec![0.5 * s_obj, 0.5 * s_obj], &entries)
 }
