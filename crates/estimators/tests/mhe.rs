@@ -6,6 +6,7 @@
 
 mod common;
 
+use common::lcg::{Data, Lcg, system};
 use estimators::mhe::{
     ArrivalRecursion, ArrivalStatus, BlockingPreset, InnerSolver, MheCost, MheSettings, MovingHorizonEstimator,
     PriorMean, WindowSolver, WindowStatus,
@@ -14,23 +15,6 @@ use estimators::{
     DataCheck, DataChecks, Estimate, Estimator, EstimatorError, InconsistencyPolicy, KalmanFilter, StepModel,
 };
 use nalgebra::{DMatrix, DVector};
-
-struct Lcg(u64);
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
-/// A random stable-ish system with `n` states, one input, `m` outputs.
-fn system(n: usize, m: usize, seed: u64) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-    let mut g = Lcg(seed);
-    let a = DMatrix::from_fn(n, n, |i, j| if i == j { 0.9 } else { 0.0 } + 0.2 * g.uniform());
-    let b = DMatrix::from_fn(n, 1, |_, _| g.uniform());
-    let c = DMatrix::from_fn(m, n, |_, _| g.uniform());
-    (a, b, c)
-}
 
 type Case = common::Case<MheSettings>;
 
@@ -76,28 +60,8 @@ fn settings(n: usize, m: usize, cost: MheCost, horizon: usize, w: f64, v: f64) -
 }
 
 /// Simulated data: inputs and measurements with noise uniform in the boxes.
-fn data(
-    a: &DMatrix<f64>,
-    b: &DMatrix<f64>,
-    c: &DMatrix<f64>,
-    steps: usize,
-    w: f64,
-    v: f64,
-    seed: u64,
-) -> (Vec<DVector<f64>>, Vec<DVector<f64>>) {
-    let mut g = Lcg(seed ^ 0x9e37);
-    let n = a.nrows();
-    let mut x = DVector::from_fn(n, |_, _| 0.3 * g.uniform());
-    let mut us = Vec::new();
-    let mut ys = Vec::new();
-    for k in 0..steps {
-        let u = DVector::from_element(1, (0.3 * k as f64).sin());
-        x = a * &x + b * &u + DVector::from_fn(n, |_, _| w * g.uniform());
-        let y = c * &x + DVector::from_fn(c.nrows(), |_, _| v * g.uniform());
-        us.push(u);
-        ys.push(y);
-    }
-    (us, ys)
+fn data(a: &DMatrix<f64>, b: &DMatrix<f64>, c: &DMatrix<f64>, steps: usize, w: f64, v: f64, seed: u64) -> Data {
+    common::lcg::simulate((a, b, c), steps, &mut Lcg(seed ^ 0x9e37), 0.3, (w, v), Lcg::uniform)
 }
 
 #[test]

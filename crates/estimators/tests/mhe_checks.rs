@@ -3,30 +3,14 @@
 //! measurement far outside `V`, a jump `W` forbids and an unstable model against stable data are
 //! proved inconsistent, with each policy doing what it says.
 
+mod common;
+
+use common::lcg::{Data, Lcg, system};
 use estimators::mhe::{MheCost, MheSettings, MovingHorizonEstimator, WindowSolver};
 use estimators::{
     DataCheck, DataChecks, Estimate, Estimator, EstimatorError, InconsistencyPolicy, Setup, SolveOutcome, StepModel,
 };
 use nalgebra::{DMatrix, DVector};
-
-struct Lcg(u64);
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-    fn sign(&mut self) -> f64 {
-        if self.uniform() >= 0.0 { 1.0 } else { -1.0 }
-    }
-}
-
-fn system(n: usize, m: usize, seed: u64) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-    let mut g = Lcg(seed);
-    let a = DMatrix::from_fn(n, n, |i, j| if i == j { 0.9 } else { 0.0 } + 0.2 * g.uniform());
-    let b = DMatrix::from_fn(n, 1, |_, _| g.uniform());
-    let c = DMatrix::from_fn(m, n, |_, _| g.uniform());
-    (a, b, c)
-}
 
 fn mhe(n: usize, m: usize, cost: MheCost, solver: WindowSolver, w: f64, v: f64) -> MovingHorizonEstimator {
     let mut s = MheSettings::new(
@@ -56,17 +40,8 @@ fn boundary_data(
     w: f64,
     v: f64,
     seed: u64,
-) -> (Vec<DVector<f64>>, Vec<DVector<f64>>) {
-    let mut g = Lcg(seed ^ 0x5bd1);
-    let mut x = DVector::from_fn(a.nrows(), |_, _| 0.5 * g.uniform());
-    let (mut us, mut ys) = (Vec::new(), Vec::new());
-    for k in 0..steps {
-        let u = DVector::from_element(1, (0.3 * k as f64).sin());
-        x = a * &x + b * &u + DVector::from_fn(a.nrows(), |_, _| w * g.sign());
-        ys.push(c * &x + DVector::from_fn(c.nrows(), |_, _| v * g.sign()));
-        us.push(u);
-    }
-    (us, ys)
+) -> Data {
+    common::lcg::simulate((a, b, c), steps, &mut Lcg(seed ^ 0x5bd1), 0.5, (w, v), Lcg::sign)
 }
 
 #[test]

@@ -4,6 +4,7 @@
 use models::Xoshiro256StarStar;
 use nalgebra::{DMatrix, DVector};
 
+pub mod lcg;
 pub mod system;
 #[allow(unused_imports)]
 pub use system::{LinearSystem, setup};
