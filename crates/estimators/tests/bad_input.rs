@@ -274,7 +274,7 @@ fn badly_scaled_positive_definite_noise_is_accepted() {
     let singular = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
     assert!(f.set_process_noise(&singular).is_err());
     // A Gaussian filter's Q is a covariance: singular is allowed, indefinite is not.
-    let kf = |q: &DMatrix<f64>| KalmanFilter::new(common::setup(&DVector::zeros(2), &p0, &q, &r, 1));
+    let kf = |q: &DMatrix<f64>| KalmanFilter::new(common::setup(&DVector::zeros(2), &p0, q, &r, 1));
     assert!(kf(&singular).is_ok());
     assert!(kf(&DMatrix::zeros(2, 2)).is_ok());
     let indefinite = DMatrix::from_row_slice(2, 2, &[1.0, 1.0 + 1e-6, 1.0 + 1e-6, 1.0]);
