@@ -290,10 +290,13 @@ pub fn why_not(model: &Model, entry: &EstimatorEntry) -> Option<String> {
     if let Some(why) = model.lacks(entry.needs) {
         return Some(why);
     }
+    read_settings(model, entry, None).err().and_then(|_| missing(entry))
+}
+
+/// What `entry`'s settings need that the model file must give, in its terms (`None`: nothing).
+fn missing(entry: &EstimatorEntry) -> Option<String> {
     let need = entry.settings.needs()?;
-    read_settings(model, entry, None)
-        .is_err()
-        .then(|| format!("needs {need} in the model file (or in its `[estimator.{}]` table)", entry.name))
+    Some(format!("needs {need} in the model file (or in its `[estimator.{}]` table)", entry.name))
 }
 
 /// The settings of `entry`: the model file's (its `[estimator.NAME]` table over its `[mhe]`,
@@ -304,16 +307,16 @@ fn settings(
     entry: &EstimatorEntry,
     solver: Option<&SmfSolver>,
 ) -> Result<Option<EstimatorSettings>, Error> {
-    if let Some(why) = why_not(model, entry) {
-        return Err(Error::File {
-            path: model.path().to_owned(),
-            message: format!("--estimator {} {why}", entry.name),
-        });
-    }
-    read_settings(model, entry, solver)
+    // The file's tables were read when the file was: what can fail here is what it lacks.
+    read_settings(model, entry, solver).map_err(|e| match missing(entry) {
+        Some(why) => {
+            Error::File { path: model.path().to_owned(), message: format!("--estimator {} {why}", entry.name) }
+        }
+        None => e,
+    })
 }
 
-/// The settings of `entry` as [`settings`] reads them, without naming what is missing.
+/// The settings of `entry` as the registry's reader gives them.
 fn read_settings(
     model: &Model,
     entry: &EstimatorEntry,

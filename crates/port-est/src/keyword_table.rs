@@ -23,8 +23,8 @@ pub struct KeywordTable {
     name: String,
     /// The file it is in (a relative `path` value is read against the file's folder).
     path: PathBuf,
-    /// Where the table starts.
-    at: Location,
+    /// Where the table starts (`None`: the file has no such table).
+    at: Option<Location>,
     /// Each key, its value and where the value is.
     entries: Vec<(String, Value, Location)>,
 }
@@ -39,14 +39,14 @@ impl KeywordTable {
         Self {
             name: name.to_owned(),
             path: path.to_owned(),
-            at: at(span),
+            at: Some(at(span)),
             entries: table.iter().map(|(k, v)| (k.clone(), v.get_ref().clone(), at(v.span()))).collect(),
         }
     }
 
     /// No table: the defaults (errors are about the file `path`).
     pub(crate) fn absent(name: &str, path: &Path) -> Self {
-        Self { name: name.to_owned(), path: path.to_owned(), at: Location::new(path, 0, 0), entries: Vec::new() }
+        Self { name: name.to_owned(), path: path.to_owned(), at: None, entries: Vec::new() }
     }
 
     /// Its name in messages.
@@ -55,9 +55,9 @@ impl KeywordTable {
         &self.name
     }
 
-    /// Where the table starts.
-    pub(crate) fn at(&self) -> &Location {
-        &self.at
+    /// Where the table starts (`None`: the file has no such table).
+    pub(crate) fn at(&self) -> Option<&Location> {
+        self.at.as_ref()
     }
 
     /// Each key (as `table.key`) and where its value is.
@@ -76,8 +76,10 @@ impl KeywordTable {
     pub(crate) fn error(&self, key: &str, message: &str) -> Error {
         match self.entries.iter().find(|(k, ..)| k == key) {
             Some((_, _, at)) => Error::At { at: at.clone(), message: format!("`{}.{key}`: {message}", self.name) },
-            None if self.at.line == 0 => Error::File { path: self.path.clone(), message: message.to_owned() },
-            None => Error::At { at: self.at.clone(), message: format!("`{}`: {message}", self.name) },
+            None => match &self.at {
+                Some(at) => Error::At { at: at.clone(), message: format!("`{}`: {message}", self.name) },
+                None => Error::File { path: self.path.clone(), message: message.to_owned() },
+            },
         }
     }
 

@@ -315,10 +315,10 @@ impl Model {
     /// The `[estimator.NAME]` table of the estimator `name` (an empty one when the file has
     /// none): its settings by the registry's keywords, read with [`KeywordTable::reader`].
     #[must_use]
-    pub fn settings_table(&self, name: &str) -> KeywordTable {
+    pub fn settings_table(&self, name: &str) -> std::borrow::Cow<'_, KeywordTable> {
         match self.estimator_tables.iter().find(|(n, _)| *n == name) {
-            Some((_, t)) => t.clone(),
-            None => KeywordTable::absent(&format!("estimator.{name}"), &self.source.path),
+            Some((_, t)) => std::borrow::Cow::Borrowed(t),
+            None => std::borrow::Cow::Owned(KeywordTable::absent(&format!("estimator.{name}"), &self.source.path)),
         }
     }
 
@@ -641,7 +641,9 @@ fn parse(path: &Path, text: &str, limits: &Limits, builtin: Option<&'static Buil
         estimator_tables.push((entry.name, t));
     }
     for t in tables.iter().chain(estimator_tables.iter().map(|(_, t)| t)) {
-        keys.push((t.name().to_owned(), t.at().line, t.at().column));
+        if let Some(at) = t.at() {
+            keys.push((t.name().to_owned(), at.line, at.column));
+        }
         for (k, at) in t.locations() {
             keys.push((k, at.line, at.column));
         }

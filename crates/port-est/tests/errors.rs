@@ -5,16 +5,10 @@ use std::path::{Path, PathBuf};
 
 use port_est::{Error, FilterOptions, filter};
 
-const MODEL: &str = "\
-# A damped oscillator.
-a  = [[1.0, 0.01], [-0.01, 0.998]]
-b  = [[0.0], [0.01]]
-c  = [[1.0, 0.0]]
-q  = [[1e-6, 0.0], [0.0, 1e-4]]
-r  = [[4e-4]]
-p0 = [[0.25, 0.0], [0.0, 0.25]]
-x0 = [0.0, 0.0]
-";
+#[macro_use]
+mod common;
+
+const MODEL: &str = concat!("# A damped oscillator.\n", oscillator_text!());
 
 const DATA: &str = "k,u1,y1\n0,0.0,0.30\n1,0.2,0.29\n2,0.4,0.28\n";
 

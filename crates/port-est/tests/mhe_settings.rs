@@ -5,14 +5,8 @@ use std::path::{Path, PathBuf};
 
 use port_est::{FilterOptions, filter};
 
-const MODEL: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
-b  = [[0.0], [0.01]]
-c  = [[1.0, 0.0]]
-q  = [[1e-6, 0.0], [0.0, 1e-4]]
-r  = [[4e-4]]
-p0 = [[0.25, 0.0], [0.0, 0.25]]
-x0 = [0.0, 0.0]
-";
+mod common;
+use common::OSCILLATOR as MODEL;
 
 const TABLE: &str = "[mhe]
 horizon = 6

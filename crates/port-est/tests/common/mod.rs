@@ -4,21 +4,34 @@
 
 use std::path::{Path, PathBuf};
 
-/// A damped oscillator (two states, one input, one output) with an `[mhe]` table of its noise
-/// boxes, as a model file.
-pub const OSCILLATOR_WITH_NOISE_BOXES: &str = "a  = [[1.0, 0.01], [-0.01, 0.998]]
+/// The text of a damped oscillator's model file (two states, one input, one output), as a
+/// literal for `concat!`.
+macro_rules! oscillator_text {
+    () => {
+        "a  = [[1.0, 0.01], [-0.01, 0.998]]
 b  = [[0.0], [0.01]]
 c  = [[1.0, 0.0]]
 q  = [[1e-6, 0.0], [0.0, 1e-4]]
 r  = [[4e-4]]
 p0 = [[0.25, 0.0], [0.0, 0.25]]
 x0 = [0.0, 0.0]
-[mhe]
+"
+    };
+}
+
+/// A damped oscillator (two states, one input, one output) as a model file.
+pub const OSCILLATOR: &str = oscillator_text!();
+
+/// The oscillator with an `[mhe]` table of its noise boxes.
+pub const OSCILLATOR_WITH_NOISE_BOXES: &str = concat!(
+    oscillator_text!(),
+    "[mhe]
 w_lower = [-1e-3, -1e-2]
 w_upper = [1e-3, 1e-2]
 v_lower = [-0.02]
 v_upper = [0.02]
-";
+"
+);
 
 /// A double integrator (position measured, acceleration as input) as a model file.
 pub const DOUBLE_INTEGRATOR: &str = "\
