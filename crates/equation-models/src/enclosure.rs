@@ -67,6 +67,29 @@ impl EquationModel {
         }
     }
 
+    /// `rows` over the box `x` (input `u`), values only: into `value`, with `values` the graph's
+    /// scratch (one interval per node).
+    fn enclose_values(&self, rows: &Rows, x: &[Interval], u: &[f64], values: &mut [Interval], value: &mut [Interval]) {
+        let n = x.len();
+        values[..n].copy_from_slice(x);
+        for (v, &ui) in values[n..n + u.len()].iter_mut().zip(u) {
+            *v = Interval::point(ui);
+        }
+        self.graph.run_value_enclosure(&rows.schedule, values);
+        for (k, &r) in rows.roots.iter().enumerate() {
+            value[k] = values[r as usize];
+        }
+    }
+
+    /// Runs `f` on the graph's value scratch (one interval per node) and `extra` more intervals.
+    fn with_value_work<R>(&self, extra: usize, mut f: impl FnMut(&mut [Interval], &mut [Interval]) -> R) -> R {
+        let nodes = self.graph.len();
+        with_interval_scratch(nodes + extra, |buf| {
+            let (values, rest) = buf.split_at_mut(nodes);
+            f(values, rest)
+        })
+    }
+
     /// Runs `f` on the graph's interval scratch and `extra` more intervals.
     fn with_work<R>(&self, extra: usize, mut f: impl FnMut(Work<'_>, &mut [Interval]) -> R) -> R {
         let (nodes, n) = (self.graph.len(), self.dims().states);
@@ -193,6 +216,83 @@ impl SecondOrderModel for EquationModel {
                 for j in 0..n {
                     out.set_jacobian(i, j, jac[i * n + j]);
                 }
+            }
+        });
+        Ok(())
+    }
+
+    /// As [`SecondOrderModel::f_enclosure`]'s values, without the forward-mode Jacobian (the same
+    /// bits: the values never read the derivatives).
+    fn f_value_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        let n = self.dims().states;
+        let TimeModel::Continuous { ts, discretization } = self.time else {
+            self.check_box("f enclosure", n, x, u, out)?;
+            out.clear();
+            out.set_hessian_invalid();
+            self.with_value_work(n, |values, value| {
+                self.enclose_values(&self.rhs, x, u.as_slice(), values, value);
+                for (i, v) in value.iter().enumerate() {
+                    out.set_value(i, *v);
+                }
+            });
+            return Ok(());
+        };
+        if discretization == Discretization::Zoh {
+            // Already cheap: a product by the hold's matrices.
+            return self.f_enclosure(x, u, out);
+        }
+        self.check_box("f enclosure", n, x, u, out)?;
+        out.clear();
+        out.set_hessian_invalid();
+        let ts = Interval::point(ts);
+        self.with_value_work(5 * n, |values, rest| {
+            let (value, rest) = rest.split_at_mut(n);
+            let (g, rest) = rest.split_at_mut(n);
+            let (acc, rest) = rest.split_at_mut(n);
+            let (k, xs) = rest.split_at_mut(n);
+            self.enclose_values(&self.rhs, x, u.as_slice(), values, g);
+            if discretization == Discretization::Euler {
+                for i in 0..n {
+                    value[i] = x[i] + ts * g[i];
+                }
+            } else {
+                // RK4's stages as in `f_enclosure`, without the chain rule.
+                let offsets = [Interval::ZERO, ts * 0.5, ts * 0.5, ts];
+                let weights = [1.0, 2.0, 2.0, 1.0];
+                acc.copy_from_slice(g);
+                k.copy_from_slice(g);
+                for s in 1..4 {
+                    for i in 0..n {
+                        xs[i] = x[i] + offsets[s] * k[i];
+                    }
+                    self.enclose_values(&self.rhs, xs, u.as_slice(), values, g);
+                    for i in 0..n {
+                        acc[i] = acc[i] + g[i] * weights[s];
+                    }
+                    k.copy_from_slice(g);
+                }
+                let sixth = ts / 6.0;
+                for i in 0..n {
+                    value[i] = x[i] + sixth * acc[i];
+                }
+            }
+            for (i, v) in value.iter().enumerate() {
+                out.set_value(i, *v);
+            }
+        });
+        Ok(())
+    }
+
+    /// As [`SecondOrderModel::h_enclosure`]'s values, without the Jacobian.
+    fn h_value_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
+        let d = self.dims();
+        self.check_box("h enclosure", d.outputs, x, u, out)?;
+        out.clear();
+        out.set_hessian_invalid();
+        self.with_value_work(d.outputs, |values, value| {
+            self.enclose_values(&self.out, x, u.as_slice(), values, value);
+            for (i, v) in value.iter().enumerate() {
+                out.set_value(i, *v);
             }
         });
         Ok(())

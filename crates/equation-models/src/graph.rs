@@ -234,6 +234,23 @@ impl Graph {
 }
 
 impl Graph {
+    /// [`Graph::run_enclosure`] without the derivatives: only the value enclosures (the same bits
+    /// as that run's values, which never read the derivatives).
+    pub(crate) fn run_value_enclosure(&self, schedule: &[u32], values: &mut [intervals::Interval]) {
+        use crate::interval_rules::{apply, bin_apply};
+        use intervals::Interval;
+        for &i in schedule {
+            let i = i as usize;
+            values[i] = match self.ops[i] {
+                Op::Slot => values[i],
+                Op::Const(c) => Interval::point(c),
+                Op::Neg(a) => -values[a as usize],
+                Op::Unary(f, a) => apply(f, values[a as usize]),
+                Op::Binary(g, a, b) => bin_apply(g, values[a as usize], values[b as usize]),
+            };
+        }
+    }
+
     /// [`Graph::run`] on intervals (module `interval_rules`): `values` holds enclosures of the
     /// states (slots `0..n`) and inputs; afterwards every scheduled node's value enclosure, and in
     /// `grads` (`n` per node) the enclosure of its derivatives with respect to the states, for the

@@ -1,8 +1,9 @@
 //! Interval enclosures of models written as equations (`SecondOrderModel`): at random points of
 //! random boxes, `f`, `h` and their exact Jacobians lie in the box's enclosures — for the vessel
 //! (Euler), the truck (Euler, Pacejka tyres with `atan2`, `abs`, `max`), the car (exact
-//! zero-order hold) and a pendulum (RK4); functions undefined on the box give unbounded
-//! enclosures.
+//! zero-order hold), a pendulum (RK4) and CORA's six tanks (a discrete map); the value-only
+//! enclosures are the full ones' values bit for bit; functions undefined on the box give
+//! unbounded enclosures.
 
 use equation_models::EquationModel;
 use models::{AnyModel, DifferentiableModel, Interval, SecondOrderModel, TaylorEnclosure, Xoshiro256StarStar};
@@ -46,6 +47,13 @@ fn check(model: &EquationModel, centre: &[f64], spread: &[f64], u: &DVector<f64>
         model.f_enclosure(&boxed, u, &mut fe).unwrap();
         model.h_enclosure(&boxed, u, &mut he).unwrap();
         assert!(fe.is_bounded() && he.is_bounded(), "box {boxed:?}");
+        // The value-only enclosures skip the derivatives, not a rounding.
+        let (mut fv, mut hv) = (TaylorEnclosure::new(n, n), TaylorEnclosure::new(m, n));
+        model.f_value_enclosure(&boxed, u, &mut fv).unwrap();
+        model.h_value_enclosure(&boxed, u, &mut hv).unwrap();
+        let bits = |v: Interval| (v.lo().to_bits(), v.hi().to_bits());
+        assert!((0..n).all(|i| bits(fv.value(i)) == bits(fe.value(i))), "f values, box {boxed:?}");
+        assert!((0..m).all(|i| bits(hv.value(i)) == bits(he.value(i))), "h values, box {boxed:?}");
         for _ in 0..10 {
             let x = DVector::from_fn(n, |i, _| c[i] + r[i] * rng.uniform(-1.0, 1.0));
             model.f_with_jacobian(&x, u, &mut f, &mut jf).unwrap();
@@ -89,7 +97,16 @@ fn the_enclosures_contain_the_model_and_its_jacobians_at_every_point_of_the_box(
     check(&car, &[0.5, 0.02, 0.01, 0.02], &[0.5, 0.05, 0.05, 0.05], &DVector::from_element(1, 0.02), 3);
     let pendulum = EquationModel::from_toml_str(PENDULUM, "pendulum.toml").unwrap();
     check(&pendulum, &[0.4, 0.0], &[0.2, 0.5], &DVector::from_element(1, 0.1), 4);
-    for model in [&vessel, &truck, &car, &pendulum] {
+    let path = format!("{}/../../examples/six-tank/model.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let tanks = EquationModel::from_toml_str_with_foreign_keys(
+        &text,
+        &path,
+        &[NOISE_KEYS.as_slice(), &["x0_radius", "w_radius", "v_radius"]].concat(),
+    )
+    .unwrap();
+    check(&tanks, &[20.0; 6], &[4.0; 6], &DVector::from_element(3, 0.1), 5);
+    for model in [&vessel, &truck, &car, &pendulum, &tanks] {
         assert!(model.second_order().is_some());
     }
 }
