@@ -68,6 +68,11 @@ pub(crate) struct FactorRanges {
     pub(crate) r: Vec<Interval>,
 }
 
+/// Below this a positive excess `ρ` might give `H = ρ² / (K⁻¹)_jj = 0` by underflow (a KKT
+/// diagonal entry is at most 1, so `ρ ≥ 2⁻⁴⁹⁰` gives `ρ² ≥ 2⁻⁹⁸⁰`, far from underflow; the crude
+/// measure `ρ² (1 + ‖g_j‖²)` only grows).
+const TINY_EXCESS: f64 = 1e-147;
+
 /// Sweeps of the propagation (each visits every row once).
 const PROPAGATION_SWEEPS: usize = 3;
 
@@ -269,12 +274,25 @@ impl ConstrainedZonotope {
         let (nc, ng) = (self.constraints(), self.generators());
         let candidates: Vec<usize> =
             (0..ng).filter(|&j| excess[j].is_finite() && (0..nc).any(|i| self.a[(i, j)] != 0.0)).collect();
+        // A factor with no excess loses nothing (H_j = 0): the first such is the choice, and the
+        // KKT diagonal is not needed unless an earlier candidate's excess is small enough that its
+        // H_j could round to 0 as well (the same choice as the full scan, bit for bit).
+        let free = candidates.iter().position(|&j| excess[j] == 0.0);
+        let col = match free {
+            Some(p) if candidates[..p].iter().all(|&j| excess[j] >= TINY_EXCESS) => candidates[p],
+            _ => self.least_hausdorff_error(&candidates, excess)?,
+        };
+        self.pivot_row(col).map(|row| (row, col))
+    }
+
+    /// The candidate with the least `H_j` (the first of equals).
+    fn least_hausdorff_error(&self, candidates: &[usize], excess: &[f64]) -> Option<usize> {
         if candidates.is_empty() {
             return None;
         }
         let kinv = kkt_inverse_diagonal(&self.g, &self.a);
         let mut best: Option<(f64, usize)> = None;
-        for &j in &candidates {
+        for &j in candidates {
             let h = if excess[j] == 0.0 {
                 0.0
             } else if kinv[j].is_finite() && kinv[j] > 0.0 {
@@ -286,9 +304,13 @@ impl ConstrainedZonotope {
                 best = Some((h, j));
             }
         }
-        let (_, col) = best?;
-        let row = (0..nc).max_by(|&p, &q| self.a[(p, col)].abs().total_cmp(&self.a[(q, col)].abs()))?;
-        Some((row, col))
+        best.map(|(_, j)| j)
+    }
+
+    /// The row where factor `col`'s coefficient is largest in magnitude.
+    fn pivot_row(&self, col: usize) -> Option<usize> {
+        let nc = self.constraints();
+        (0..nc).max_by(|&p, &q| self.a[(p, col)].abs().total_cmp(&self.a[(q, col)].abs()))
     }
 
     /// Eliminates factor `col` with constraint `row` (Z5): `ξ_col = β − Σ_{k≠col} w_k ξ_k`,
@@ -481,6 +503,41 @@ mod tests {
             }
         }
         assert!(narrowing > 100 && empty > 5, "{narrowing} narrowing, {empty} empty");
+    }
+
+    #[test]
+    fn a_factor_without_excess_is_the_choice_of_the_full_scan() {
+        let mut seed = 11_u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let mut shortcuts = 0;
+        for case in 0..300 {
+            let (n, nc, ng) = (1 + case % 4, 1 + case % 3, 3 + case % 7);
+            let z = ConstrainedZonotope::new(
+                DVector::from_fn(n, |_, _| next()),
+                DMatrix::from_fn(n, ng, |_, _| next()),
+                DMatrix::from_fn(nc, ng, |_, _| if next() < -0.5 { 0.0 } else { next() }),
+                DVector::from_fn(nc, |_, _| 0.1 * next()),
+            )
+            .unwrap();
+            // Excesses: zero, tiny (where H could underflow), ordinary or infinite.
+            let excess: Vec<f64> = (0..ng)
+                .map(|_| match next() {
+                    v if v < -0.6 => 0.0,
+                    v if v < -0.5 => 1e-200,
+                    v if v > 0.9 => f64::INFINITY,
+                    v => v.abs(),
+                })
+                .collect();
+            let candidates: Vec<usize> =
+                (0..ng).filter(|&j| excess[j].is_finite() && (0..nc).any(|i| z.a[(i, j)] != 0.0)).collect();
+            let full = z.least_hausdorff_error(&candidates, &excess).and_then(|c| z.pivot_row(c).map(|r| (r, c)));
+            assert_eq!(z.elimination_choice(&excess), full, "case {case}");
+            shortcuts += usize::from(candidates.iter().any(|&j| excess[j] == 0.0));
+        }
+        assert!(shortcuts > 50, "{shortcuts}");
     }
 
     #[test]
