@@ -140,23 +140,123 @@ pub(crate) fn propagate(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<FactorRang
 /// is singular (the caller falls back to a cruder measure).
 fn kkt_inverse_diagonal(g: &DMatrix<f64>, a: &DMatrix<f64>) -> Vec<f64> {
     let (n, ng, nc) = (g.nrows(), g.ncols(), a.nrows());
-    let m = DMatrix::identity(n, n) + g * g.transpose();
-    let Some(m_chol) = m.cholesky() else { return vec![f64::NAN; ng] };
-    let minv_g = m_chol.solve(g); // n × ng
-    let gat = g * a.transpose(); // n × nc
-    let u = a.transpose() - g.transpose() * m_chol.solve(&gat); // ng × nc
-    let h_diag: Vec<f64> = (0..ng).map(|j| 1.0 - g.column(j).dot(&minv_g.column(j))).collect();
-    if nc == 0 {
-        return h_diag;
+    let singular = || vec![f64::NAN; ng];
+    // One buffer: L (n × n, the Cholesky factor of I + G Gᵀ), Z = (I + G Gᵀ)⁻¹ G (n × ng),
+    // G Aᵀ (n × nc), U (ng × nc), S and its inverse (nc × nc each), column-major.
+    let mut buf = vec![0.0; n * n + n * ng + n * nc + ng * nc + 2 * nc * nc];
+    let (l, rest) = buf.split_at_mut(n * n);
+    let (z, rest) = rest.split_at_mut(n * ng);
+    let (gat, rest) = rest.split_at_mut(n * nc);
+    let (u, rest) = rest.split_at_mut(ng * nc);
+    let (sm, sinv) = rest.split_at_mut(nc * nc);
+    for c in 0..n {
+        for r in c..n {
+            let mut v = if r == c { 1.0 } else { 0.0 };
+            for j in 0..ng {
+                v += g[(r, j)] * g[(c, j)];
+            }
+            for k in 0..c {
+                v -= l[r + k * n] * l[c + k * n];
+            }
+            if r == c {
+                if !(v > 0.0 && v.is_finite()) {
+                    return singular();
+                }
+                l[c + c * n] = v.sqrt();
+            } else {
+                l[r + c * n] = v / l[c + c * n];
+            }
+        }
     }
-    let s = a * &u;
-    let Some(s_lu) = s.clone().lu().try_inverse() else { return vec![f64::NAN; ng] };
-    (0..ng)
-        .map(|j| {
-            let uj = u.row(j).transpose();
-            h_diag[j] - uj.dot(&(&s_lu * &uj))
-        })
-        .collect()
+    // Z's columns by forward and back substitution; H⁻¹'s diagonal 1 − g_jᵀ z_j (Woodbury).
+    let mut diag = vec![0.0; ng];
+    for j in 0..ng {
+        let zj = &mut z[j * n..(j + 1) * n];
+        for r in 0..n {
+            let mut v = g[(r, j)];
+            for k in 0..r {
+                v -= l[r + k * n] * zj[k];
+            }
+            zj[r] = v / l[r + r * n];
+        }
+        for r in (0..n).rev() {
+            let mut v = zj[r];
+            for k in r + 1..n {
+                v -= l[k + r * n] * zj[k];
+            }
+            zj[r] = v / l[r + r * n];
+        }
+        diag[j] = 1.0 - (0..n).map(|r| g[(r, j)] * zj[r]).sum::<f64>();
+    }
+    if nc == 0 {
+        return diag;
+    }
+    // U = H⁻¹ Aᵀ = Aᵀ − Zᵀ (G Aᵀ); S = A U.
+    for c in 0..nc {
+        for r in 0..n {
+            gat[r + c * n] = (0..ng).map(|j| g[(r, j)] * a[(c, j)]).sum();
+        }
+    }
+    for c in 0..nc {
+        for j in 0..ng {
+            u[j + c * ng] = a[(c, j)] - (0..n).map(|k| z[k + j * n] * gat[k + c * n]).sum::<f64>();
+        }
+    }
+    for c in 0..nc {
+        for r in 0..nc {
+            sm[r + c * nc] = (0..ng).map(|j| a[(r, j)] * u[j + c * ng]).sum();
+        }
+    }
+    if !invert_in_place(sm, sinv, nc) {
+        return singular();
+    }
+    for (j, dj) in diag.iter_mut().enumerate() {
+        let mut q = 0.0;
+        for c in 0..nc {
+            let sc: f64 = (0..nc).map(|r| sinv[r + c * nc] * u[j + r * ng]).sum();
+            q += u[j + c * ng] * sc;
+        }
+        *dj -= q;
+    }
+    diag
+}
+
+/// `inv ← m⁻¹` (`k × k`, column-major) by Gauss–Jordan elimination with partial pivoting; `m` is
+/// overwritten. `false` on a zero or non-finite pivot.
+fn invert_in_place(m: &mut [f64], inv: &mut [f64], k: usize) -> bool {
+    inv.fill(0.0);
+    for i in 0..k {
+        inv[i + i * k] = 1.0;
+    }
+    for c in 0..k {
+        let Some(p) = (c..k).max_by(|&x, &y| m[x + c * k].abs().total_cmp(&m[y + c * k].abs())) else {
+            return false;
+        };
+        let pivot = m[p + c * k];
+        if pivot == 0.0 || !pivot.is_finite() {
+            return false;
+        }
+        if p != c {
+            for j in 0..k {
+                m.swap(p + j * k, c + j * k);
+                inv.swap(p + j * k, c + j * k);
+            }
+        }
+        for j in 0..k {
+            m[c + j * k] /= pivot;
+            inv[c + j * k] /= pivot;
+        }
+        for r in (0..k).filter(|&r| r != c) {
+            let f = m[r + c * k];
+            if f != 0.0 {
+                for j in 0..k {
+                    m[r + j * k] -= f * m[c + j * k];
+                    inv[r + j * k] -= f * inv[c + j * k];
+                }
+            }
+        }
+    }
+    true
 }
 
 impl ConstrainedZonotope {
@@ -280,17 +380,13 @@ impl ConstrainedZonotope {
         let free = candidates.iter().position(|&j| excess[j] == 0.0);
         let col = match free {
             Some(p) if candidates[..p].iter().all(|&j| excess[j] >= TINY_EXCESS) => candidates[p],
-            _ => self.least_hausdorff_error(&candidates, excess)?,
+            _ => self.least_hausdorff_error(&candidates, excess, &kkt_inverse_diagonal(&self.g, &self.a))?,
         };
         self.pivot_row(col).map(|row| (row, col))
     }
 
-    /// The candidate with the least `H_j` (the first of equals).
-    fn least_hausdorff_error(&self, candidates: &[usize], excess: &[f64]) -> Option<usize> {
-        if candidates.is_empty() {
-            return None;
-        }
-        let kinv = kkt_inverse_diagonal(&self.g, &self.a);
+    /// The candidate with the least `H_j` (the first of equals), `kinv` the KKT diagonal.
+    fn least_hausdorff_error(&self, candidates: &[usize], excess: &[f64], kinv: &[f64]) -> Option<usize> {
         let mut best: Option<(f64, usize)> = None;
         for &j in candidates {
             let h = if excess[j] == 0.0 {
@@ -533,7 +629,9 @@ mod tests {
                 .collect();
             let candidates: Vec<usize> =
                 (0..ng).filter(|&j| excess[j].is_finite() && (0..nc).any(|i| z.a[(i, j)] != 0.0)).collect();
-            let full = z.least_hausdorff_error(&candidates, &excess).and_then(|c| z.pivot_row(c).map(|r| (r, c)));
+            let kinv = kkt_inverse_diagonal(&z.g, &z.a);
+            let full =
+                z.least_hausdorff_error(&candidates, &excess, &kinv).and_then(|c| z.pivot_row(c).map(|r| (r, c)));
             assert_eq!(z.elimination_choice(&excess), full, "case {case}");
             shortcuts += usize::from(candidates.iter().any(|&j| excess[j] == 0.0));
         }

@@ -130,7 +130,8 @@ pub(crate) fn mean_value<M: SecondOrderModel + ?Sized>(
 /// The interval observer's prediction (C5): per row, the best of the natural interval extension
 /// of `f` over the box, the mean-value form `f(p) + J(X)(X − p)` and, where every Jacobian entry
 /// of the row has one sign over the box (`f_i` monotone in each state), the exact range
-/// `[f_i(x̲ⁱ), f_i(x̄ⁱ)]` at the row's two corners, each enclosed; then the process-noise box.
+/// `[f_i(x̲ⁱ), f_i(x̄ⁱ)]` at the row's two corners, each enclosed (not for a row affine over the
+/// box, whose mean-value form is already its range); then the process-noise box.
 /// `None` when unbounded.
 pub(crate) fn predict_box<M: SecondOrderModel + ?Sized>(
     model: &M,
@@ -155,7 +156,9 @@ pub(crate) fn predict_box<M: SecondOrderModel + ?Sized>(
         }
         let row = &mv.jacobian[i * n..(i + 1) * n];
         let definite = |j: usize| row[j].lo() >= 0.0 || row[j].hi() <= 0.0;
-        if !(0..n).any(definite) {
+        // A row affine over the box (its Jacobian enclosure a point) has the mean-value form as
+        // its exact range up to rounding: its corners would add no more than a few ulps.
+        if !(0..n).any(definite) || row.iter().all(|d| d.lo() == d.hi()) {
             continue;
         }
         // Monotone in each definite state: its ends give the range over the sub-box where the
