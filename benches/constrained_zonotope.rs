@@ -1,7 +1,10 @@
 //! One step of the constrained-zonotope filters: `czf-nl` on CORA's six-tank benchmark (6 states,
-//! 3 measured; order 20, 8 constraints, 2·6 verified LPs per step) and `czf` on the straddle
-//! carrier (4 states, 3 measured, T_s = 1 ms) beside the ellipsoidal `smf` step of the same size,
-//! measured side by side. `cargo bench --bench constrained_zonotope`.
+//! 3 measured, 2·6 verified LPs per step) at the order the benchmark chose (2, no constraints kept:
+//! the six-tank model file's `[estimator.czf-nl]` table) and at the default (20, 8 constraints),
+//! and `czf` on the straddle carrier (4 states, 3 measured, T_s = 1 ms) at its chosen order (1, no
+//! constraints: a box between steps, docs/constrained-zonotopes.md (C6)) and at order 8 with 6
+//! constraints, beside the ellipsoidal `smf` step of the same size, measured side by side.
+//! `cargo bench --bench constrained_zonotope`.
 
 use std::hint::black_box;
 
@@ -49,23 +52,28 @@ fn six_tank(crit: &mut Criterion) {
     let x0 = DVector::from_element(6, 21.0);
     let run =
         boundary_run(&model, &x0, &|k| DVector::from_element(3, 0.1 + 0.0025 * (k % 20) as f64), (0.001, 0.2), 60);
-    let f0 = ConstrainedZonotopeFilter::new(setup, ConstrainedZonotopeSettings::default()).unwrap();
-    // Steps 20..60 of the run, after the set has reached its reduced size.
-    let mut warm = f0.clone();
-    for (u, y) in &run[..20] {
-        warm.step(&model, u, y).unwrap();
+    let mut group = crit.benchmark_group("czf-nl six-tank step");
+    for (name, order, max_constraints) in [("order 2, 0 constraints", 2, 0), ("order 20, 8 constraints", 20, 8)] {
+        let settings = ConstrainedZonotopeSettings { order, max_constraints, ..Default::default() };
+        let f0 = ConstrainedZonotopeFilter::new(setup.clone(), settings).unwrap();
+        // Steps 20..60 of the run, after the set has reached its reduced size.
+        let mut warm = f0.clone();
+        for (u, y) in &run[..20] {
+            warm.step(&model, u, y).unwrap();
+        }
+        let mut f = warm.clone();
+        let mut i = 20;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                if i == run.len() {
+                    (f, i) = (warm.clone(), 20);
+                }
+                i += 1;
+                black_box(f.step(&model, &run[i - 1].0, &run[i - 1].1).unwrap().lower()[0])
+            })
+        });
     }
-    let mut f = warm.clone();
-    let mut i = 20;
-    crit.bench_function("czf-nl six-tank step", |b| {
-        b.iter(|| {
-            if i == run.len() {
-                (f, i) = (warm.clone(), 20);
-            }
-            i += 1;
-            black_box(f.step(&model, &run[i - 1].0, &run[i - 1].1).unwrap().lower()[0])
-        })
-    });
+    group.finish();
 }
 
 fn carrier(crit: &mut Criterion) {
@@ -92,18 +100,22 @@ fn carrier(crit: &mut Criterion) {
     };
     let step_model = StepModel::new(&a, &b, &c);
     let mut group = crit.benchmark_group("carrier_step");
-    let settings = ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() };
-    let czf0 = ConstrainedZonotopeFilter::new(boxes, settings).unwrap();
-    let (mut czf, mut i) = (czf0.clone(), 0);
-    group.bench_function("czf", |bch| {
-        bch.iter(|| {
-            if i == run.len() {
-                (czf, i) = (czf0.clone(), 0);
-            }
-            i += 1;
-            black_box(czf.step(&step_model, &run[i - 1].0, &run[i - 1].1).unwrap().lower()[0])
-        })
-    });
+    for (name, order, max_constraints) in
+        [("czf order 1 (box between steps)", 1, 0), ("czf order 8, 6 constraints", 8, 6)]
+    {
+        let settings = ConstrainedZonotopeSettings { order, max_constraints, ..Default::default() };
+        let czf0 = ConstrainedZonotopeFilter::new(boxes.clone(), settings).unwrap();
+        let (mut czf, mut i) = (czf0.clone(), 0);
+        group.bench_function(name, |bch| {
+            bch.iter(|| {
+                if i == run.len() {
+                    (czf, i) = (czf0.clone(), 0);
+                }
+                i += 1;
+                black_box(czf.step(&step_model, &run[i - 1].0, &run[i - 1].1).unwrap().lower()[0])
+            })
+        });
+    }
     let smf0 = SetMembershipFilter::new(ellipsoids).unwrap();
     let (mut smf, mut j) = (smf0.clone(), 0);
     group.bench_function("smf", |bch| {

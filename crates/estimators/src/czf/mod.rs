@@ -10,7 +10,8 @@
 //! * Published interval (C4): the certified interval hull (verified LP bounds) intersected with
 //!   an interval observer run beside the set (C5) and with the declared state bounds; that box
 //!   is also where the next extension is taken.
-//! * Reduction (Z4)–(Z6) to the [`ConstrainedZonotopeSettings`] limits after every operation.
+//! * Reduction (Z4)–(Z6) to the [`ConstrainedZonotopeSettings`] limits after every operation;
+//!   at order 1 with no constraints kept the set between steps is the published box itself (C6).
 //!
 //! The [`Setup`] matrices are generator matrices: `X₀ = ⟨x₀, P₀⟩`, `W = ⟨0, Q⟩`, `V = ⟨0, R⟩` (a
 //! diagonal matrix is the box of those half-widths; no ellipsoid is needed). A measurement whose
@@ -40,6 +41,8 @@ use extension::{Function, boxed, contract_box, mean_value, predict_box};
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConstrainedZonotopeSettings {
     /// Generators kept per state after each reduction (the zonotope order; `order · n` factors).
+    /// Order 1 with `max_constraints = 0` keeps a box between steps: the published interval
+    /// itself, the tightest certified one (docs/constrained-zonotopes.md (C6)).
     pub order: usize,
     /// Equality constraints kept after each reduction.
     pub max_constraints: usize,
@@ -178,6 +181,8 @@ pub struct ConstrainedZonotopeFilter {
     v_generators: DMatrix<f64>,
     v_radius: Vec<f64>,
     limits: ReductionLimits,
+    /// Order 1, no constraints: the set kept between steps is the published box (C6).
+    box_between_steps: bool,
     checks: DataChecks,
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     initial_width: Vec<f64>,
@@ -314,6 +319,7 @@ impl ConstrainedZonotopeFilter {
             v_generators: setup.measurement_noise.clone(),
             v_radius,
             limits,
+            box_between_steps: settings.order == 1 && settings.max_constraints == 0,
             checks: DataChecks::with_policy(settings.inconsistency),
             bounds,
             initial_width,
@@ -436,6 +442,18 @@ impl ConstrainedZonotopeFilter {
         Ok((Published { center, shape, lower, upper, status, report }, observer))
     }
 
+    /// The set kept for the next step: `set` reduced to the limits (Z4)–(Z6), or, when they hold
+    /// only a box, the published box (C6) — every reduction would end in a box containing `set`, and
+    /// the published interval is the tightest certified one (it holds the set's hull met with the
+    /// interval observer's box and the declared bounds, each of which holds the true state).
+    fn kept(&self, set: &ConstrainedZonotope, published: &Published) -> Result<ConstrainedZonotope, SetError> {
+        if self.box_between_steps {
+            ConstrainedZonotope::from_bounds(&published.lower, &published.upper)
+        } else {
+            set.reduce(&self.limits)
+        }
+    }
+
     /// (C2): the predicted set, unreduced, and the interval observer's predicted box.
     fn predicted<M: SecondOrderModel + ?Sized>(
         &mut self,
@@ -546,7 +564,8 @@ impl ConstrainedZonotopeFilter {
             let data = if checked { DataCheck::Consistent } else { DataCheck::NotChecked };
             match self.publish(&hull, contracted, status(data, self.lost), step) {
                 Ok((published, observer)) => {
-                    let estimate = published.with_set(candidate.reduce(&self.limits).map_err(lost)?);
+                    let kept = self.kept(&candidate, &published).map_err(lost)?;
+                    let estimate = published.with_set(kept);
                     return Ok(Updated { observer, estimate, lost: self.lost });
                 }
                 // The hull, the observer and the declared bounds do not meet: inconsistent too.
@@ -562,7 +581,8 @@ impl ConstrainedZonotopeFilter {
         let data = if checked { DataCheck::Inconsistent } else { DataCheck::NotChecked };
         let hull = set.interval_hull().map_err(lost)?;
         let (published, observer) = self.publish(&hull, x, status(data, true), step)?;
-        let estimate = published.with_set(set.reduce(&self.limits).map_err(lost)?);
+        let kept = self.kept(&set, &published).map_err(lost)?;
+        let estimate = published.with_set(kept);
         Ok(Updated { observer, estimate, lost: true })
     }
 
@@ -595,7 +615,8 @@ impl ConstrainedZonotopeFilter {
             guarantee: if self.lost { Guarantee::Lost } else { Guarantee::Holds },
         };
         let (published, observer) = self.publish(&hull, observer, status, step)?;
-        let estimate = published.with_set(set.reduce(&self.limits).map_err(|e| guarantee_lost(step, e.to_string()))?);
+        let kept = self.kept(&set, &published).map_err(|e| guarantee_lost(step, e.to_string()))?;
+        let estimate = published.with_set(kept);
         self.last_u.copy_from(u);
         self.commit(Updated { observer, estimate, lost: self.lost }, step);
         Ok(&self.estimate)
