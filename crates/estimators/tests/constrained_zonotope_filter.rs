@@ -139,28 +139,37 @@ fn on_a_linear_model_the_interval_is_the_exact_set_s() {
 fn the_pendulum_s_truth_stays_inside_with_noise_on_the_boundary() {
     let model = Pendulum { dt: 0.05, root: false };
     let (q, r) = ([0.002, 0.01], [0.02]);
-    let s = boxes(dvector![0.3, 0.0], &[0.5, 1.0], &q, &r, 1);
-    let mut f = ConstrainedZonotopeFilter::new(s, ConstrainedZonotopeSettings::default()).unwrap();
-    let mut rng = Xoshiro256StarStar::seed_from_u64(11);
-    let mut x = dvector![0.3 + 0.5, -1.0];
-    let mut next = DVector::zeros(2);
-    let mut y = DVector::zeros(1);
-    let mut widths = Vec::new();
-    for k in 0..3000 {
-        let u = dvector![2.0 * (k as f64 * 0.01).sin()];
-        model.f(&x, &u, &mut next).unwrap();
-        x = &next + vertex(&mut rng, &q);
-        model.h(&x, &u, &mut y).unwrap();
-        y += vertex(&mut rng, &r);
-        let e = f.step(&model, &u, &y).unwrap_or_else(|e| panic!("step {k}: {e}"));
-        assert!(inside(e, &x), "step {k}: {x} outside {:?}", (0..2).map(|i| e.bounds(i)).collect::<Vec<_>>());
-        assert_eq!(e.status().data, DataCheck::Consistent);
-        widths.push(e.bounds(1).map(|(l, h)| h - l).unwrap());
+    // The default order, and order 1 with no constraints (a box between steps, (C6)).
+    let box_between_steps = ConstrainedZonotopeSettings { order: 1, max_constraints: 0, ..Default::default() };
+    for settings in [ConstrainedZonotopeSettings::default(), box_between_steps] {
+        let s = boxes(dvector![0.3, 0.0], &[0.5, 1.0], &q, &r, 1);
+        let order = settings.order;
+        let mut f = ConstrainedZonotopeFilter::new(s, settings).unwrap();
+        let mut rng = Xoshiro256StarStar::seed_from_u64(11);
+        let mut x = dvector![0.3 + 0.5, -1.0];
+        let mut next = DVector::zeros(2);
+        let mut y = DVector::zeros(1);
+        let mut widths = Vec::new();
+        for k in 0..3000 {
+            let u = dvector![2.0 * (k as f64 * 0.01).sin()];
+            model.f(&x, &u, &mut next).unwrap();
+            x = &next + vertex(&mut rng, &q);
+            model.h(&x, &u, &mut y).unwrap();
+            y += vertex(&mut rng, &r);
+            let e = f.step(&model, &u, &y).unwrap_or_else(|e| panic!("order {order}, step {k}: {e}"));
+            assert!(
+                inside(e, &x),
+                "order {order}, step {k}: {x} outside {:?}",
+                (0..2).map(|i| e.bounds(i)).collect::<Vec<_>>()
+            );
+            assert_eq!(e.status().data, DataCheck::Consistent);
+            widths.push(e.bounds(1).map(|(l, h)| h - l).unwrap());
+        }
+        // Bounded: the angular rate's width at the end no more than twice its width early on.
+        let early = widths[500..1000].iter().copied().fold(0.0, f64::max);
+        let late = widths[2500..].iter().copied().fold(0.0, f64::max);
+        assert!(late <= 2.0 * early, "order {order}: rate width grew from {early} to {late}");
     }
-    // Bounded: the angular rate's width at the end no more than twice its width early on.
-    let early = widths[500..1000].iter().copied().fold(0.0, f64::max);
-    let late = widths[2500..].iter().copied().fold(0.0, f64::max);
-    assert!(late <= 2.0 * early, "rate width grew from {early} to {late}");
 }
 
 #[test]
@@ -361,24 +370,39 @@ fn on_the_carrier_the_intervals_are_no_wider_than_the_ellipsoid_filter_s() {
     let ell =
         |h: &[f64]| DMatrix::from_diagonal(&DVector::from_iterator(h.len(), h.iter().map(|x| h.len() as f64 * x * x)));
     let ellipsoids = Setup { p0: ell(&h0), process_noise: ell(&w), measurement_noise: ell(&v), ..boxes.clone() };
-    let settings = ConstrainedZonotopeSettings { order: 8, max_constraints: 6, ..Default::default() };
-    let mut czf = ConstrainedZonotopeFilter::new(boxes, settings).unwrap();
-    let mut smf = SetMembershipFilter::new(ellipsoids).unwrap();
-    let mut rng = Xoshiro256StarStar::seed_from_u64(8);
-    let mut x = DVector::from_iterator(4, h0.iter().map(|h| 0.9 * h));
-    let u = DVector::from_element(8, 0.01);
-    for k in 0..300 {
-        x = &a * &x + &b * &u + vertex(&mut rng, &w);
-        let y = &c * &x + vertex(&mut rng, &v);
-        let ez = czf.step(&model, &u, &y).unwrap();
-        assert!(inside(ez, &x), "czf, step {k}");
-        let es = smf.step(&model, &u, &y).unwrap();
-        assert!(inside(es, &x), "smf, step {k}");
-        if k >= 50 {
-            for i in 0..4 {
-                let wz = ez.bounds(i).map(|(l, h)| h - l).unwrap();
-                let ws = es.bounds(i).map(|(l, h)| h - l).unwrap();
-                assert!(wz <= ws, "step {k}, state {i}: czf {wz} wider than smf {ws}");
+    // Order 8 with 6 constraints, and order 1 with none: a box between steps (C6), the published
+    // interval itself.
+    for (order, max_constraints) in [(8, 6), (1, 0)] {
+        let settings = ConstrainedZonotopeSettings { order, max_constraints, ..Default::default() };
+        let mut czf = ConstrainedZonotopeFilter::new(boxes.clone(), settings).unwrap();
+        let mut smf = SetMembershipFilter::new(ellipsoids.clone()).unwrap();
+        let mut rng = Xoshiro256StarStar::seed_from_u64(8);
+        let mut x = DVector::from_iterator(4, h0.iter().map(|h| 0.9 * h));
+        let u = DVector::from_element(8, 0.01);
+        for k in 0..300 {
+            x = &a * &x + &b * &u + vertex(&mut rng, &w);
+            let y = &c * &x + vertex(&mut rng, &v);
+            let ez = czf.step(&model, &u, &y).unwrap();
+            assert!(inside(ez, &x), "czf order {order}, step {k}");
+            if order == 1 {
+                let set = ez.set();
+                assert_eq!((set.constraints(), set.generators()), (0, 4), "step {k}");
+                let (lo, hi) = set.zonotope_hull();
+                for i in 0..4 {
+                    // The box holds the published interval and exceeds it by rounding only.
+                    assert!(lo[i] <= ez.lower()[i] && hi[i] >= ez.upper()[i], "step {k}, state {i}");
+                    let slack = 1e-12 * (1.0 + ez.upper()[i].abs().max(ez.lower()[i].abs()));
+                    assert!(ez.lower()[i] - lo[i] <= slack && hi[i] - ez.upper()[i] <= slack, "step {k}, state {i}");
+                }
+            }
+            let es = smf.step(&model, &u, &y).unwrap();
+            assert!(inside(es, &x), "smf, step {k}");
+            if k >= 50 {
+                for i in 0..4 {
+                    let wz = ez.bounds(i).map(|(l, h)| h - l).unwrap();
+                    let ws = es.bounds(i).map(|(l, h)| h - l).unwrap();
+                    assert!(wz <= ws, "order {order}, step {k}, state {i}: czf {wz} wider than smf {ws}");
+                }
             }
         }
     }
