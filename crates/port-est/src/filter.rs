@@ -316,6 +316,18 @@ fn settings(
     })
 }
 
+/// The settings the model file gives the estimator `name` (its `[estimator.NAME]` table over its
+/// `[mhe]`, `[ukf]` and bounds), as `port-est filter --estimator NAME` runs it; `None` for an
+/// estimator without settings.
+///
+/// # Errors
+/// An unknown estimator, or settings the file lacks (in the file's terms).
+pub fn estimator_settings(model: &Model, name: &str) -> Result<Option<EstimatorSettings>, Error> {
+    let entry = registry::entry(name)
+        .ok_or_else(|| Error::Usage(format!("unknown estimator {name:?} (`port-est estimators` lists them)")))?;
+    settings(model, entry, None)
+}
+
 /// The settings of `entry` as the registry's reader gives them.
 fn read_settings(
     model: &Model,

@@ -3,9 +3,10 @@
 //! published interval checked against the truth.
 //!
 //! * **carrier** — `czf` on the straddle carrier (paper preset, `T_s` = 1 ms, 4 states, the three
-//!   velocities measured), beside the ellipsoidal `smf` on the least-trace ellipsoids around the
-//!   same boxes (`d·h²`, a weaker assumption, so both hold on the same data): widths per state
-//!   and step times side by side.
+//!   velocities measured) at order 1 without constraints (a box between steps,
+//!   docs/constrained-zonotopes.md (C6)), beside the ellipsoidal `smf` on the least-trace ellipsoids
+//!   around the same boxes (`d·h²`, a weaker assumption, so both hold on the same data): widths per
+//!   state and step times side by side.
 //! * **reach-stacker** — `czf-nl` on examples/reach-stacker (kinematic bicycle, GNSS x/y ±0.5 m,
 //!   yaw-rate gyro, no compass): whether the heading's interval stays bounded.
 //! * **range-bearing** — `czf-nl` on examples/range-bearing (a yard tractor measured by range and
@@ -13,7 +14,10 @@
 //! * **range-bearing circling** — the same tractor driving full circles (3 m/s, steering 0.4 rad,
 //!   a turn every 18 s): both bearings cross ±π every turn, reported wrapped as a sensor does
 //!   (the model declares them angles).
-//! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank, order 8, 6 constraints).
+//! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank, at the order its model
+//!   file's `[estimator.czf-nl]` table chose).
+//!
+//! The others run at order 6 with 6 constraints.
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -21,6 +25,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use equation_models::EquationModel;
+use estimators::registry::EstimatorSettings;
 use estimators::smf::ObservedSetMembershipFilter;
 use estimators::{
     ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, EstimatorError, SetMembershipFilter, Setup,
@@ -54,6 +59,10 @@ enum Plant {
 pub struct ScenarioResult {
     /// The model.
     pub name: String,
+    /// The filter's order (generators per state).
+    pub order: usize,
+    /// Constraints kept between steps.
+    pub max_constraints: usize,
     /// Seeded runs.
     pub runs: usize,
     /// Steps taken over every run.
@@ -135,6 +144,16 @@ fn equations(root: &Path, file: &str) -> Result<(Box<EquationModel>, Setup), Str
     }
 }
 
+/// The settings of `czf-nl` that the model file `file` gives (its `[estimator.czf-nl]` table).
+fn file_settings(root: &Path, file: &str) -> Result<ConstrainedZonotopeSettings, String> {
+    let path = root.join(file);
+    let model = port_est::model::read_model(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    match port_est::filter::estimator_settings(&model, "czf-nl").map_err(|e| format!("{}: {e}", path.display()))? {
+        Some(EstimatorSettings::ConstrainedZonotope(s)) => Ok(s),
+        other => Err(format!("{}: czf-nl's settings are {other:?}", path.display())),
+    }
+}
+
 fn radii(m: &DMatrix<f64>) -> Vec<f64> {
     (0..m.nrows()).map(|i| m[(i, i)]).collect()
 }
@@ -164,10 +183,10 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
         let (r, s) = if quick { small } else { full };
         (runs.unwrap_or(r), s)
     };
-    // Order `order`, 6 constraints.
-    let scenario = |name, plant, setup, order, input: fn(usize, &DVector<f64>) -> DVector<f64>, full, small| {
+    let order = |order, max_constraints| ConstrainedZonotopeSettings { order, max_constraints, ..Default::default() };
+    let tank_settings = file_settings(root, "examples/six-tank/model.toml")?;
+    let scenario = |name, plant, setup, settings, input: fn(usize, &DVector<f64>) -> DVector<f64>, full, small| {
         let (runs, steps) = size(full, small);
-        let settings = ConstrainedZonotopeSettings { order, max_constraints: 6, ..Default::default() };
         Scenario { name, plant, setup, settings, input, runs, steps }
     };
     let out = vec![
@@ -175,7 +194,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "carrier",
             Plant::Linear(carrier),
             carrier_setup,
-            8,
+            order(1, 0),
             |k, _| DVector::from_fn(8, |j, _| 0.01 * (1.0 + (1e-3 * k as f64 + j as f64).sin())),
             (30, 25_000),
             (2, 1000),
@@ -185,7 +204,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "reach-stacker",
             Plant::Equations(stacker),
             stacker_setup,
-            6,
+            order(6, 6),
             |k, x| {
                 let t = k as f64 * 0.1;
                 DVector::from_column_slice(&[0.5 * (2.0 - x[3]) + 0.2 * (0.05 * t).sin(), 0.25 * (0.07 * t).sin()])
@@ -198,7 +217,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "range-bearing",
             Plant::Equations(tractor),
             tractor_setup,
-            6,
+            order(6, 6),
             |k, x| {
                 let t = k as f64 * 0.1;
                 DVector::from_column_slice(&[0.5 * (2.0 * (t / 40.0).sin() - x[3]), 0.1 * (0.2 * t).sin() - 0.3 * x[2]])
@@ -211,7 +230,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "range-bearing circling",
             Plant::Equations(circling),
             circling_setup,
-            6,
+            order(6, 6),
             |_, x| DVector::from_column_slice(&[0.5 * (3.0 - x[3]), 0.4]),
             (5, 10_000),
             (2, 1000),
@@ -220,7 +239,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "six-tank",
             Plant::Equations(tanks),
             tank_setup,
-            8,
+            tank_settings,
             |k, _| DVector::from_fn(3, |i, _| 0.1 + 0.05 * ((k as f64 * 0.05) + i as f64).sin()),
             (20, 5000),
             (2, 200),
@@ -396,6 +415,8 @@ fn summarise(sc: &Scenario, tallies: Vec<RunTally>) -> ScenarioResult {
     });
     ScenarioResult {
         name: sc.name.to_owned(),
+        order: sc.settings.order,
+        max_constraints: sc.settings.max_constraints,
         runs: tallies.len(),
         steps: tallies.iter().map(|t| t.steps).sum(),
         misses: tallies.iter().map(|t| t.misses).sum(),
