@@ -14,10 +14,10 @@
 //! * **range-bearing circling** — the same tractor driving full circles (3 m/s, steering 0.4 rad,
 //!   a turn every 18 s): both bearings cross ±π every turn, reported wrapped as a sensor does
 //!   (the model declares them angles).
-//! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank, at the order its model
-//!   file's `[estimator.czf-nl]` table chose).
+//! * **six-tank** — `czf-nl` on CORA's six-tank model (examples/six-tank).
 //!
-//! The others run at order 6 with 6 constraints.
+//! The models written as equations run at the order their model file's `[estimator.czf-nl]` table
+//! chose (the vehicles order 1, a box between steps; the six tanks order 2).
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -183,7 +183,8 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
         let (r, s) = if quick { small } else { full };
         (runs.unwrap_or(r), s)
     };
-    let order = |order, max_constraints| ConstrainedZonotopeSettings { order, max_constraints, ..Default::default() };
+    let stacker_settings = file_settings(root, "examples/reach-stacker/model.toml")?;
+    let tractor_settings = file_settings(root, "examples/range-bearing/model.toml")?;
     let tank_settings = file_settings(root, "examples/six-tank/model.toml")?;
     let scenario = |name, plant, setup, settings, input: fn(usize, &DVector<f64>) -> DVector<f64>, full, small| {
         let (runs, steps) = size(full, small);
@@ -194,7 +195,8 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "carrier",
             Plant::Linear(carrier),
             carrier_setup,
-            order(1, 0),
+            // Order 1, no constraints: a box between steps (docs/constrained-zonotopes.md (C6)).
+            ConstrainedZonotopeSettings { order: 1, max_constraints: 0, ..Default::default() },
             |k, _| DVector::from_fn(8, |j, _| 0.01 * (1.0 + (1e-3 * k as f64 + j as f64).sin())),
             (30, 25_000),
             (2, 1000),
@@ -204,7 +206,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "reach-stacker",
             Plant::Equations(stacker),
             stacker_setup,
-            order(6, 6),
+            stacker_settings,
             |k, x| {
                 let t = k as f64 * 0.1;
                 DVector::from_column_slice(&[0.5 * (2.0 - x[3]) + 0.2 * (0.05 * t).sin(), 0.25 * (0.07 * t).sin()])
@@ -217,7 +219,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "range-bearing",
             Plant::Equations(tractor),
             tractor_setup,
-            order(6, 6),
+            tractor_settings.clone(),
             |k, x| {
                 let t = k as f64 * 0.1;
                 DVector::from_column_slice(&[0.5 * (2.0 * (t / 40.0).sin() - x[3]), 0.1 * (0.2 * t).sin() - 0.3 * x[2]])
@@ -230,7 +232,7 @@ fn scenarios(root: &Path, quick: bool, runs: Option<usize>) -> Result<Vec<Scenar
             "range-bearing circling",
             Plant::Equations(circling),
             circling_setup,
-            order(6, 6),
+            tractor_settings,
             |_, x| DVector::from_column_slice(&[0.5 * (3.0 - x[3]), 0.4]),
             (5, 10_000),
             (2, 1000),
