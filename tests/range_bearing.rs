@@ -5,7 +5,6 @@
 //! the rule is stated for 10 000).
 
 use equation_models::EquationModel;
-use estimators::registry::EstimatorSettings;
 use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, Setup};
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DVector, dvector};
@@ -25,11 +24,7 @@ fn position_and_heading_stay_bounded_from_ranges_and_bearings() {
     .unwrap();
     let (w, v) = ([0.01, 0.01, 0.002, 0.02], [0.3, 0.005, 0.3, 0.005]);
     // The model file's choice (order 1, a box between steps) and order 6 with 6 constraints.
-    let Some(EstimatorSettings::ConstrainedZonotope(chosen)) =
-        port_est::filter::estimator_settings(&file, "czf-nl").unwrap()
-    else {
-        panic!("czf-nl's settings are not a constrained zonotope's")
-    };
+    let chosen = xtask::reproduce::certified_sets::czf_settings(&file).unwrap();
     assert_eq!((chosen.order, chosen.max_constraints), (1, 0));
     let six = ConstrainedZonotopeSettings { order: 6, max_constraints: 6, ..Default::default() };
     let late = run(&model, setup.clone(), chosen, steps, (w, v), true);

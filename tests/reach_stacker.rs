@@ -4,7 +4,6 @@
 //! hundreds of radians on such a vehicle). `REACH_STACKER_STEPS` sets the length (default 1 000).
 
 use equation_models::EquationModel;
-use estimators::registry::EstimatorSettings;
 use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, Setup};
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector, dvector};
@@ -18,13 +17,7 @@ fn model() -> EquationModel {
 /// The model file's settings for `czf-nl` (its `[estimator.czf-nl]` table).
 fn chosen() -> ConstrainedZonotopeSettings {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/reach-stacker/model.toml");
-    let file = port_est::model::read_model(&path).unwrap();
-    let Some(EstimatorSettings::ConstrainedZonotope(s)) =
-        port_est::filter::estimator_settings(&file, "czf-nl").unwrap()
-    else {
-        panic!("czf-nl's settings are not a constrained zonotope's")
-    };
-    s
+    xtask::reproduce::certified_sets::czf_settings(&port_est::model::read_model(&path).unwrap()).unwrap()
 }
 
 #[test]

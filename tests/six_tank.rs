@@ -4,13 +4,15 @@
 //! data with every noise on the boundary of its box.
 
 use equation_models::EquationModel;
-use estimators::registry::EstimatorSettings;
 use estimators::{
     ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, NonlinearSetMembershipFilter, Setup,
 };
 use models::{DiscreteModel, Xoshiro256StarStar};
 use nalgebra::{DMatrix, DVector};
-use xtask::reproduce::certified_sets::six_tank::{self, Row, Y1};
+use xtask::reproduce::certified_sets::{
+    self,
+    six_tank::{self, Row, Y1},
+};
 
 /// CORA's FRad-A final hull widths (cora_hulls.csv), the best of its three observers per state but
 /// x4 and x5, where FRad-B's are smaller.
@@ -106,11 +108,7 @@ fn witnesses(draws: usize, count: usize, seed: u64) -> Vec<Vec<DVector<f64>>> {
 /// the default ones.
 fn orders() -> [ConstrainedZonotopeSettings; 2] {
     let model = port_est::model::read_model(&root().join("examples/six-tank/model.toml")).unwrap();
-    let Some(EstimatorSettings::ConstrainedZonotope(chosen)) =
-        port_est::filter::estimator_settings(&model, "czf-nl").unwrap()
-    else {
-        panic!("czf-nl's settings are not a constrained zonotope's")
-    };
+    let chosen = certified_sets::czf_settings(&model).unwrap();
     assert_eq!((chosen.order, chosen.max_constraints), (2, 0), "the file's choice, as docs/results/six-tank.md says");
     [chosen, ConstrainedZonotopeSettings::default()]
 }

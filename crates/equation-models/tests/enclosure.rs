@@ -102,7 +102,7 @@ fn the_enclosures_contain_the_model_and_its_jacobians_at_every_point_of_the_box(
     let tanks = EquationModel::from_toml_str_with_foreign_keys(
         &text,
         &path,
-        &[NOISE_KEYS.as_slice(), &["x0_radius", "w_radius", "v_radius"]].concat(),
+        &[NOISE_KEYS.as_slice(), &["x0_radius", "w_radius", "v_radius", "estimator"]].concat(),
     )
     .unwrap();
     check(&tanks, &[20.0; 6], &[4.0; 6], &DVector::from_element(3, 0.1), 5);

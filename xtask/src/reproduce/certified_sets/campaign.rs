@@ -25,7 +25,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use equation_models::EquationModel;
-use estimators::registry::EstimatorSettings;
 use estimators::smf::ObservedSetMembershipFilter;
 use estimators::{
     ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, EstimatorError, SetMembershipFilter, Setup,
@@ -148,10 +147,7 @@ fn equations(root: &Path, file: &str) -> Result<(Box<EquationModel>, Setup), Str
 fn file_settings(root: &Path, file: &str) -> Result<ConstrainedZonotopeSettings, String> {
     let path = root.join(file);
     let model = port_est::model::read_model(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    match port_est::filter::estimator_settings(&model, "czf-nl").map_err(|e| format!("{}: {e}", path.display()))? {
-        Some(EstimatorSettings::ConstrainedZonotope(s)) => Ok(s),
-        other => Err(format!("{}: czf-nl's settings are {other:?}", path.display())),
-    }
+    super::czf_settings(&model)
 }
 
 fn radii(m: &DMatrix<f64>) -> Vec<f64> {

@@ -14,6 +14,8 @@ pub mod six_tank;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use estimators::ConstrainedZonotopeSettings;
+use estimators::registry::EstimatorSettings;
 use serde::Serialize;
 
 use super::outputs;
@@ -55,6 +57,19 @@ pub struct Summary {
     pub campaign: Vec<campaign::ScenarioResult>,
     /// The targets.
     pub claims: Vec<Claim>,
+}
+
+/// The settings of `czf-nl` that a model file gives (its `[estimator.czf-nl]` table over its
+/// bounds), as `port-est filter --estimator czf-nl` runs it.
+///
+/// # Errors
+/// Settings the file lacks, or settings of another kind.
+pub fn czf_settings(model: &port_est::Model) -> Result<ConstrainedZonotopeSettings, String> {
+    let path = model.path().display();
+    match port_est::filter::estimator_settings(model, "czf-nl").map_err(|e| format!("{path}: {e}"))? {
+        Some(EstimatorSettings::ConstrainedZonotope(s)) => Ok(s),
+        other => Err(format!("{path}: czf-nl's settings are {other:?}, not a constrained zonotope's")),
+    }
 }
 
 /// The repository's root (xtask runs from a checkout).

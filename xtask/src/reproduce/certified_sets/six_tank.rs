@@ -8,7 +8,6 @@ use std::path::Path;
 use std::time::Instant;
 
 use equation_models::EquationModel;
-use estimators::registry::EstimatorSettings;
 use estimators::{ConstrainedZonotopeFilter, ConstrainedZonotopeSettings, Estimate, Setup};
 use nalgebra::DVector;
 use serde::Serialize;
@@ -157,10 +156,7 @@ pub fn run(root: &Path, quick: bool) -> Result<SixTank, String> {
     let port_est::model::Dynamics::Equations(tanks) = &model.dynamics else {
         return Err("examples/six-tank/model.toml: not a model written as equations".into());
     };
-    let chosen = match port_est::filter::estimator_settings(&model, "czf-nl").map_err(|e| format!("six-tank: {e}"))? {
-        Some(EstimatorSettings::ConstrainedZonotope(s)) => s,
-        other => return Err(format!("six-tank: czf-nl's settings are {other:?}, not a constrained zonotope's")),
-    };
+    let chosen = super::czf_settings(&model)?;
     let rows = log(&dir.join("data.csv"))?;
     let cora = cora(&dir.join("cora_hulls.csv"))?;
     let repeats = TIMING_REPEATS[usize::from(quick)];
