@@ -111,6 +111,44 @@ fn identity_plus(n: usize, c: Interval, d: &[Interval], out: &mut [Interval]) {
     }
 }
 
+/// RK4's weights of its four stages (their offsets are 0, ts/2, ts/2, ts).
+const RK4_WEIGHTS: [f64; 4] = [1.0, 2.0, 2.0, 1.0];
+
+/// The point of an RK4 stage, `xs = x + c·k`.
+fn stage_point(x: &[Interval], c: Interval, k: &[Interval], xs: &mut [Interval]) {
+    for ((s, xi), ki) in xs.iter_mut().zip(x).zip(k) {
+        *s = *xi + c * *ki;
+    }
+}
+
+/// A stage's slope `g` added to the sum, `acc += w·g`, and kept for the next stage, `k = g`.
+fn accumulate(acc: &mut [Interval], g: &[Interval], w: f64, k: &mut [Interval]) {
+    for (a, gi) in acc.iter_mut().zip(g) {
+        *a = *a + *gi * w;
+    }
+    k.copy_from_slice(g);
+}
+
+/// `value = x + c·slope`: Euler's step (`c = ts`), RK4's last (`c = ts/6`, the weighted sum).
+fn advance(x: &[Interval], c: Interval, slope: &[Interval], value: &mut [Interval]) {
+    for ((v, xi), si) in value.iter_mut().zip(x).zip(slope) {
+        *v = *xi + c * *si;
+    }
+}
+
+/// `out`'s values, and its Jacobian (row-major, `value.len()` rows) when given.
+fn write(out: &mut TaylorEnclosure, value: &[Interval], jac: Option<&[Interval]>) {
+    let cols = jac.map_or(0, |j| j.len() / value.len().max(1));
+    for (i, v) in value.iter().enumerate() {
+        out.set_value(i, *v);
+        if let Some(jac) = jac {
+            for j in 0..cols {
+                out.set_jacobian(i, j, jac[i * cols + j]);
+            }
+        }
+    }
+}
+
 impl SecondOrderModel for EquationModel {
     fn f_enclosure(&self, x: &[Interval], u: &DVector<f64>, out: &mut TaylorEnclosure) -> Result<(), ModelError> {
         let n = self.dims().states;
@@ -150,22 +188,17 @@ impl SecondOrderModel for EquationModel {
                     let ts = Interval::point(ts);
                     self.enclose(&self.rhs, x, u.as_slice(), &mut work, g, jg);
                     if discretization == Discretization::Euler {
-                        for i in 0..n {
-                            value[i] = x[i] + ts * g[i];
-                        }
+                        advance(x, ts, g, value);
                         identity_plus(n, ts, jg, jac);
                     } else {
                         // RK4: stages k_s, their points x_s = x + c_s k_{s−1}, the chain rule.
                         let offsets = [Interval::ZERO, ts * 0.5, ts * 0.5, ts];
-                        let weights = [1.0, 2.0, 2.0, 1.0];
                         prev.copy_from_slice(jg);
                         sum.copy_from_slice(jg);
                         acc.copy_from_slice(g);
                         k.copy_from_slice(g);
                         for s in 1..4 {
-                            for i in 0..n {
-                                xs[i] = x[i] + offsets[s] * k[i];
-                            }
+                            stage_point(x, offsets[s], k, xs);
                             self.enclose(&self.rhs, xs, u.as_slice(), &mut work, g, jg);
                             identity_plus(n, offsets[s], prev, tmp);
                             for i in 0..n {
@@ -175,29 +208,19 @@ impl SecondOrderModel for EquationModel {
                                         d = d + jg[i * n + l] * tmp[l * n + c];
                                     }
                                     prev[i * n + c] = d;
-                                    sum[i * n + c] = sum[i * n + c] + d * weights[s];
+                                    sum[i * n + c] = sum[i * n + c] + d * RK4_WEIGHTS[s];
                                 }
                             }
-                            for i in 0..n {
-                                acc[i] = acc[i] + g[i] * weights[s];
-                            }
-                            k.copy_from_slice(g);
+                            accumulate(acc, g, RK4_WEIGHTS[s], k);
                         }
                         let sixth = ts / 6.0;
-                        for i in 0..n {
-                            value[i] = x[i] + sixth * acc[i];
-                        }
+                        advance(x, sixth, acc, value);
                         identity_plus(n, sixth, sum, jac);
                     }
                 }
                 _ => self.enclose(&self.rhs, x, u.as_slice(), &mut work, value, jac),
             }
-            for i in 0..n {
-                out.set_value(i, value[i]);
-                for j in 0..n {
-                    out.set_jacobian(i, j, jac[i * n + j]);
-                }
-            }
+            write(out, value, Some(jac));
         });
         Ok(())
     }
@@ -211,12 +234,7 @@ impl SecondOrderModel for EquationModel {
         self.with_work(m + m * n, |mut work, rest| {
             let (value, jac) = rest.split_at_mut(m);
             self.enclose(&self.out, x, u.as_slice(), &mut work, value, jac);
-            for i in 0..m {
-                out.set_value(i, value[i]);
-                for j in 0..n {
-                    out.set_jacobian(i, j, jac[i * n + j]);
-                }
-            }
+            write(out, value, Some(jac));
         });
         Ok(())
     }
@@ -231,9 +249,7 @@ impl SecondOrderModel for EquationModel {
             out.set_hessian_invalid();
             self.with_value_work(n, |values, value| {
                 self.enclose_values(&self.rhs, x, u.as_slice(), values, value);
-                for (i, v) in value.iter().enumerate() {
-                    out.set_value(i, *v);
-                }
+                write(out, value, None);
             });
             return Ok(());
         };
@@ -252,33 +268,20 @@ impl SecondOrderModel for EquationModel {
             let (k, xs) = rest.split_at_mut(n);
             self.enclose_values(&self.rhs, x, u.as_slice(), values, g);
             if discretization == Discretization::Euler {
-                for i in 0..n {
-                    value[i] = x[i] + ts * g[i];
-                }
+                advance(x, ts, g, value);
             } else {
                 // RK4's stages as in `f_enclosure`, without the chain rule.
                 let offsets = [Interval::ZERO, ts * 0.5, ts * 0.5, ts];
-                let weights = [1.0, 2.0, 2.0, 1.0];
                 acc.copy_from_slice(g);
                 k.copy_from_slice(g);
                 for s in 1..4 {
-                    for i in 0..n {
-                        xs[i] = x[i] + offsets[s] * k[i];
-                    }
+                    stage_point(x, offsets[s], k, xs);
                     self.enclose_values(&self.rhs, xs, u.as_slice(), values, g);
-                    for i in 0..n {
-                        acc[i] = acc[i] + g[i] * weights[s];
-                    }
-                    k.copy_from_slice(g);
+                    accumulate(acc, g, RK4_WEIGHTS[s], k);
                 }
-                let sixth = ts / 6.0;
-                for i in 0..n {
-                    value[i] = x[i] + sixth * acc[i];
-                }
+                advance(x, ts / 6.0, acc, value);
             }
-            for (i, v) in value.iter().enumerate() {
-                out.set_value(i, *v);
-            }
+            write(out, value, None);
         });
         Ok(())
     }
@@ -291,9 +294,7 @@ impl SecondOrderModel for EquationModel {
         out.set_hessian_invalid();
         self.with_value_work(d.outputs, |values, value| {
             self.enclose_values(&self.out, x, u.as_slice(), values, value);
-            for (i, v) in value.iter().enumerate() {
-                out.set_value(i, *v);
-            }
+            write(out, value, None);
         });
         Ok(())
     }
