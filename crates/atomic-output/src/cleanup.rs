@@ -42,6 +42,22 @@ pub(crate) fn temporary_prefix(name: &OsStr) -> OsString {
     prefix
 }
 
+/// The directory the temporaries of `target` go in (its parent; `.` for a bare name) and a
+/// builder of their names, `.NAME.PID.*.tmp`; `kind` says what `target` must name ("a file").
+///
+/// # Errors
+/// [`io::ErrorKind::InvalidInput`] if `target` names nothing (empty, or ending in `..`).
+pub(crate) fn temporary_place<'a>(target: &'a Path, kind: &str) -> io::Result<(&'a Path, OsString)> {
+    let name = target.file_name().ok_or_else(|| {
+        io::Error::new(io::ErrorKind::InvalidInput, format!("{}: does not name {kind}", target.display()))
+    })?;
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Ok((dir, temporary_prefix(name)))
+}
+
 /// Removes a file or a directory tree, ignoring what is already gone.
 fn remove(path: &Path) {
     match fs::symlink_metadata(path) {

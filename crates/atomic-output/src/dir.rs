@@ -29,14 +29,7 @@ impl AtomicDir {
     /// temporary directory.
     pub fn create(target: impl AsRef<Path>) -> io::Result<Self> {
         let target = target.as_ref();
-        let name = target.file_name().ok_or_else(|| {
-            io::Error::new(io::ErrorKind::InvalidInput, format!("{}: does not name a directory", target.display()))
-        })?;
-        let parent = match target.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let prefix = cleanup::temporary_prefix(name);
+        let (parent, prefix) = cleanup::temporary_place(target, "a directory")?;
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp");
         #[cfg(unix)]

@@ -69,14 +69,7 @@ impl AtomicFile {
     /// writable).
     pub fn create(target: impl AsRef<Path>) -> io::Result<Self> {
         let target = target.as_ref();
-        let name = target.file_name().ok_or_else(|| {
-            io::Error::new(io::ErrorKind::InvalidInput, format!("{}: does not name a file", target.display()))
-        })?;
-        let dir = match target.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let prefix = cleanup::temporary_prefix(name);
+        let (dir, prefix) = cleanup::temporary_place(target, "a file")?;
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp");
         let kept = fs::metadata(target).ok().filter(fs::Metadata::is_file).map(|m| m.permissions());
