@@ -221,24 +221,31 @@ fn the_vessel_stays_bounded_where_the_ellipsoid_filter_grows() {
 fn contradicting_data_are_refused_and_leave_the_filter_unchanged() {
     let model = ConstantModel::new(dmatrix![1.0, 0.1; 0.0, 1.0], dmatrix![0.0; 0.1], dmatrix![1.0, 0.0]).unwrap();
     let s = boxes(dvector![0.0, 0.0], &[1.0, 1.0], &[0.01, 0.01], &[0.1], 1);
-    let mut f = ConstrainedZonotopeFilter::new(s.clone(), ConstrainedZonotopeSettings::default()).unwrap();
-    let u = dvector![0.0];
-    f.step(&model, &u, &dvector![0.3]).unwrap();
-    let before = (f.estimate().lower().clone(), f.estimate().upper().clone(), f.estimate().set().clone());
-    // 1.3 + 0.1 cannot be reached: the prediction's x₁ is at most ≈ 0.55.
-    let err = f.step(&model, &u, &dvector![5.0]).unwrap_err();
-    assert!(matches!(err, EstimatorError::SetMissed { step: 2, .. }), "{err}");
-    assert_eq!((f.estimate().lower().clone(), f.estimate().upper().clone(), f.estimate().set().clone()), before);
-    // The measurement on the edge of the reachable set is accepted.
-    let e = f.step(&model, &u, &dvector![0.3]).unwrap();
-    assert!(e.status().is_clean());
-    // Flagged: the prediction is published, marked inconsistent and no longer guaranteed.
-    f.set_data_checks(DataChecks::with_policy(InconsistencyPolicy::FlagAndContinue)).unwrap();
-    let e = f.step(&model, &u, &dvector![5.0]).unwrap();
-    assert_eq!(e.status().data, DataCheck::Inconsistent);
-    assert_eq!(e.status().guarantee, Guarantee::Lost);
-    let e = f.step(&model, &u, &dvector![0.3]).unwrap();
-    assert_eq!(e.status().guarantee, Guarantee::Lost, "every later set is not guaranteed");
+    // The default order, and order 1 without constraints (a box between steps, (C6)).
+    let box_between_steps = ConstrainedZonotopeSettings { order: 1, max_constraints: 0, ..Default::default() };
+    for settings in [ConstrainedZonotopeSettings::default(), box_between_steps] {
+        let mut f = ConstrainedZonotopeFilter::new(s.clone(), settings).unwrap();
+        let u = dvector![0.0];
+        f.step(&model, &u, &dvector![0.3]).unwrap();
+        let before = (f.estimate().lower().clone(), f.estimate().upper().clone(), f.estimate().set().clone());
+        // 1.3 + 0.1 cannot be reached: the prediction's x₁ is at most ≈ 0.55.
+        let err = f.step(&model, &u, &dvector![5.0]).unwrap_err();
+        assert!(matches!(err, EstimatorError::SetMissed { step: 2, .. }), "{err}");
+        assert_eq!((f.estimate().lower().clone(), f.estimate().upper().clone(), f.estimate().set().clone()), before);
+        // The measurement on the edge of the reachable set is accepted.
+        let e = f.step(&model, &u, &dvector![0.3]).unwrap();
+        assert!(e.status().is_clean());
+        // Flagged: the prediction is published, marked inconsistent and no longer guaranteed.
+        f.set_data_checks(DataChecks::with_policy(InconsistencyPolicy::FlagAndContinue)).unwrap();
+        let e = f.step(&model, &u, &dvector![5.0]).unwrap();
+        assert_eq!(e.status().data, DataCheck::Inconsistent);
+        assert_eq!(e.status().guarantee, Guarantee::Lost);
+        // The set kept holds the published prediction (at order 1, that box itself).
+        let (lo, hi) = e.set().zonotope_hull();
+        assert!((0..2).all(|i| lo[i] <= e.lower()[i] && hi[i] >= e.upper()[i]));
+        let e = f.step(&model, &u, &dvector![0.3]).unwrap();
+        assert_eq!(e.status().guarantee, Guarantee::Lost, "every later set is not guaranteed");
+    }
 }
 
 #[test]
