@@ -172,3 +172,29 @@ fn a_rule_file_named_in_a_table_is_read_beside_the_model_file() {
     assert!(e.contains("m.toml:9:7: `estimator.fkf.fis`: "), "{e}");
     assert!(e.contains(&beside.display().to_string()), "the path beside the model file: {e}");
 }
+
+#[test]
+fn the_readme_s_tables_are_read_as_it_says() {
+    // The crate README's example of `[estimator.NAME]` tables, appended to a model file with the
+    // moving-horizon estimators' noise boxes.
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let start = readme.find("[estimator.czf]").expect("the README shows `[estimator.czf]`");
+    let block = &readme[start..start + readme[start..].find("```").unwrap()];
+    let block: String = block.lines().map(|l| format!("{}\n", l.trim())).collect();
+    let d = dir("readme");
+    std::fs::write(d.join("m.toml"), format!("{}{block}", common::OSCILLATOR_WITH_NOISE_BOXES)).unwrap();
+    let model = read_model(&d.join("m.toml")).unwrap_or_else(|e| panic!("{e}"));
+    for (name, order, max_constraints) in [("czf", 30, 8), ("czf-nl", 1, 0)] {
+        match port_est::filter::estimator_settings(&model, name).unwrap() {
+            Some(EstimatorSettings::ConstrainedZonotope(s)) => {
+                assert_eq!((s.order, s.max_constraints), (order, max_constraints), "{name}");
+            }
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+    let Some(EstimatorSettings::MovingHorizon(mhe)) = port_est::filter::estimator_settings(&model, "rmhe").unwrap()
+    else {
+        panic!("rmhe's settings are a moving-horizon estimator's")
+    };
+    assert_eq!(mhe.horizon, 10);
+}
