@@ -68,9 +68,9 @@ pub(crate) struct FactorRanges {
     pub(crate) r: Vec<Interval>,
 }
 
-/// Below this a positive excess `ρ` might give `H = ρ² / (K⁻¹)_jj = 0` by underflow (a KKT
-/// diagonal entry is at most 1, so `ρ ≥ 2⁻⁴⁹⁰` gives `ρ² ≥ 2⁻⁹⁸⁰`, far from underflow; the crude
-/// measure `ρ² (1 + ‖g_j‖²)` only grows).
+/// Below this a positive excess `ρ` might give `H = ρ² / (K⁻¹)_jj = 0` by underflow (the KKT
+/// diagonal entry is held to at most 1, so `ρ ≥ 10⁻¹⁴⁷` gives `H ≥ ρ² ≥ 10⁻²⁹⁴`, a normal
+/// number; the crude measure `ρ² (1 + ‖g_j‖²)` only grows).
 const TINY_EXCESS: f64 = 1e-147;
 
 /// Sweeps of the propagation (each visits every row once).
@@ -374,6 +374,9 @@ impl ConstrainedZonotope {
         let (nc, ng) = (self.constraints(), self.generators());
         let candidates: Vec<usize> =
             (0..ng).filter(|&j| excess[j].is_finite() && (0..nc).any(|i| self.a[(i, j)] != 0.0)).collect();
+        if candidates.is_empty() {
+            return None;
+        }
         // A factor with no excess loses nothing (H_j = 0): the first such is the choice, and the
         // KKT diagonal is not needed unless an earlier candidate's excess is small enough that its
         // H_j could round to 0 as well (the same choice as the full scan, bit for bit).
@@ -392,7 +395,10 @@ impl ConstrainedZonotope {
             let h = if excess[j] == 0.0 {
                 0.0
             } else if kinv[j].is_finite() && kinv[j] > 0.0 {
-                excess[j] * excess[j] / kinv[j]
+                // (K⁻¹)_jj ≤ (H⁻¹)_jj ≤ 1 in exact arithmetic; a larger computed value is rounding
+                // of an ill-conditioned S, and is held to 1 (so H_j ≥ ρ², which `TINY_EXCESS` keeps
+                // above 0).
+                excess[j] * excess[j] / kinv[j].min(1.0)
             } else {
                 excess[j] * excess[j] * (1.0 + self.g.column(j).norm_squared())
             };
@@ -633,24 +639,41 @@ mod tests {
             let full =
                 z.least_hausdorff_error(&candidates, &excess, &kinv).and_then(|c| z.pivot_row(c).map(|r| (r, c)));
             assert_eq!(z.elimination_choice(&excess), full, "case {case}");
-            shortcuts += usize::from(candidates.iter().any(|&j| excess[j] == 0.0));
+            let free = candidates.iter().position(|&j| excess[j] == 0.0);
+            shortcuts += usize::from(free.is_some_and(|p| candidates[..p].iter().all(|&j| excess[j] >= TINY_EXCESS)));
         }
         assert!(shortcuts > 50, "{shortcuts}");
     }
 
     #[test]
     fn the_low_rank_kkt_diagonal_is_the_direct_inverse_s() {
-        let g = DMatrix::from_fn(3, 9, |i, j| ((i * 7 + j * 3) as f64).sin());
-        let a = DMatrix::from_fn(2, 9, |i, j| ((i * 5 + j * 11) as f64).cos());
-        let (ng, nc) = (9, 2);
-        let mut k = DMatrix::zeros(ng + nc, ng + nc);
-        k.view_mut((0, 0), (ng, ng)).copy_from(&(DMatrix::identity(ng, ng) + g.transpose() * &g));
-        k.view_mut((ng, 0), (nc, ng)).copy_from(&a);
-        k.view_mut((0, ng), (ng, nc)).copy_from(&a.transpose());
-        let direct = k.try_inverse().unwrap();
-        let fast = kkt_inverse_diagonal(&g, &a);
-        for j in 0..ng {
-            assert!((direct[(j, j)] - fast[j]).abs() < 1e-12, "{j}: {} vs {}", direct[(j, j)], fast[j]);
+        // Sizes (n, n_g, n_c), the last with a first column of S that needs a row swap.
+        for (n, ng, nc) in [(3, 9, 2), (4, 10, 3), (2, 6, 4)] {
+            let g = DMatrix::from_fn(n, ng, |i, j| ((i * 7 + j * 3) as f64).sin());
+            // Rows of distinct frequencies: independent (cos(α + βj) rows would span two only).
+            let mut a = DMatrix::from_fn(nc, ng, |i, j| (0.7 * ((i + 1) * (j + 1)) as f64 + i as f64).cos());
+            if nc == 4 {
+                a.row_mut(0).scale_mut(1e-3);
+            }
+            let mut k = DMatrix::zeros(ng + nc, ng + nc);
+            k.view_mut((0, 0), (ng, ng)).copy_from(&(DMatrix::identity(ng, ng) + g.transpose() * &g));
+            k.view_mut((ng, 0), (nc, ng)).copy_from(&a);
+            k.view_mut((0, ng), (ng, nc)).copy_from(&a.transpose());
+            let direct = k.try_inverse().unwrap();
+            let fast = kkt_inverse_diagonal(&g, &a);
+            for j in 0..ng {
+                let tol = 1e-10 * (1.0 + direct[(j, j)].abs());
+                assert!(
+                    (direct[(j, j)] - fast[j]).abs() < tol,
+                    "{n}, {ng}, {nc}, {j}: {} vs {}",
+                    direct[(j, j)],
+                    fast[j]
+                );
+            }
         }
+        // Two equal rows of A: S is singular, and the caller is told so (NaN: the cruder measure).
+        let g = DMatrix::from_fn(2, 5, |i, j| ((i + 2 * j) as f64).sin());
+        let a = DMatrix::from_fn(2, 5, |_, j| (j as f64).cos());
+        assert!(kkt_inverse_diagonal(&g, &a).iter().all(|v| v.is_nan()));
     }
 }
