@@ -1,6 +1,7 @@
 //! A reach stacker (kinematic bicycle, examples/reach-stacker) measured by GNSS and a yaw-rate gyro,
-//! no compass: `czf-nl` at the model file's order (1, a box between steps) keeps its heading bounded,
-//! and narrower than at order 6, over a long run with every noise on the boundary of its box, with no `GuaranteeLost` (the ellipsoid filter `smf-nl` grew to a heading interval of
+//! no compass: `czf-nl` at the model file's order (1, a box between steps) keeps its heading
+//! bounded, and narrower than at order 6, over a long run with every noise on the boundary of its
+//! box, with no `GuaranteeLost` (the ellipsoid filter `smf-nl` grew to a heading interval of
 //! hundreds of radians on such a vehicle). `REACH_STACKER_STEPS` sets the length (default 1 000).
 
 use equation_models::EquationModel;

@@ -427,23 +427,33 @@ fn a_partial_step_is_the_step_of_the_model_with_the_measured_outputs_only() {
     let c_sub = dmatrix![1.0, 0.0, 0.0; 0.0, 0.2, 1.0];
     let sub = estimators::StepModel::new(&a, &b, &c_sub);
     let x0 = dvector![0.2, -0.1, 0.4];
-    let settings = ConstrainedZonotopeSettings::default();
-    let mut ours =
-        ConstrainedZonotopeFilter::new(boxes(x0.clone(), &[1.0; 3], &[0.01; 3], &r, 0), settings.clone()).unwrap();
-    let mut reference =
-        ConstrainedZonotopeFilter::new(boxes(x0, &[1.0; 3], &[0.01; 3], &[r[0], r[2]], 0), settings).unwrap();
-    let mut rng = Xoshiro256StarStar::seed_from_u64(9);
-    let mut x = dvector![0.5, 0.3, -0.2];
-    let u = DVector::zeros(0);
-    for k in 0..30 {
-        x = &a * &x + vertex(&mut rng, &[0.01; 3]);
-        let y = &c * &x + vertex(&mut rng, &r);
-        let e = ours.step_partial(&full, &u, &y, &[true, false, true]).unwrap();
-        let want = reference.step(&sub, &u, &dvector![y[0], y[2]]).unwrap();
-        assert!(inside(e, &x), "step {k}");
-        for i in 0..3 {
-            let ((l, h), (wl, wh)) = (e.bounds(i).unwrap(), want.bounds(i).unwrap());
-            assert!((l - wl).abs() < 1e-9 && (h - wh).abs() < 1e-9, "step {k}, state {i}: [{l}, {h}] vs [{wl}, {wh}]");
+    // The default order, and order 1 without constraints (a box between steps, (C6)).
+    let box_between_steps = ConstrainedZonotopeSettings { order: 1, max_constraints: 0, ..Default::default() };
+    for settings in [ConstrainedZonotopeSettings::default(), box_between_steps] {
+        let p0 = boxes(x0.clone(), &[1.0; 3], &[0.01; 3], &r, 0);
+        let mut ours = ConstrainedZonotopeFilter::new(p0, settings.clone()).unwrap();
+        let p0_sub = boxes(x0.clone(), &[1.0; 3], &[0.01; 3], &[r[0], r[2]], 0);
+        let mut reference = ConstrainedZonotopeFilter::new(p0_sub, settings).unwrap();
+        let mut rng = Xoshiro256StarStar::seed_from_u64(9);
+        let mut x = dvector![0.5, 0.3, -0.2];
+        let u = DVector::zeros(0);
+        for k in 0..30 {
+            x = &a * &x + vertex(&mut rng, &[0.01; 3]);
+            let y = &c * &x + vertex(&mut rng, &r);
+            let e = ours.step_partial(&full, &u, &y, &[true, false, true]).unwrap();
+            let want = reference.step(&sub, &u, &dvector![y[0], y[2]]).unwrap();
+            assert!(inside(e, &x), "step {k}");
+            for i in 0..3 {
+                let ((l, h), (wl, wh)) = (e.bounds(i).unwrap(), want.bounds(i).unwrap());
+                assert!(
+                    (l - wl).abs() < 1e-9 && (h - wh).abs() < 1e-9,
+                    "step {k}, state {i}: [{l}, {h}] vs [{wl}, {wh}]"
+                );
+            }
         }
+        // Nothing measured: the prediction alone, still holding the truth.
+        x = &a * &x + vertex(&mut rng, &[0.01; 3]);
+        let e = ours.step_partial(&full, &u, &(&c * &x), &[false; 3]).unwrap();
+        assert!(inside(e, &x));
     }
 }

@@ -443,9 +443,10 @@ impl ConstrainedZonotopeFilter {
     }
 
     /// The set kept for the next step: `set` reduced to the limits (Z4)–(Z6), or, when they hold
-    /// only a box, the published box (C6) — every reduction would end in a box containing `set`, and
-    /// the published interval is the tightest certified one (it holds the set's hull met with the
-    /// interval observer's box and the declared bounds, each of which holds the true state).
+    /// only a box, the published box (C6) — a reduction with anything to do would end in a box
+    /// containing `set`, and the published interval is the tightest box the step certified (the
+    /// set's hull met with the interval observer's box and the declared bounds, each of which
+    /// holds the true state).
     fn kept(&self, set: &ConstrainedZonotope, published: &Published) -> Result<ConstrainedZonotope, SetError> {
         if self.box_between_steps {
             ConstrainedZonotope::from_bounds(&published.lower, &published.upper)
