@@ -221,19 +221,12 @@ mod tests {
     use super::*;
     use nalgebra::DVector;
 
-    fn rand(r: usize, c: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        DMatrix::from_fn(r, c, |_, _| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        })
-    }
+    use crate::test_data::{centred_matrix as rand, spd_matrix};
 
     /// A random symmetric positive definite matrix with badly scaled coordinates.
     fn spd(n: usize, seed: u64) -> DMatrix<f64> {
-        let h = rand(n, n, seed);
         let d = DMatrix::from_diagonal(&DVector::from_fn(n, |i, _| 10f64.powi(i as i32 % 4 - 2)));
-        &d * (&h * h.transpose() + DMatrix::identity(n, n) * 0.1) * &d
+        &d * spd_matrix(n, seed, 0.1) * &d
     }
 
     fn close(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) -> bool {

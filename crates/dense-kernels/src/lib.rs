@@ -15,6 +15,7 @@
 //!   skip a zero multiplier as the general kernels do, so the same bits on any data.
 //! * Validation ([`spd`]): symmetry and positive definiteness with the workspace's tolerances,
 //!   reporting the offending entry or pivot.
+//! * [`test_data`]: deterministic pseudo-random matrices for the workspace's tests and benches.
 //!
 //! **The pivot rule.** Positive definite to working precision means that every Cholesky pivot
 //! `G_jj²` is finite and above `4 ε n` times its own diagonal entry ([`PD_RELATIVE_TOLERANCE`]
@@ -30,6 +31,7 @@ pub mod cholesky;
 pub mod fixed;
 pub mod small;
 pub mod spd;
+pub mod test_data;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -189,13 +191,7 @@ pub fn i_minus_lc(l: &DMatrix<f64>, c: &DMatrix<f64>, out: &mut DMatrix<f64>) {
 mod tests {
     use super::*;
 
-    fn m(r: usize, c: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        DMatrix::from_fn(r, c, |_, _| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        })
-    }
+    use crate::test_data::centred_matrix as m;
 
     #[test]
     fn kernels_match_nalgebra() {

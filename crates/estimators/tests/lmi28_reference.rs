@@ -68,13 +68,8 @@ fn every_backend_matches_the_reference_optimum() {
 /// Random systems with n ≤ 8, m ≤ n: stable and unstable `A`, well- and ill-conditioned `Q`, `R`.
 #[cfg(feature = "clarabel")]
 fn random_cases() -> Vec<Case> {
-    let mut seed = 0x9e3779b97f4a7c15u64;
-    let mut rnd = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut g = dense_kernels::test_data::XorShift(0x9e3779b97f4a7c15);
+    let mut rnd = move || g.centred();
     let mut out = Vec::new();
     for k in 0..12 {
         let n = 2 + k % 7;

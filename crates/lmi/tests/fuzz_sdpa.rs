@@ -5,11 +5,8 @@ use proptest::prelude::*;
 
 const VALID: &str = "\"a small problem\"\n2 =mdim\n2 =nblocks\n{2, -1}\n1.0 2.0\n0 1 1 1 1.0\n0 2 1 1 -1.0\n1 1 1 1 1.0\n1 1 1 2 0.5\n2 1 2 2 1.0\n2 2 1 1 1.0\n";
 
-/// Replaces the character at `at` (modulo the length) by `with`.
 fn mutate(text: &str, at: usize, with: char) -> String {
-    let chars: Vec<char> = text.chars().collect();
-    let i = at % chars.len();
-    chars.iter().enumerate().map(|(k, c)| if k == i { with } else { *c }).collect()
+    text_fuzz::replace_char(text, at, with.encode_utf8(&mut [0; 4]))
 }
 
 fn check(text: &str) {

@@ -6,8 +6,6 @@
 //! cargo run -p port-est -- truck --input truck.csv --output truck-estimates.csv
 //! ```
 
-use std::io::Write;
-
 use truck_dynamics::{Slalom, TruckParams, TruthConfig, simulate_truth};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -19,14 +17,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let slalom = Slalom::digest();
     let truth = simulate_truth(&TruckParams::digest_preset(), &config, |t| slalom.angle(t))?;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    writeln!(out, "k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3")?;
-    for k in 0..truth.len().saturating_sub(1) {
-        let (Some(u), Some(y)) = (truth.estimator_input(k), truth.measurement(k + 1)) else { break };
-        write!(out, "{k},{}", u.delta)?;
-        for w in u.omega {
-            write!(out, ",{w}")?;
-        }
-        writeln!(out, ",{},{},{}", y[0], y[1], y[2])?;
-    }
+    port_est::truck::write_log(&mut out, port_est::truck::truth_rows(&truth))?;
     Ok(())
 }

@@ -88,6 +88,28 @@ pub struct BdsInsOptions {
     pub limits: Limits,
 }
 
+impl BdsInsOptions {
+    /// `port-est bds-ins --input INPUT --output OUTPUT` with every other setting at the command
+    /// line's default: the shipped settings and rule file, fuzzy scaling, the paper's RTK coding,
+    /// a warning for a step that does not end cleanly, the estimator's data checks, nothing
+    /// written on an error, the default limits.
+    #[must_use]
+    pub fn new(input: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
+        Self {
+            input: input.into(),
+            output: output.into(),
+            config: None,
+            fis: None,
+            fuzzy: true,
+            rtk_coding: RtkCoding::Paper,
+            status: StatusPolicy::Warn,
+            checks: None,
+            on_error: OnError::Discard,
+            limits: Limits::default(),
+        }
+    }
+}
+
 /// What a run did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct BdsInsSummary {
@@ -654,16 +676,10 @@ mod tests {
 
     fn options(fis: Option<&Path>, fuzzy: bool, coding: RtkCoding) -> BdsInsOptions {
         BdsInsOptions {
-            input: "d.csv".into(),
-            output: "o.csv".into(),
-            config: None,
             fis: fis.map(Path::to_owned),
             fuzzy,
             rtk_coding: coding,
-            status: StatusPolicy::Warn,
-            checks: None,
-            on_error: OnError::Discard,
-            limits: Limits::default(),
+            ..BdsInsOptions::new("d.csv", "o.csv")
         }
     }
 

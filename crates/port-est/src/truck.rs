@@ -24,10 +24,11 @@ use std::path::{Path, PathBuf};
 use estimators::registry::{self, names};
 use estimators::{AnyEstimator, EstimatorError, Setup};
 use models::DiscreteModel;
+use nalgebra::Vector3;
 use nalgebra::{DMatrix, DVector};
 use serde::Deserialize;
 use toml::Spanned;
-use truck_dynamics::{TruckEkfModel, TruckParams};
+use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams, TruthTrajectory};
 
 use crate::data::{DataReader, DataRow};
 use crate::error::Error;
@@ -55,6 +56,24 @@ pub struct TruckOptions {
     pub on_error: OnError,
     /// Size limit of the settings file.
     pub limits: Limits,
+}
+
+impl TruckOptions {
+    /// `port-est truck --input INPUT --output OUTPUT` with every other setting at the command
+    /// line's default: the digest's settings, a warning for a step that does not end cleanly, the
+    /// estimator's data checks, nothing written on an error, the default limits.
+    #[must_use]
+    pub fn new(input: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
+        Self {
+            input: input.into(),
+            output: output.into(),
+            config: None,
+            status: StatusPolicy::Warn,
+            checks: None,
+            on_error: OnError::Discard,
+            limits: Limits::default(),
+        }
+    }
 }
 
 /// The settings file, as written.
@@ -326,6 +345,31 @@ fn run_truck<R: Read, W: Write>(
     Ok(())
 }
 
+/// Writes `(u_k, y_{k+1})` rows in the `DATA.csv` layout above, header first, `k` counting from
+/// 0 (see [`truth_rows`] for a simulated run's).
+///
+/// # Errors
+/// What writing to `out` returns.
+pub fn write_log<W: Write>(
+    out: &mut W,
+    rows: impl IntoIterator<Item = (TruckInput, Vector3<f64>)>,
+) -> std::io::Result<()> {
+    writeln!(out, "k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3")?;
+    for (k, (u, y)) in rows.into_iter().enumerate() {
+        write!(out, "{k},{}", u.delta)?;
+        for w in u.omega {
+            write!(out, ",{w}")?;
+        }
+        writeln!(out, ",{},{},{}", y[0], y[1], y[2])?;
+    }
+    Ok(())
+}
+
+/// The rows `(u_k, y_{k+1})` a logger would have recorded from a simulated run (noise-free).
+pub fn truth_rows(truth: &TruthTrajectory) -> impl Iterator<Item = (TruckInput, Vector3<f64>)> + '_ {
+    (0..truth.len().saturating_sub(1)).map_while(|k| Some((truth.estimator_input(k)?, truth.measurement(k + 1)?)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -337,20 +381,10 @@ mod tests {
         let config = TruthConfig { duration: seconds, ..TruthConfig::digest() };
         let slalom = Slalom::digest();
         let truth = simulate_truth(&params, &config, |t| slalom.angle(t)).unwrap();
-        let mut text = String::from("k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n");
-        let mut betas = Vec::new();
-        for k in 0..truth.len() - 1 {
-            let u = truth.estimator_input(k).unwrap();
-            let y = truth.measurement(k + 1).unwrap();
-            text.push_str(&format!("{k},{}", u.delta));
-            for w in u.omega {
-                text.push_str(&format!(",{w}"));
-            }
-            text.push_str(&format!(",{},{},{}\n", y[0], y[1], y[2]));
-            let x = truth.body_state(k + 1).unwrap();
-            betas.push((x[1] / x[0]).atan());
-        }
-        (text, betas)
+        let mut text = Vec::new();
+        write_log(&mut text, truth_rows(&truth)).unwrap();
+        let betas = (1..truth.len()).map(|k| truth.body_state(k).unwrap()).map(|x| (x[1] / x[0]).atan()).collect();
+        (String::from_utf8(text).unwrap(), betas)
     }
 
     #[test]

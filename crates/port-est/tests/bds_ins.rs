@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
+use port_est::bds_ins::{BdsInsOptions, bds_ins};
 
 fn example() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/bds-ins/data.csv")
@@ -17,18 +17,7 @@ fn out_dir() -> PathBuf {
 }
 
 fn options(input: PathBuf, output: PathBuf) -> BdsInsOptions {
-    BdsInsOptions {
-        input,
-        output,
-        config: None,
-        fis: None,
-        fuzzy: true,
-        rtk_coding: RtkCoding::Paper,
-        status: port_est::StatusPolicy::Warn,
-        checks: None,
-        on_error: port_est::OnError::Discard,
-        limits: port_est::Limits::default(),
-    }
+    BdsInsOptions::new(input, output)
 }
 
 #[test]

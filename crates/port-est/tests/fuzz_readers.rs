@@ -11,9 +11,7 @@ const MODEL: &str = "a = [[1.0, 0.01], [0.0, 0.99]]\nb = [[0.0], [0.01]]\nc = [[
 const DATA: &str = "k,u1,y1\n0,0.5,0.01\n1,0.5,0.02\n2,-0.5,0.015\n";
 
 fn mutate(text: &str, at: usize, with: char) -> String {
-    let chars: Vec<char> = text.chars().collect();
-    let i = at % chars.len();
-    chars.iter().enumerate().map(|(k, c)| if k == i { with } else { *c }).collect()
+    text_fuzz::replace_char(text, at, with.encode_utf8(&mut [0; 4]))
 }
 
 fn read_all(text: &str) {

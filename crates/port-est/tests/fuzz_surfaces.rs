@@ -13,6 +13,7 @@ use port_est::data::DataReader;
 use port_est::mhe_table::memory_estimate;
 use port_est::{Error, Limits, StatusPolicy, parse_model_with, truck};
 use proptest::prelude::*;
+use text_fuzz::replace_char as mutate;
 
 const TRUCK_SETTINGS: &str = "ts = 0.001
 x0 = [10.0, 0.0, 0.0]
@@ -26,47 +27,25 @@ accel_white = 1e-3\ngyro_white = 1e-5\np0_sigma = [1, 1, 0.1, 0.1, 0.01, 0.01, 0
 
 const RULES: &str = include_str!("../../fuzzy-inference/systems/bds_ins.toml");
 
-fn mutate(text: &str, at: usize, with: &str) -> String {
-    let chars: Vec<char> = text.chars().collect();
-    let i = at % chars.len();
-    let mut out: String = chars[..i].iter().collect();
-    out.push_str(with);
-    out.extend(&chars[i + 1..]);
-    out
-}
-
-/// Replacements that reach the interesting corners: huge, negative, non-finite, fractional and
-/// ill-typed numbers, broken syntax.
+/// Replacements that reach the interesting corners: huge, tiny and fractional numbers, ill-typed
+/// values, broken syntax (with `text_fuzz`'s non-finite and signed ones).
 fn pieces() -> impl Strategy<Value = String> {
-    prop_oneof![
-        prop::sample::select(vec![
-            "0",
-            "-1",
-            "1e308",
-            "-1e308",
-            "1e-320",
-            "nan",
-            "inf",
-            "-inf",
-            "9223372036854775807",
-            "18446744073709551615",
-            "1000000000",
-            "0.5",
-            "\"x\"",
-            "[",
-            "]",
-            "=",
-            ",",
-            "\n",
-            "[[1, 2], [3]]",
-            "true",
-            "#",
-            "\u{feff}",
-        ])
-        .prop_map(str::to_owned),
-        any::<u64>().prop_map(|v| v.to_string()),
-        any::<f64>().prop_map(|v| format!("{v:e}")),
-    ]
+    text_fuzz::pieces(&[
+        "1e-320",
+        "9223372036854775807",
+        "18446744073709551615",
+        "1000000000",
+        "\"x\"",
+        "[",
+        "]",
+        "=",
+        ",",
+        "\n",
+        "[[1, 2], [3]]",
+        "true",
+        "#",
+        "\u{feff}",
+    ])
 }
 
 /// Every error names a place: a `file:line:column`, or at least the file.
@@ -95,17 +74,9 @@ fn truck_log(rows: usize) -> String {
     let config = TruthConfig { duration: rows as f64 * 1e-3, ..TruthConfig::digest() };
     let slalom = Slalom::digest();
     let truth = simulate_truth(&TruckParams::digest_preset(), &config, |t| slalom.angle(t)).unwrap();
-    let mut text = String::from("k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n");
-    for k in 0..truth.len() - 1 {
-        let u = truth.estimator_input(k).unwrap();
-        let y = truth.measurement(k + 1).unwrap();
-        text.push_str(&format!("{k},{}", u.delta));
-        for w in u.omega {
-            text.push_str(&format!(",{w}"));
-        }
-        text.push_str(&format!(",{},{},{}\n", y[0], y[1], y[2]));
-    }
-    text
+    let mut text = Vec::new();
+    port_est::truck::write_log(&mut text, port_est::truck::truth_rows(&truth)).unwrap();
+    String::from_utf8(text).unwrap()
 }
 
 fn bds_log(rows: usize) -> String {

@@ -9,9 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
+use port_est::bds_ins::{BdsInsOptions, bds_ins};
 use port_est::truck::{TruckOptions, truck};
-use port_est::{Error, FilterOptions, Limits, OnError, StatusPolicy, filter};
+use port_est::{Error, FilterOptions, OnError, StatusPolicy, filter};
 
 const MODEL: &str = include_str!("../../../examples/filter/model.toml");
 const DATA: &str = include_str!("../../../examples/filter/data.csv");
@@ -94,33 +94,24 @@ fn truck_log(seconds: f64, reverse_at: usize) -> String {
     let config = TruthConfig { duration: seconds, ..TruthConfig::digest() };
     let slalom = Slalom::digest();
     let truth = simulate_truth(&params, &config, |t| slalom.angle(t)).unwrap();
-    let mut text = String::from("k,u1,u2,u3,u4,u5,u6,u7,y1,y2,y3\n");
-    for k in 0..truth.len() - 1 {
-        let u = truth.estimator_input(k).unwrap();
-        let y = truth.measurement(k + 1).unwrap();
-        let sign = if k >= reverse_at { -1.0 } else { 1.0 };
-        text.push_str(&format!("{k},{}", u.delta));
-        for w in u.omega {
-            text.push_str(&format!(",{}", sign * w));
+    let reversed = port_est::truck::truth_rows(&truth).enumerate().map(|(k, (mut u, mut y))| {
+        if k >= reverse_at {
+            u.omega = u.omega.map(|w| -w);
+            y[0] = -y[0];
         }
-        text.push_str(&format!(",{},{},{}\n", sign * y[0], y[1], y[2]));
-    }
-    text
+        (u, y)
+    });
+    let mut text = Vec::new();
+    port_est::truck::write_log(&mut text, reversed).unwrap();
+    String::from_utf8(text).unwrap()
 }
 
 #[test]
 fn truck_keeps_the_good_part_of_a_log_that_turns_bad() {
     let d = dir("truck");
     std::fs::write(d.join("t.csv"), truck_log(1.5, 1158)).unwrap();
-    let options = TruckOptions {
-        input: d.join("t.csv"),
-        output: d.join("out.csv"),
-        config: None,
-        status: StatusPolicy::Warn,
-        checks: None,
-        on_error: OnError::KeepPartial,
-        limits: Limits::default(),
-    };
+    let options =
+        TruckOptions { on_error: OnError::KeepPartial, ..TruckOptions::new(d.join("t.csv"), d.join("out.csv")) };
     let e = truck(&options).unwrap_err();
     let msg = e.to_string();
     let steps = std::fs::read_to_string(d.join("out.partial.csv")).unwrap().lines().count() - 1;
@@ -138,18 +129,8 @@ fn bds_ins_keeps_the_epochs_before_a_bad_status() {
     cells[8] = "7".into();
     lines[101] = cells.join(",");
     std::fs::write(d.join("d.csv"), lines.join("\n") + "\n").unwrap();
-    let options = BdsInsOptions {
-        input: d.join("d.csv"),
-        output: d.join("out.csv"),
-        config: None,
-        fis: None,
-        fuzzy: true,
-        rtk_coding: RtkCoding::Paper,
-        status: StatusPolicy::Warn,
-        checks: None,
-        on_error: OnError::KeepPartial,
-        limits: Limits::default(),
-    };
+    let options =
+        BdsInsOptions { on_error: OnError::KeepPartial, ..BdsInsOptions::new(d.join("d.csv"), d.join("out.csv")) };
     let msg = bds_ins(&options).unwrap_err().to_string();
     assert!(msg.contains("d.csv:102:") && msg.contains("RTK status code 7"), "{msg}");
     assert!(msg.contains("the 100 steps before it are kept in"), "{msg}");

@@ -7,9 +7,9 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::OSCILLATOR_WITH_NOISE_BOXES as MODEL;
-use port_est::bds_ins::{BdsInsOptions, RtkCoding, bds_ins};
+use port_est::bds_ins::{BdsInsOptions, bds_ins};
 use port_est::truck::{TruckOptions, truck};
-use port_est::{Error, FilterOptions, GapPolicy, Limits, OnError, StatusPolicy, filter, parse_model_with};
+use port_est::{Error, FilterOptions, GapPolicy, Limits, filter, parse_model_with};
 
 fn dir(name: &str) -> PathBuf {
     common::fresh_dir("port-est-resources", name)
@@ -123,28 +123,14 @@ fn endless_model_settings_and_rule_files_are_refused_at_the_size_limit() {
         e.to_string(),
         "/dev/zero: larger than 16 MiB, the limit for a model file (raise it with --max-file-size)"
     );
-    let truck_options = TruckOptions {
-        input: data.clone(),
-        output: d.join("t.csv"),
-        config: Some(zero.to_owned()),
-        status: StatusPolicy::Warn,
-        checks: None,
-        on_error: OnError::Discard,
-        limits: Limits::default(),
-    };
+    let truck_options = TruckOptions { config: Some(zero.to_owned()), ..TruckOptions::new(&data, d.join("t.csv")) };
     let e = quickly("truck settings", || truck(&truck_options)).unwrap_err().to_string();
     assert!(e.contains("the limit for a settings file (raise it with --max-file-size)"), "{e}");
     let bds = |config: Option<&Path>, fis: Option<&Path>| BdsInsOptions {
-        input: data.clone(),
-        output: d.join("b.csv"),
         config: config.map(Path::to_owned),
         fis: fis.map(Path::to_owned),
-        fuzzy: true,
-        rtk_coding: RtkCoding::Paper,
-        status: StatusPolicy::Warn,
-        checks: None,
-        on_error: OnError::Discard,
         limits: Limits { file_bytes: 1 << 20, ..Limits::default() },
+        ..BdsInsOptions::new(&data, d.join("b.csv"))
     };
     let e = quickly("bds settings", || bds_ins(&bds(Some(zero), None))).unwrap_err().to_string();
     assert!(e.contains("larger than 1 MiB, the limit for a settings file"), "{e}");
@@ -168,18 +154,7 @@ fn a_rule_file_asking_for_an_absurd_resolution_is_refused_at_its_line() {
     for setting in ["{ sampled = 10000000000 }", "{ sampled = 1e10 }", "{ grid = 1000000 }"] {
         let fis = d.join("fis.toml");
         std::fs::write(&fis, shipped.replace("defuzzifier = \"exact\"", &format!("defuzzifier = {setting}"))).unwrap();
-        let options = BdsInsOptions {
-            input: data.clone(),
-            output: d.join("out.csv"),
-            config: None,
-            fis: Some(fis.clone()),
-            fuzzy: true,
-            rtk_coding: RtkCoding::Paper,
-            status: StatusPolicy::Warn,
-            checks: None,
-            on_error: OnError::Discard,
-            limits: Limits::default(),
-        };
+        let options = BdsInsOptions { fis: Some(fis.clone()), ..BdsInsOptions::new(&data, d.join("out.csv")) };
         let e = quickly(setting, || bds_ins(&options)).unwrap_err().to_string();
         assert!(e.starts_with(&format!("--fis: {}:8:", fis.display())), "{setting}: {e}");
     }

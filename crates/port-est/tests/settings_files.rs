@@ -6,7 +6,6 @@ use std::path::Path;
 
 use port_est::bds_ins::{self, BdsInsOptions, RtkCoding};
 use port_est::truck;
-use port_est::{Limits, OnError, StatusPolicy};
 
 fn truck_error(text: &str) -> String {
     truck::check_settings(Path::new("c.toml"), text).unwrap_err().to_string()
@@ -167,18 +166,7 @@ fn the_fis_option_reads_by_name_from_a_file() {
     std::fs::write(&fis, text).unwrap();
     let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/bds-ins/data.csv");
     let run = |fis: Option<&Path>, output: &str| {
-        let options = BdsInsOptions {
-            input: input.clone(),
-            output: d.join(output),
-            config: None,
-            fis: fis.map(Path::to_owned),
-            fuzzy: true,
-            rtk_coding: RtkCoding::Paper,
-            status: StatusPolicy::Warn,
-            checks: None,
-            on_error: OnError::Discard,
-            limits: Limits::default(),
-        };
+        let options = BdsInsOptions { fis: fis.map(Path::to_owned), ..BdsInsOptions::new(&input, d.join(output)) };
         bds_ins::bds_ins(&options).unwrap();
         std::fs::read_to_string(d.join(output)).unwrap()
     };

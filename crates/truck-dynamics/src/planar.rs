@@ -24,9 +24,8 @@ pub const PAPER_SAMPLE_PERIOD: f64 = 1e-3;
 
 /// Names of the states, as they appear in error messages.
 pub const STATE_NAMES: [&str; STATE_DIM] = ["V_x (longitudinal speed)", "V_y (lateral speed)", "gamma (yaw rate)"];
-/// Names of the inputs, as they appear in error messages.
-pub const INPUT_NAMES: [&str; INPUT_DIM] = [
-    "delta (road-wheel angle)",
+/// Names of the six wheel speeds, in the order of [`crate::WHEEL_NAMES`].
+pub(crate) const WHEEL_SPEED_NAMES: [&str; 6] = [
     "omega_L1 (wheel speed)",
     "omega_R1 (wheel speed)",
     "omega_L2 (wheel speed)",
@@ -34,6 +33,23 @@ pub const INPUT_NAMES: [&str; INPUT_DIM] = [
     "omega_L3 (wheel speed)",
     "omega_R3 (wheel speed)",
 ];
+/// Names of the inputs, as they appear in error messages.
+pub const INPUT_NAMES: [&str; INPUT_DIM] = join(["delta (road-wheel angle)"], WHEEL_SPEED_NAMES);
+
+/// The names `a` then `b`, for lists of names built from others in constants.
+pub(crate) const fn join<const A: usize, const B: usize, const N: usize>(
+    a: [&'static str; A],
+    b: [&'static str; B],
+) -> [&'static str; N] {
+    assert!(A + B == N, "join: the lengths do not add up");
+    let mut out = [""; N];
+    let mut i = 0;
+    while i < N {
+        out[i] = if i < A { a[i] } else { b[i - A] };
+        i += 1;
+    }
+    out
+}
 
 /// The estimator's inputs at one step: road-wheel angle and the six wheel speeds.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -39,7 +39,7 @@ use models::validate::{non_negative, positive};
 use crate::error::{TruckError, finite_input};
 use crate::kinematics::{Geometry, WHEEL_NAMES, WHEELS, WheelKinematics, wheel_kinematics};
 use crate::params::TruckParams;
-use crate::planar::{TruckInput, sideslip};
+use crate::planar::{STATE_DIM, STATE_NAMES, TruckInput, WHEEL_SPEED_NAMES, join, sideslip};
 
 /// Number of truth states.
 pub const TRUTH_STATE_DIM: usize = 19;
@@ -59,27 +59,21 @@ pub const POSE_INDEX: usize = 16;
 pub const LOAD_TRANSFER_PASSES: usize = 3;
 
 /// Names of the truth states, as they appear in error messages.
-pub const TRUTH_STATE_NAMES: [&str; TRUTH_STATE_DIM] = [
-    "V_x (longitudinal speed)",
-    "V_y (lateral speed)",
-    "gamma (yaw rate)",
-    "omega_L1 (wheel speed)",
-    "omega_R1 (wheel speed)",
-    "omega_L2 (wheel speed)",
-    "omega_R2 (wheel speed)",
-    "omega_L3 (wheel speed)",
-    "omega_R3 (wheel speed)",
-    "alpha'_L1 (relaxed slip angle)",
-    "alpha'_R1 (relaxed slip angle)",
-    "alpha'_L2 (relaxed slip angle)",
-    "alpha'_R2 (relaxed slip angle)",
-    "alpha'_L3 (relaxed slip angle)",
-    "alpha'_R3 (relaxed slip angle)",
-    "speed-error integral",
-    "X (ground position)",
-    "Y (ground position)",
-    "psi (heading)",
-];
+pub const TRUTH_STATE_NAMES: [&str; TRUTH_STATE_DIM] = join(
+    join::<STATE_DIM, 6, 9>(STATE_NAMES, WHEEL_SPEED_NAMES),
+    [
+        "alpha'_L1 (relaxed slip angle)",
+        "alpha'_R1 (relaxed slip angle)",
+        "alpha'_L2 (relaxed slip angle)",
+        "alpha'_R2 (relaxed slip angle)",
+        "alpha'_L3 (relaxed slip angle)",
+        "alpha'_R3 (relaxed slip angle)",
+        "speed-error integral",
+        "X (ground position)",
+        "Y (ground position)",
+        "psi (heading)",
+    ],
+);
 
 /// Everything the truth model computes at one state and input.
 #[derive(Debug, Clone, Copy, PartialEq)]

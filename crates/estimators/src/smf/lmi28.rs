@@ -699,13 +699,8 @@ mod tests {
         // the whitened, row-scaled statement and the literal one are congruent, so faer-ipm must
         // find the same objective (here within 1e-8 relative) and multipliers (to the accuracy the
         // tolerance 1e-9 allows).
-        let mut seed = 0x2545f4914f6cdd1du64;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut g = dense_kernels::test_data::XorShift(0x2545f4914f6cdd1d);
+        let mut rnd = move || g.centred();
         let settings = lmi::SolverSettings::builder().tolerance(1e-9).build().unwrap();
         for k in 0..6 {
             let (n, m) = (2 + k % 4, 1 + k % 2);

@@ -364,17 +364,10 @@ pub(super) mod tests {
     use super::*;
     use models::{ConstantModel, DiscreteModel, LinearModel};
 
-    fn rand(r: usize, c: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        DMatrix::from_fn(r, c, |_, _| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        })
-    }
+    use dense_kernels::test_data::centred_matrix as rand;
 
     fn spd(n: usize, seed: u64) -> DMatrix<f64> {
-        let h = rand(n, n, seed);
-        &h * h.transpose() + DMatrix::identity(n, n) * 0.5
+        dense_kernels::test_data::spd_matrix(n, seed, 0.5)
     }
 
     /// A window of `len` states of a random linear model (`n = 3`, `m = 2`, one input) with
