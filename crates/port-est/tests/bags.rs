@@ -191,43 +191,8 @@ fn estimates_written_as_a_bag_hold_the_csv_numbers() {
     assert!(!std::fs::read_dir(&d).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
 }
 
-/// A model of the ROS 2 fixtures (standard messages: `sensor_msgs/Imu` at 100 Hz,
-/// `sensor_msgs/NavSatFix` at 10 Hz with a dropout, `nav_msgs/Odometry`, `geometry_msgs/TwistStamped`).
-const ROS2_MODEL: &str = r#"
-x0 = [0.0, 0.0, 0.0]
-p0 = [100.0, 100.0, 100.0]
-q = [1.0, 1.0, 1.0]
-r = [1.0, 10.0, 1.0, 1.0, 1.0]
-
-[model]
-states = ["lat", "v", "yaw_rate"]
-inputs = ["a", "delta"]
-outputs = ["gnss_lat", "gnss_status", "gyro", "wheel_speed", "gyro_var"]
-
-[f]
-lat = "lat"
-v = "v + 0.01 * a"
-yaw_rate = "yaw_rate + 0.01 * delta"
-
-[h]
-gnss_lat = "lat"
-gnss_status = "0 * lat"
-gyro = "yaw_rate"
-wheel_speed = "v"
-gyro_var = "0 * v"
-
-[log]
-ts = 0.01
-
-[log.fields]
-a = { topic = "/imu", field = "linear_acceleration.x" }
-delta = { topic = "/cmd_vel", field = "twist.angular.z" }
-gnss_lat = { topic = "/gnss/fix", field = "latitude" }
-gnss_status = { topic = "/gnss/fix", field = "status.status" }
-gyro = { topic = "/imu", field = "angular_velocity.z" }
-wheel_speed = { topic = "/odom", field = "twist.twist.linear.x" }
-gyro_var = { topic = "/imu", field = "angular_velocity_covariance[8]" }
-"#;
+/// A model of the ROS 2 fixtures, shared with the Python tests.
+const ROS2_MODEL: &str = include_str!("../../ros-bag/tests/fixtures/ros2_model.toml");
 
 #[test]
 fn ros2_bags_of_standard_messages_give_their_rows_output() {

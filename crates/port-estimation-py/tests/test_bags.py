@@ -312,41 +312,7 @@ def test_a_damaged_chunk_is_named_by_its_offset(tmp_path):
 
 
 # The ROS 2 fixtures' model file: its [log] table is the mapping ROS2_INPUTS, ROS2_OUTPUTS at 10 ms.
-ROS2_MODEL = """
-x0 = [0.0, 0.0, 0.0]
-p0 = [100.0, 100.0, 100.0]
-q = [1.0, 1.0, 1.0]
-r = [1.0, 10.0, 1.0, 1.0, 1.0]
-
-[model]
-states = ["lat", "v", "yaw_rate"]
-inputs = ["a", "delta"]
-outputs = ["gnss_lat", "gnss_status", "gyro", "wheel_speed", "gyro_var"]
-
-[f]
-lat = "lat"
-v = "v + 0.01 * a"
-yaw_rate = "yaw_rate + 0.01 * delta"
-
-[h]
-gnss_lat = "lat"
-gnss_status = "0 * lat"
-gyro = "yaw_rate"
-wheel_speed = "v"
-gyro_var = "0 * v"
-
-[log]
-ts = 0.01
-
-[log.fields]
-wheel_speed = { topic = "/odom", field = "twist.twist.linear.x" }
-a = { topic = "/imu", field = "linear_acceleration.x" }
-delta = { topic = "/cmd_vel", field = "twist.angular.z" }
-gnss_lat = { topic = "/gnss/fix", field = "latitude" }
-gnss_status = { topic = "/gnss/fix", field = "status.status" }
-gyro = { topic = "/imu", field = "angular_velocity.z" }
-gyro_var = { topic = "/imu", field = "angular_velocity_covariance[8]" }
-"""
+ROS2_MODEL = (FIXTURES / "ros2_model.toml").read_text()
 
 
 def test_a_model_files_log_table_reads_the_bag():
