@@ -4,11 +4,52 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
+use std::time::Instant;
 
 use nalgebra::DVector;
+use serde::Serialize;
 use svg_plot::{BarChart, Chart, Grid};
 
 use super::runner::Run;
+
+/// Where and how a reproduction ran, in its `summary.json` (never in a snapshot): read at the
+/// start of the run, the wall-clock total at its end.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunInfo {
+    /// CPU model and core count.
+    pub machine: String,
+    /// `release`, or `debug` when built with debug assertions (timings then not representative).
+    pub build: String,
+    /// `/proc/loadavg` when the run started (other processes share the machine).
+    pub load_average: String,
+    /// Total wall-clock seconds of the reproduction.
+    pub total_seconds: f64,
+    /// When the run started.
+    #[serde(skip)]
+    started: Instant,
+}
+
+impl RunInfo {
+    /// The machine, the build and the load now, and the clock started.
+    #[must_use]
+    pub fn start() -> Self {
+        Self {
+            machine: machine(),
+            build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
+            load_average: std::fs::read_to_string("/proc/loadavg")
+                .map_or_else(|_| "unknown".into(), |s| s.trim().into()),
+            total_seconds: 0.0,
+            started: Instant::now(),
+        }
+    }
+
+    /// The same, with the seconds since [`RunInfo::start`].
+    #[must_use]
+    pub fn finished(mut self) -> Self {
+        self.total_seconds = self.started.elapsed().as_secs_f64();
+        self
+    }
+}
 
 /// A short description of the machine (CPU model and core count).
 #[must_use]

@@ -19,7 +19,6 @@ pub mod run;
 
 use estimators::registry::names;
 use std::path::Path;
-use std::time::Instant;
 
 use bds_ins_dynamics::{RtkStatus, scenario};
 use serde::Serialize;
@@ -197,14 +196,9 @@ pub struct Summary {
     pub timing: Vec<(String, StepTiming)>,
     /// The claims and verdicts.
     pub claims: Vec<report::Claim>,
-    /// CPU and cores.
-    pub machine: String,
-    /// `release` or `debug`.
-    pub build: String,
-    /// `/proc/loadavg` at the start.
-    pub load_average: String,
-    /// Total wall-clock seconds.
-    pub total_seconds: f64,
+    /// Machine, build, load and wall-clock time.
+    #[serde(flatten)]
+    pub run: outputs::RunInfo,
 }
 
 /// What `summary.json` says about the paper's own numbers.
@@ -348,8 +342,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
     if sizes.runs == 0 {
         return Err("no Monte Carlo run (--runs 0?)".into());
     }
-    let t0 = Instant::now();
-    let load_average = std::fs::read_to_string("/proc/loadavg").map_or_else(|_| "unknown".into(), |s| s.trim().into());
+    let run = outputs::RunInfo::start();
     for sub in ["figures", "csv"] {
         std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
     }
@@ -452,10 +445,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         field,
         timing,
         claims,
-        machine: outputs::machine(),
-        build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
-        load_average,
-        total_seconds: t0.elapsed().as_secs_f64(),
+        run: run.finished(),
     };
     outputs::write_summary_and_report(out, &summary, &report::markdown(&summary))?;
     Ok(summary)

@@ -305,10 +305,10 @@ pub fn markdown(s: &Summary) -> String {
         if s.quick { " --quick" } else { "" },
         s.seed,
         s.sizes.runs,
-        s.total_seconds,
-        s.machine,
-        s.build,
-        s.load_average
+        s.run.total_seconds,
+        s.run.machine,
+        s.run.build,
+        s.run.load_average
     );
     if s.quick {
         let _ = writeln!(
@@ -459,7 +459,7 @@ pub fn markdown(s: &Summary) -> String {
          one FIS evaluation), experiment (a), first reading, all seeds; {} build on a shared machine (load average \
          {}). `cargo bench -p estimators --bench adaptive` measures the same step with criterion.\n\n\
          | filter | steps | median [µs] | 99th percentile [µs] |\n|---|---:|---:|---:|",
-        s.build, s.load_average
+        s.run.build, s.run.load_average
     );
     for (name, t) in &s.timing {
         let _ = writeln!(md, "| {} | {} | {} | {} |", cell(name), t.steps_timed, sig3(t.median_us), sig3(t.p99_us));

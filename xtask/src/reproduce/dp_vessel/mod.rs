@@ -16,7 +16,6 @@ pub mod report;
 pub mod run;
 
 use std::path::Path;
-use std::time::Instant;
 
 use serde::Serialize;
 use vessel_control::{NsampcParams, ReferenceFilter};
@@ -128,19 +127,14 @@ pub struct Summary {
     pub figures: Vec<(String, String)>,
     /// The paper's claims and verdicts.
     pub claims: Vec<report::Claim>,
-    /// CPU model and core count.
-    pub machine: String,
-    /// `release`, or `debug` when built with debug assertions.
-    pub build: String,
-    /// `/proc/loadavg` when the run started.
-    pub load_average: String,
     /// The certified position and heading of `smf-nl` with bounded noise (not the paper's
     /// experiment).
     pub certified: certified::CertifiedVessel,
     /// `mhe-ukf`'s runs replayed with real-time iterations, per scenario.
     pub real_time: Vec<real_time::RealTimeReplay>,
-    /// Total wall-clock seconds.
-    pub total_seconds: f64,
+    /// Machine, build, load and wall-clock time.
+    #[serde(flatten)]
+    pub run: outputs::RunInfo,
 }
 
 /// What `summary.json` says about the paper's own numbers.
@@ -157,8 +151,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
     if sizes.seeds == 0 {
         return Err("no seed to run (--runs 0?)".into());
     }
-    let t0 = Instant::now();
-    let load_average = std::fs::read_to_string("/proc/loadavg").map_or_else(|_| "unknown".into(), |s| s.trim().into());
+    let run = outputs::RunInfo::start();
     for sub in ["figures", "csv"] {
         std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
     }
@@ -229,12 +222,9 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         results,
         figures,
         claims,
-        machine: outputs::machine(),
-        build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
-        load_average,
         certified,
         real_time,
-        total_seconds: t0.elapsed().as_secs_f64(),
+        run: run.finished(),
     };
     let report = format!(
         "{}\n{}\n{}",

@@ -293,9 +293,9 @@ pub fn markdown(s: &Summary) -> String {
         s.filter.r_diag,
         s.filter.p0_diag,
         s.filter.ukf,
-        s.build,
-        s.machine,
-        s.load_average
+        s.run.build,
+        s.run.machine,
+        s.run.load_average
     );
     let _ = writeln!(m, "## The paper's claims\n\n| claim | verdict |\n|---|---|");
     for c in &s.claims {

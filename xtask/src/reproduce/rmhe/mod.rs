@@ -13,7 +13,6 @@ pub mod run;
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 use serde::Serialize;
 use svg_plot::{Chart, Grid, PALETTE, Series};
@@ -131,12 +130,9 @@ pub struct Summary {
     pub claims: Vec<Claim>,
     /// Figures `(file, caption)`.
     pub figures: Vec<(String, String)>,
-    /// Machine.
-    pub machine: String,
-    /// `/proc/loadavg` at the start.
-    pub load_average: String,
-    /// Total seconds.
-    pub total_seconds: f64,
+    /// Machine, build, load and wall-clock time.
+    #[serde(flatten)]
+    pub run: outputs::RunInfo,
 }
 
 impl Summary {
@@ -171,12 +167,11 @@ const STATES: [(&str, &str, f64); 4] = [
 /// # Errors
 /// A failed estimator run or an output that cannot be written.
 pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Result<Summary, String> {
-    let t0 = Instant::now();
+    let run = outputs::RunInfo::start();
     let sizes = Sizes::new(quick, runs);
     if sizes.seeds == 0 {
         return Err("--runs must be positive".into());
     }
-    let load_average = std::fs::read_to_string("/proc/loadavg").map_or_else(|_| "unknown".into(), |s| s.trim().into());
     for sub in ["figures", "csv"] {
         std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
     }
@@ -241,7 +236,7 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
     bar.finish_and_clear();
     let (timing, ordering_fraction) = time_variants(&exp, &variants, sizes.timing_repetitions, seed)?;
     let claims = judge(&blocks, &timing, ordering_fraction);
-    let mut summary = Summary {
+    let summary = Summary {
         quick,
         seed,
         sizes,
@@ -251,11 +246,8 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         ordering_fraction,
         claims,
         figures,
-        machine: outputs::machine(),
-        load_average,
-        total_seconds: 0.0,
+        run: run.finished(),
     };
-    summary.total_seconds = t0.elapsed().as_secs_f64();
     outputs::write_summary_and_report(out, &summary, &report(&summary))?;
     Ok(summary)
 }
@@ -534,9 +526,9 @@ fn report(s: &Summary) -> String {
         s.sizes.seeds,
         if s.quick { " (`--quick`)" } else { "" },
         s.seed,
-        s.machine,
-        s.load_average,
-        s.total_seconds
+        s.run.machine,
+        s.run.load_average,
+        s.run.total_seconds
     );
     let _ = writeln!(r, "## The paper's claims\n");
     let _ = writeln!(r, "| claim | verdict |\n|---|---|");

@@ -105,18 +105,13 @@ pub struct Summary {
     pub figures: Vec<(String, String)>,
     /// The paper's claims and verdicts.
     pub claims: Vec<report::Claim>,
-    /// CPU model and core count.
-    pub machine: String,
-    /// `release`, or `debug` when built with debug assertions (timings then not representative).
-    pub build: String,
-    /// `/proc/loadavg` when the run started (other processes share the machine).
-    pub load_average: String,
     /// Seconds spent simulating the truths.
     pub truth_seconds: f64,
     /// The certified sideslip of `smf-nl` with bounded noise (not the paper's experiment).
     pub certified: certified::CertifiedSummary,
-    /// Total wall-clock seconds of the reproduction.
-    pub total_seconds: f64,
+    /// Machine, build, load and wall-clock time.
+    #[serde(flatten)]
+    pub run: outputs::RunInfo,
 }
 
 /// What `summary.json` says about the paper's own numbers.
@@ -197,8 +192,7 @@ fn run_case(
 /// A failed simulation or filter step, or an output that cannot be written.
 pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Result<Summary, String> {
     let sizes = Sizes::new(quick, runs);
-    let t0 = Instant::now();
-    let load_average = std::fs::read_to_string("/proc/loadavg").map_or_else(|_| "unknown".into(), |s| s.trim().into());
+    let run = outputs::RunInfo::start();
     for sub in ["figures", "csv"] {
         std::fs::create_dir_all(out.join(sub)).map_err(|e| format!("creating {}: {e}", out.join(sub).display()))?;
     }
@@ -241,12 +235,9 @@ pub fn reproduce(quick: bool, out: &Path, seed: u64, runs: Option<usize>) -> Res
         kalman_step,
         figures,
         claims,
-        machine: crate::reproduce::outputs::machine(),
-        build: if cfg!(debug_assertions) { "debug" } else { "release" }.to_owned(),
-        load_average,
         truth_seconds,
         certified,
-        total_seconds: t0.elapsed().as_secs_f64(),
+        run: run.finished(),
     };
     let report = format!("{}\n{}", report::markdown(&summary), certified::markdown(&summary.certified));
     outputs::write_summary_and_report(out, &summary, &report)?;

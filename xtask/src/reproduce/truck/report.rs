@@ -238,10 +238,10 @@ pub fn markdown(s: &Summary) -> String {
         s.sizes.seeds,
         s.sizes.duration_s,
         s.sizes.steps,
-        s.total_seconds,
+        s.run.total_seconds,
         s.truth_seconds,
-        s.machine,
-        s.load_average
+        s.run.machine,
+        s.run.load_average
     );
     if s.quick {
         let _ = writeln!(
@@ -360,9 +360,9 @@ pub fn markdown(s: &Summary) -> String {
          processes (load average {} at the start), so the tail includes preemption.\n\n\
          | filter | steps timed | median [µs] | 99th percentile [µs] | mean [µs] | largest [µs] | median / 1 ms |\n\
          |---|---:|---:|---:|---:|---:|---:|",
-        s.build,
-        if s.build == "release" { "" } else { " (timings not representative)" },
-        s.load_average
+        s.run.build,
+        if s.run.build == "release" { "" } else { " (timings not representative)" },
+        s.run.load_average
     );
     let row = |md: &mut String, name: &str, t: &StepTiming| {
         let _ = writeln!(
