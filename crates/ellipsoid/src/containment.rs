@@ -152,13 +152,10 @@ impl Ellipsoid {
 
 #[cfg(test)]
 mod tests {
+    use crate::test_util::v;
     use nalgebra::DMatrix;
 
     use super::*;
-
-    fn v(x: &[f64]) -> DVector<f64> {
-        DVector::from_column_slice(x)
-    }
 
     #[test]
     fn offset_balls() {

@@ -291,14 +291,7 @@ pub(crate) fn log_unit_ball_volume(n: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn v(x: &[f64]) -> DVector<f64> {
-        DVector::from_column_slice(x)
-    }
-
-    fn m(r: usize, c: usize, x: &[f64]) -> DMatrix<f64> {
-        DMatrix::from_row_slice(r, c, x)
-    }
+    use crate::test_util::{m, v};
 
     #[test]
     fn unit_ball_volumes() {

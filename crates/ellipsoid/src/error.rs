@@ -192,18 +192,11 @@ pub type Result<T> = std::result::Result<T, EllipsoidError>;
 
 #[cfg(test)]
 mod tests {
+    use crate::test_util::{m, v};
     use nalgebra::{DMatrix, DVector};
 
     use super::EllipsoidError;
     use crate::{Ellipsoid, MeasurementSet};
-
-    fn v(x: &[f64]) -> DVector<f64> {
-        DVector::from_column_slice(x)
-    }
-
-    fn m(r: usize, c: usize, x: &[f64]) -> DMatrix<f64> {
-        DMatrix::from_row_slice(r, c, x)
-    }
 
     fn unit_disc() -> Ellipsoid {
         Ellipsoid::ball(v(&[0.0, 0.0]), 1.0).expect("valid")

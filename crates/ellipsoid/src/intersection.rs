@@ -445,10 +445,7 @@ impl Ellipsoid {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn v(x: &[f64]) -> DVector<f64> {
-        DVector::from_column_slice(x)
-    }
+    use crate::test_util::v;
 
     #[test]
     fn two_unit_discs_half_half() {

@@ -75,37 +75,32 @@ impl CertWork {
     }
 }
 
+/// What a certification reads: the step's model, the gain `L` and multipliers `τ` of the update,
+/// the predicted shape `X₁ = A P Aᵀ`, the noise shapes, the estimate before the step and the
+/// step's data.
+#[derive(Clone, Copy)]
+pub(crate) struct CertInput<'a> {
+    pub(crate) model: &'a StepModel<'a>,
+    pub(crate) l: &'a DMatrix<f64>,
+    pub(crate) tau: [f64; 3],
+    pub(crate) x1: &'a DMatrix<f64>,
+    pub(crate) q: &'a DMatrix<f64>,
+    pub(crate) r: &'a DMatrix<f64>,
+    pub(crate) est: &'a SetEstimate,
+    pub(crate) u: &'a DVector<f64>,
+    pub(crate) y: &'a DVector<f64>,
+}
+
 /// Computes the certified `P_{k+1}` into `cw.p_new` and the centre into `cw.x_new` from
 /// `(L, τ)` (module documentation, "Certification"). `None` if the shape, the centre or the
 /// inflation is not finite. `τ` must come from [`clamp_tau`] and `L` must be 0 if `τ₃ = 0`.
-pub(crate) fn certify(
-    cw: &mut CertWork,
-    model: &StepModel<'_>,
-    l: &DMatrix<f64>,
-    tau: [f64; 3],
-    x1: &DMatrix<f64>,
-    q: &DMatrix<f64>,
-    r: &DMatrix<f64>,
-    est: &SetEstimate,
-    u: &DVector<f64>,
-    y: &DVector<f64>,
-) -> Option<Inflation> {
-    (cw.fns.certify)(cw, model, l, tau, x1, q, r, est, u, y)
+pub(crate) fn certify(cw: &mut CertWork, input: &CertInput<'_>) -> Option<Inflation> {
+    (cw.fns.certify)(cw, input)
 }
 
 /// [`certify`] with the kernels `K`.
-pub(crate) fn certify_with<K: Kernels>(
-    cw: &mut CertWork,
-    model: &StepModel<'_>,
-    l: &DMatrix<f64>,
-    tau: [f64; 3],
-    x1: &DMatrix<f64>,
-    q: &DMatrix<f64>,
-    r: &DMatrix<f64>,
-    est: &SetEstimate,
-    u: &DVector<f64>,
-    y: &DVector<f64>,
-) -> Option<Inflation> {
+pub(crate) fn certify_with<K: Kernels>(cw: &mut CertWork, input: &CertInput<'_>) -> Option<Inflation> {
+    let CertInput { model, l, tau, x1, q, r, est, u, y } = *input;
     let (n, m) = K::dims(l.nrows(), l.ncols());
     let (nn, nm) = (n * n, n * m);
     K::i_minus_lc(l, model.c, &mut cw.k);

@@ -117,31 +117,27 @@ fn direction<K: Kernels>(w: &mut ConsistencyWork, r: &DMatrix<f64>, tau: [f64; 3
     true
 }
 
-/// Checks the measurement `y` against the prediction `w.z = A x̂ + B u` (set by the caller), the
-/// predicted shape `x1 = A P Aᵀ`, the noise shapes `q`, `r` and the output matrix `c`, starting
-/// the search from `tau` (module documentation).
-pub(crate) fn check(
-    w: &mut ConsistencyWork,
-    c: &DMatrix<f64>,
-    x1: &DMatrix<f64>,
-    q: &DMatrix<f64>,
-    r: &DMatrix<f64>,
-    y: &DVector<f64>,
-    tau: [f64; 3],
-) -> Consistency {
-    (w.fns.check)(w, c, x1, q, r, y, tau)
+/// What the data check reads: the output matrix `c`, the predicted shape `x1 = A P Aᵀ`, the noise
+/// shapes `q`, `r`, the measurement `y` and the multipliers `tau` the search starts from.
+#[derive(Clone, Copy)]
+pub(crate) struct CheckInput<'a> {
+    pub(crate) c: &'a DMatrix<f64>,
+    pub(crate) x1: &'a DMatrix<f64>,
+    pub(crate) q: &'a DMatrix<f64>,
+    pub(crate) r: &'a DMatrix<f64>,
+    pub(crate) y: &'a DVector<f64>,
+    pub(crate) tau: [f64; 3],
+}
+
+/// Checks the measurement against the prediction `w.z = A x̂ + B u` (set by the caller) and the
+/// shapes of `input` (module documentation).
+pub(crate) fn check(w: &mut ConsistencyWork, input: &CheckInput<'_>) -> Consistency {
+    (w.fns.check)(w, input)
 }
 
 /// [`check`] with the kernels `K`.
-pub(crate) fn check_with<K: Kernels>(
-    w: &mut ConsistencyWork,
-    c: &DMatrix<f64>,
-    x1: &DMatrix<f64>,
-    q: &DMatrix<f64>,
-    r: &DMatrix<f64>,
-    y: &DVector<f64>,
-    tau: [f64; 3],
-) -> Consistency {
+pub(crate) fn check_with<K: Kernels>(w: &mut ConsistencyWork, input: &CheckInput<'_>) -> Consistency {
+    let CheckInput { c, x1, q, r, y, tau } = *input;
     let m = K::dims(c.ncols(), c.nrows()).1;
     // e = y − C z; M₁ = C X₁ Cᵀ; M₂ = C Q Cᵀ.
     w.e.as_mut_slice()[..m].copy_from_slice(&y.as_slice()[..m]);
@@ -210,7 +206,7 @@ mod tests {
         {
             w.z.fill(0.0);
             let y = DVector::from_vec(vec![dist * 0.6, dist * 0.8]);
-            let got = check(&mut w, &c, &x1, &q, &r, &y, [1.0 / 3.0; 3]);
+            let got = check(&mut w, &CheckInput { c: &c, x1: &x1, q: &q, r: &r, y: &y, tau: [1.0 / 3.0; 3] });
             assert_eq!(got.is_consistent(), inside, "|e| = {dist}: {got:?}");
             if let Consistency::Inconsistent { excess } = got {
                 // For spheres every direction along e is optimal: excess = |e| − 1 exactly.
@@ -246,7 +242,7 @@ mod tests {
                 let h: f64 = [&m1, &m2, &r].iter().map(|m| (dir.dot(&(*m * &dir))).sqrt()).sum();
                 let y = &dir * (h * scale);
                 w.z.fill(0.0);
-                let got = check(&mut w, &c, &x1, &q, &r, &y, [0.2, 0.3, 0.5]);
+                let got = check(&mut w, &CheckInput { c: &c, x1: &x1, q: &q, r: &r, y: &y, tau: [0.2, 0.3, 0.5] });
                 let g = exact(&y);
                 if g > 1e-3 {
                     assert!(!got.is_consistent(), "k = {k}, scale {scale}: exact g = {g}, got {got:?}");

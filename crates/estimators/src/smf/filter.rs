@@ -8,8 +8,8 @@ use nalgebra::{DMatrix, DVector};
 use models::{Dims, LinearModel, StepModel};
 
 use super::angles::AngleWork;
-use super::certify::{CertWork, Inflation, U, certify};
-use super::consistency::{self, Consistency, ConsistencyWork, InconsistencyPolicy};
+use super::certify::{CertInput, CertWork, Inflation, U, certify};
+use super::consistency::{self, CheckInput, Consistency, ConsistencyWork, InconsistencyPolicy};
 use super::fallback::{FallbackReason, GainCtx, clamp_tau, near_simplex};
 use super::gain::GainWork;
 use super::input::{InputModel, check_in_box, effective_noise};
@@ -479,8 +479,8 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             return Err(EstimatorError::NumericalFailure("the prediction's multipliers are not finite"));
         };
         sol.l.fill(0.0);
-        let Some(inflation) = certify(&mut ws.cert, model, &sol.l, tau, &ws.x1, q_used, r, est, u_used, &ws.y_zero)
-        else {
+        let input = CertInput { model, l: &sol.l, tau, x1: &ws.x1, q: q_used, r, est, u: u_used, y: &ws.y_zero };
+        let Some(inflation) = certify(&mut ws.cert, &input) else {
             return Err(EstimatorError::NumericalFailure("the predicted set is not finite"));
         };
         pending.center.copy_from(&est.center);
@@ -649,7 +649,11 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
                         }
                         let ok = ws.x1.iter().chain(ws.q_eff.iter()).all(|v| v.is_finite());
                         if ok
-                            && consistency::check(&mut ws.cons, model.c, &ws.x1, &ws.q_eff, r, y, warm).is_consistent()
+                            && consistency::check(
+                                &mut ws.cons,
+                                &CheckInput { c: model.c, x1: &ws.x1, q: &ws.q_eff, r, y, tau: warm },
+                            )
+                            .is_consistent()
                         {
                             restarted = true;
                             break;
@@ -721,11 +725,15 @@ impl<S: UpdateSolver> SetMembershipFilter<S> {
             tau = gain.fallback(warm, &mut sol.l);
         }
         // Certified P_{k+1} and centre; redone with the fallback if they overflowed.
-        let mut inflation = certify(&mut ws.cert, model, &sol.l, tau, gain.x1, q_used, r, est, u_used, y);
+        let mut inflation =
+            certify(&mut ws.cert, &CertInput { model, l: &sol.l, tau, x1: gain.x1, q: q_used, r, est, u: u_used, y });
         if inflation.is_none() && !fell_back {
             reason = Some(FallbackReason::InvalidSolution);
             tau = gain.fallback(warm, &mut sol.l);
-            inflation = certify(&mut ws.cert, model, &sol.l, tau, gain.x1, q_used, r, est, u_used, y);
+            inflation = certify(
+                &mut ws.cert,
+                &CertInput { model, l: &sol.l, tau, x1: gain.x1, q: q_used, r, est, u: u_used, y },
+            );
         }
         let Some(inflation) = inflation else {
             return Err(EstimatorError::NumericalFailure("the set estimate is not finite"));
@@ -833,7 +841,7 @@ fn consistency_of(
 ) -> Consistency {
     (ws.fns.centre)(model.a, model.b, center, u_used, &mut ws.cons.z);
     let q_used = if bounded { &ws.q_eff } else { q };
-    consistency::check(&mut ws.cons, model.c, &ws.x1, q_used, r, y, warm)
+    consistency::check(&mut ws.cons, &CheckInput { c: model.c, x1: &ws.x1, q: q_used, r, y, tau: warm })
 }
 
 /// The prediction shared by a step and a prediction-only step: `X₁ = A P_k Aᵀ` into `ws.x1`, and

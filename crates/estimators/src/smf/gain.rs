@@ -14,6 +14,16 @@ pub(crate) struct Eval {
     pub hess: [[f64; 3]; 3],
 }
 
+/// The matrices the objective `g(τ)` reads ([`GainWork::eval`]): the predicted shape
+/// `X₁ = A P Aᵀ`, the noise shapes `Q`, `R` and the output matrix `C`.
+#[derive(Clone, Copy)]
+pub(crate) struct GainData<'a> {
+    pub(crate) x1: &'a DMatrix<f64>,
+    pub(crate) q: &'a DMatrix<f64>,
+    pub(crate) c: &'a DMatrix<f64>,
+    pub(crate) r: &'a DMatrix<f64>,
+}
+
 /// Buffers for the closed-form gain (G1) and for `g`, its gradient and Hessian.
 #[derive(Debug, Clone)]
 pub(crate) struct GainWork {
@@ -126,26 +136,13 @@ impl GainWork {
     }
 
     /// `g(τ)`, (D1) and (D2) after [`GainWork::load`]. `None` if the gain fails.
-    pub(crate) fn eval(
-        &mut self,
-        tau: [f64; 3],
-        x1: &DMatrix<f64>,
-        q: &DMatrix<f64>,
-        c: &DMatrix<f64>,
-        r: &DMatrix<f64>,
-    ) -> Option<Eval> {
-        (self.fns.eval)(self, tau, x1, q, c, r)
+    pub(crate) fn eval(&mut self, tau: [f64; 3], data: &GainData<'_>) -> Option<Eval> {
+        (self.fns.eval)(self, tau, data)
     }
 
     /// [`GainWork::eval`] with the kernels `K`.
-    pub(crate) fn eval_with<K: Kernels>(
-        &mut self,
-        tau: [f64; 3],
-        x1: &DMatrix<f64>,
-        q: &DMatrix<f64>,
-        c: &DMatrix<f64>,
-        r: &DMatrix<f64>,
-    ) -> Option<Eval> {
+    pub(crate) fn eval_with<K: Kernels>(&mut self, tau: [f64; 3], data: &GainData<'_>) -> Option<Eval> {
+        let GainData { x1, q, c, r } = *data;
         if !self.gain_with::<K>(tau, c, r) {
             return None;
         }

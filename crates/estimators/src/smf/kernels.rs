@@ -11,12 +11,10 @@
 use nalgebra::{DMatrix, DVector};
 
 use dense_kernels::{self as dense, PivotFailure, fixed, small};
-use models::StepModel;
 
-use super::certify::{CertWork, Inflation, certify_with};
-use super::consistency::{Consistency, ConsistencyWork, check_with};
-use super::filter::SetEstimate;
-use super::gain::{Eval, GainWork};
+use super::certify::{CertInput, CertWork, Inflation, certify_with};
+use super::consistency::{CheckInput, Consistency, ConsistencyWork, check_with};
+use super::gain::{Eval, GainData, GainWork};
 
 /// State counts with a compiled step (the vehicles: truck 3, carrier and car 4, vessel 6,
 /// BDS/INS 13).
@@ -209,31 +207,12 @@ type X1Fn = fn(&DMatrix<f64>, &DMatrix<f64>, &mut DMatrix<f64>, &mut DMatrix<f64
 /// `z = A x + B u`.
 type CentreFn = fn(&DMatrix<f64>, &DMatrix<f64>, &DVector<f64>, &DVector<f64>, &mut DVector<f64>);
 /// The data check ([`super::consistency::check`]).
-type CheckFn = fn(
-    &mut ConsistencyWork,
-    &DMatrix<f64>,
-    &DMatrix<f64>,
-    &DMatrix<f64>,
-    &DMatrix<f64>,
-    &DVector<f64>,
-    [f64; 3],
-) -> Consistency;
+type CheckFn = fn(&mut ConsistencyWork, &CheckInput<'_>) -> Consistency;
 type LoadFn = fn(&mut GainWork, &DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>);
 type GainFn = fn(&mut GainWork, [f64; 3], &DMatrix<f64>, &DMatrix<f64>) -> bool;
-type EvalFn = fn(&mut GainWork, [f64; 3], &DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>) -> Option<Eval>;
+type EvalFn = fn(&mut GainWork, [f64; 3], &GainData<'_>) -> Option<Eval>;
 /// The certification ([`super::certify::certify`]).
-type CertifyFn = fn(
-    &mut CertWork,
-    &StepModel<'_>,
-    &DMatrix<f64>,
-    [f64; 3],
-    &DMatrix<f64>,
-    &DMatrix<f64>,
-    &DMatrix<f64>,
-    &SetEstimate,
-    &DVector<f64>,
-    &DVector<f64>,
-) -> Option<Inflation>;
+type CertifyFn = fn(&mut CertWork, &CertInput<'_>) -> Option<Inflation>;
 
 /// One instance of each part of the step, chosen once ([`StepFns::for_sizes`]).
 #[derive(Debug, Clone, Copy)]
