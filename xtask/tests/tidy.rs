@@ -26,6 +26,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, &[&str])] = &[
     ("dense-kernels", &[]),
     ("counting-allocator", &[]),
+    ("text-fuzz", &[]),
     ("fuzzy-inference", &[]),
     ("atomic-output", &[]),
     ("svg-plot", &[]),

@@ -5,6 +5,7 @@
 use nalgebra::DMatrix;
 
 use super::kernels::{Kernels, StepFns};
+use super::update::UpdateProblem;
 
 /// Value, gradient and Hessian of `g` on the positive orthant, at one `τ`.
 #[derive(Debug, Clone, Copy)]
@@ -12,16 +13,6 @@ pub(crate) struct Eval {
     pub g: f64,
     pub grad: [f64; 3],
     pub hess: [[f64; 3]; 3],
-}
-
-/// The matrices the objective `g(τ)` reads ([`GainWork::eval`]): the predicted shape
-/// `X₁ = A P Aᵀ`, the noise shapes `Q`, `R` and the output matrix `C`.
-#[derive(Clone, Copy)]
-pub(crate) struct GainData<'a> {
-    pub(crate) x1: &'a DMatrix<f64>,
-    pub(crate) q: &'a DMatrix<f64>,
-    pub(crate) c: &'a DMatrix<f64>,
-    pub(crate) r: &'a DMatrix<f64>,
 }
 
 /// Buffers for the closed-form gain (G1) and for `g`, its gradient and Hessian.
@@ -135,14 +126,14 @@ impl GainWork {
         self.gain_tau == Some(tau.map(f64::to_bits))
     }
 
-    /// `g(τ)`, (D1) and (D2) after [`GainWork::load`]. `None` if the gain fails.
-    pub(crate) fn eval(&mut self, tau: [f64; 3], data: &GainData<'_>) -> Option<Eval> {
-        (self.fns.eval)(self, tau, data)
+    /// `g(τ)`, (D1) and (D2) of `pr`'s `X₁`, `Q`, `C`, `R` after [`GainWork::load`]. `None` if the gain fails.
+    pub(crate) fn eval(&mut self, tau: [f64; 3], pr: &UpdateProblem<'_>) -> Option<Eval> {
+        (self.fns.eval)(self, tau, pr)
     }
 
     /// [`GainWork::eval`] with the kernels `K`.
-    pub(crate) fn eval_with<K: Kernels>(&mut self, tau: [f64; 3], data: &GainData<'_>) -> Option<Eval> {
-        let GainData { x1, q, c, r } = *data;
+    pub(crate) fn eval_with<K: Kernels>(&mut self, tau: [f64; 3], pr: &UpdateProblem<'_>) -> Option<Eval> {
+        let UpdateProblem { x1, q, c, r, .. } = *pr;
         if !self.gain_with::<K>(tau, c, r) {
             return None;
         }

@@ -14,7 +14,8 @@ use dense_kernels::{self as dense, PivotFailure, fixed, small};
 
 use super::certify::{CertInput, CertWork, Inflation, certify_with};
 use super::consistency::{CheckInput, Consistency, ConsistencyWork, check_with};
-use super::gain::{Eval, GainData, GainWork};
+use super::gain::{Eval, GainWork};
+use super::update::UpdateProblem;
 
 /// State counts with a compiled step (the vehicles: truck 3, carrier and car 4, vessel 6,
 /// BDS/INS 13).
@@ -210,7 +211,7 @@ type CentreFn = fn(&DMatrix<f64>, &DMatrix<f64>, &DVector<f64>, &DVector<f64>, &
 type CheckFn = fn(&mut ConsistencyWork, &CheckInput<'_>) -> Consistency;
 type LoadFn = fn(&mut GainWork, &DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>);
 type GainFn = fn(&mut GainWork, [f64; 3], &DMatrix<f64>, &DMatrix<f64>) -> bool;
-type EvalFn = fn(&mut GainWork, [f64; 3], &GainData<'_>) -> Option<Eval>;
+type EvalFn = fn(&mut GainWork, [f64; 3], &UpdateProblem<'_>) -> Option<Eval>;
 /// The certification ([`super::certify::certify`]).
 type CertifyFn = fn(&mut CertWork, &CertInput<'_>) -> Option<Inflation>;
 

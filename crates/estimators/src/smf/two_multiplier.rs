@@ -90,7 +90,7 @@
 //! homogeneous of degree 1 in the small multipliers, not quadratic). Typical counts: 0–1
 //! iterations in steady state, 4–5 when `τ` moves far between steps.
 
-use super::gain::{GainData, GainWork};
+use super::gain::GainWork;
 use super::kernels::StepFns;
 use super::update::{UpdateProblem, UpdateSolution, UpdateSolver, UpdateStatus};
 use crate::error::EstimatorError;
@@ -184,8 +184,7 @@ impl TwoMultiplierSolver {
     fn minimise(&mut self, pr: &UpdateProblem<'_>, warm: [f64; 3]) -> (Point, UpdateStatus, u32) {
         // tidy: invariant — `solve` prepares the work buffers before calling `minimise`.
         let work = self.work.as_mut().expect("prepared");
-        let data = GainData { x1: pr.x1, q: pr.q, c: pr.c, r: pr.r };
-        let eval = |w: &mut GainWork, p: &Point| w.eval(p.tau(), &data);
+        let eval = |w: &mut GainWork, p: &Point| w.eval(p.tau(), pr);
         let mut pt = Self::start(warm);
         let mut ev = match eval(work, &pt) {
             Some(e) => e,
@@ -585,10 +584,12 @@ mod tests {
     #[test]
     fn gradient_and_hessian_match_finite_differences() {
         let (x1, q, c, r) = case();
+        let (identity, zero) = (DMatrix::identity(3, 3), nalgebra::DVector::zeros(3));
+        let pr = UpdateProblem { a: &identity, c: &c, q: &q, r: &r, p: &identity, x_hat: &zero, x1: &x1 };
         let mut w = GainWork::new(3, 2);
         w.load(&x1, &q, &c);
         for tau in [[0.3, 0.5, 0.2], [0.2, 0.1, 0.7], [0.6, 0.35, 0.05], [0.4, 0.3, 1e-7]] {
-            let e = w.eval(tau, &GainData { x1: &x1, q: &q, c: &c, r: &r }).unwrap();
+            let e = w.eval(tau, &pr).unwrap();
             assert!((e.g - g_ref(tau, &x1, &q, &c, &r)).abs() < 1e-10 * e.g);
             for i in 0..3 {
                 let hstep = 1e-6 * tau[i].max(1e-4);
@@ -598,8 +599,8 @@ mod tests {
                 tm[i] -= hstep;
                 let fd = (g_ref(tp, &x1, &q, &c, &r) - g_ref(tm, &x1, &q, &c, &r)) / (2.0 * hstep);
                 assert!((fd - e.grad[i]).abs() < 1e-6 * (1.0 + fd.abs()), "grad {i} {tau:?}: {fd} vs {}", e.grad[i]);
-                let ep = w.eval(tp, &GainData { x1: &x1, q: &q, c: &c, r: &r }).unwrap();
-                let em = w.eval(tm, &GainData { x1: &x1, q: &q, c: &c, r: &r }).unwrap();
+                let ep = w.eval(tp, &pr).unwrap();
+                let em = w.eval(tm, &pr).unwrap();
                 for j in 0..3 {
                     let fd = (ep.grad[j] - em.grad[j]) / (2.0 * hstep);
                     let an = e.hess[i][j];
@@ -623,7 +624,7 @@ mod tests {
         assert_eq!(out.status, UpdateStatus::Solved);
         let tau = out.tau;
         let w = s.work.as_mut().unwrap();
-        let e = w.eval(tau, &GainData { x1: &x1, q: &q, c: &c, r: &r }).unwrap();
+        let e = w.eval(tau, &pr).unwrap();
         // tr(Tᵢ)/τᵢ = tr P for every active multiplier: ∂g/∂τᵢ = −g.
         for i in 0..3 {
             assert!((e.grad[i] + e.g).abs() < 1e-8 * e.g, "{i}: {:?} {}", e.grad, e.g);
