@@ -17,20 +17,7 @@ fn vehicle(name: &str) -> EquationModel {
     EquationModel::from_toml_str_with_foreign_keys(&text, &path, &NOISE_KEYS).unwrap()
 }
 
-const PENDULUM: &str = r#"
-[model]
-states = ["theta", "omega"]
-inputs = ["torque"]
-outputs = ["tip_x", "tip_y"]
-ts = 0.05
-discretization = "rk4"
-[dxdt]
-theta = "omega"
-omega = "-9.81 / 0.8 * sin(theta) - 0.3 * omega + torque"
-[h]
-tip_x = "0.8 * sin(theta)"
-tip_y = "-0.8 * cos(theta)"
-"#;
+const PENDULUM: &str = include_str!("models/pendulum.toml");
 
 /// Checks `model` on random boxes around `centre` with half-widths up to `spread`.
 fn check(model: &EquationModel, centre: &[f64], spread: &[f64], u: &DVector<f64>, seed: u64) {

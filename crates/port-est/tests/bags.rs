@@ -19,38 +19,10 @@ fn dir(name: &str) -> PathBuf {
     common::fresh_dir("port-est-bags", name)
 }
 
-/// A model of the JSON fixture: input `v` from `/speed_json`, outputs `x`, `valid`, `wz`.
-const MODEL: &str = r#"
-x0 = [0.0, 0.0]
-p0 = [100.0, 100.0]
-q = [1.0, 1.0]
-r = [1.0, 1.0, 1.0]
-
-[model]
-states = ["px", "w"]
-inputs = ["v"]
-outputs = ["x", "valid", "wz"]
-
-[f]
-px = "px + 0.05 * v"
-w = "w"
-
-[h]
-x = "px"
-valid = "w"
-wz = "w"
-"#;
-
-const LOG: &str = r#"
-[log]
-ts = 0.05
-
-[log.fields]
-v = { topic = "/speed_json", field = "v" }
-x = { topic = "/pose_json", field = "x" }
-valid = { topic = "/pose_json", field = "valid" }
-wz = { topic = "/speed_json", field = "gyro[2]" }
-"#;
+/// A model of the JSON fixture (input `v` from `/speed_json`, outputs `x`, `valid`, `wz`) and its
+/// `[log]` table.
+const MODEL: &str = include_str!("../../ros-bag/tests/fixtures/json_model.toml");
+const LOG: &str = include_str!("../../ros-bag/tests/fixtures/json_log.toml");
 
 fn options(d: &Path, input: PathBuf, output: &str, estimator: &str) -> FilterOptions {
     FilterOptions {

@@ -14,31 +14,7 @@ use port_est::filter::{run_filter, select};
 use port_est::{Error, StatusPolicy, parse_model};
 
 /// A damped pendulum driven by a torque, integrated by RK4: nonlinear and differentiable.
-const PENDULUM: &str = r#"
-x0 = [0.5, 0.0]
-p0 = [[0.04, 0.0], [0.0, 0.04]]
-q = [[1e-6, 0.0], [0.0, 1e-4]]
-r = [[1e-4]]
-
-[model]
-states = ["theta", "omega"]
-inputs = ["torque"]
-outputs = ["angle"]
-ts = 0.05
-discretization = "rk4"
-
-[parameters]
-g = 9.81
-l = 0.8
-d = 0.3
-
-[dxdt]
-theta = "omega"
-omega = "-g / l * sin(theta) - d * omega + torque"
-
-[h]
-angle = "theta"
-"#;
+const PENDULUM: &str = include_str!("fixtures/pendulum.toml");
 
 /// The measurements of a simulated run of `text`'s model: `k,<inputs>,<outputs>` with the
 /// model's names, Gaussian noise of covariances `q`, `r` (diagonal), and the true states.

@@ -14,16 +14,9 @@ import port_estimation as pe
 ROOT = Path(__file__).resolve().parents[3]
 
 
-# A double integrator (position measured, acceleration as input) as a model file.
-DOUBLE_INTEGRATOR = """\
-a = [[1.0, 0.1], [0.0, 1.0]]
-b = [[0.0], [0.1]]
-c = [[1.0, 0.0]]
-q = [[1e-4, 0.0], [0.0, 1e-4]]
-r = [[1e-2]]
-p0 = [[1.0, 0.0], [0.0, 1.0]]
-x0 = [0.0, 0.0]
-"""
+# A double integrator (position measured, acceleration as input) as a model file, shared with
+# port-est's tests.
+DOUBLE_INTEGRATOR = (ROOT / "crates" / "port-est" / "tests" / "fixtures" / "double_integrator.toml").read_text()
 
 
 def test_a_linear_model_with_boxes_holds_the_truth_on_the_boundary():

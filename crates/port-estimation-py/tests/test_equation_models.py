@@ -12,45 +12,9 @@ import pytest
 
 import port_estimation as pe
 
-LINEAR = """
-[model]
-states = ["p", "v"]
-inputs = ["a"]
-outputs = ["pos"]
-
-[parameters]
-dt = 0.1
-
-[f]
-p = "p + dt * v"
-v = "0.9 * v + dt * a"
-
-[h]
-pos = "p"
-"""
-
-PENDULUM = """
-[model]
-states = ["theta", "omega"]
-inputs = ["torque"]
-outputs = ["tip_x", "tip_y"]
-ts = 0.01
-discretization = "rk4"
-
-[parameters]
-g = 9.81
-l = 0.8
-c = 0.3
-
-[dxdt]
-theta = "omega"
-omega = "-(g / l) * sin(theta) - c * omega + torque"
-
-[h]
-tip_x = "l * sin(theta)"
-tip_y = "-(l * cos(theta))"
-"""
-
+MODELS = Path(__file__).resolve().parent / "models"
+LINEAR = (MODELS / "linear.toml").read_text()
+PENDULUM = (MODELS / "pendulum.toml").read_text()
 
 def test_a_linear_model_written_as_equations_is_the_matrix_model():
     eq = pe.Model.from_equations(LINEAR, "linear.toml")

@@ -34,15 +34,7 @@ v_upper = [0.02]
 );
 
 /// A double integrator (position measured, acceleration as input) as a model file.
-pub const DOUBLE_INTEGRATOR: &str = "\
-a  = [[1.0, 0.1], [0.0, 1.0]]
-b  = [[0.0], [0.1]]
-c  = [[1.0, 0.0]]
-q  = [[1e-4, 0.0], [0.0, 1e-4]]
-r  = [[1e-2]]
-p0 = [[1.0, 0.0], [0.0, 1.0]]
-x0 = [0.0, 0.0]
-";
+pub const DOUBLE_INTEGRATOR: &str = include_str!("../fixtures/double_integrator.toml");
 
 /// An empty folder `name` under `group` in the tests' scratch space (emptied if it was there).
 pub fn fresh_dir(group: &str, name: &str) -> PathBuf {
