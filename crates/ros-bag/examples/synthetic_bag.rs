@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use mcap::records::MessageHeader;
-use ros_bag::{Bag, LogSpec};
+use ros_bag::{Bag, CdrWriter, LogSpec};
 
 /// The definitions a message's `std_msgs/Header` brings into its schema.
 macro_rules! header_definitions {
@@ -98,34 +98,8 @@ y1 = { topic = "/imu", field = "angular_velocity.z" }
 y2 = { topic = "/gnss/fix", field = "latitude" }
 "#;
 
-/// CDR writer (little-endian, alignment counted after the 4-byte encapsulation header).
-struct Cdr(Vec<u8>);
-
-impl Cdr {
-    fn new() -> Self {
-        Self(vec![0, 1, 0, 0])
-    }
-    fn align(&mut self, n: usize) {
-        while (self.0.len() - 4) % n != 0 {
-            self.0.push(0);
-        }
-    }
-    fn f64(&mut self, v: f64) {
-        self.align(8);
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    fn header(&mut self, t: u64, frame: &str) {
-        self.0.extend_from_slice(&((t / 1_000_000_000) as i32).to_le_bytes());
-        self.0.extend_from_slice(&((t % 1_000_000_000) as u32).to_le_bytes());
-        self.0.extend_from_slice(&(frame.len() as u32 + 1).to_le_bytes());
-        self.0.extend_from_slice(frame.as_bytes());
-        self.0.push(0);
-    }
-}
-
-fn imu(buf: &mut Cdr, t: u64, i: u64) {
-    buf.0.truncate(4);
-    buf.header(t, "imu_link");
+fn imu(buf: &mut CdrWriter, t: u64, i: u64) {
+    buf.clear().header(t, "imu_link");
     let s = i as f64 * 1e-3;
     for v in [0.0, 0.0, 0.0, 1.0] {
         buf.f64(v);
@@ -147,12 +121,10 @@ fn imu(buf: &mut Cdr, t: u64, i: u64) {
     }
 }
 
-fn fix(buf: &mut Cdr, t: u64, i: u64) {
-    buf.0.truncate(4);
-    buf.header(t, "gnss");
-    buf.0.push(0); // status.status (int8)
-    buf.align(2);
-    buf.0.extend_from_slice(&1u16.to_le_bytes()); // status.service
+fn fix(buf: &mut CdrWriter, t: u64, i: u64) {
+    buf.clear().header(t, "gnss");
+    buf.u8(0); // status.status (int8)
+    buf.u16(1); // status.service
     let s = i as f64 * 1e-3;
     for v in [51.95 + 1e-5 * (0.1 * s).sin(), 4.05, 12.5] {
         buf.f64(v);
@@ -160,7 +132,7 @@ fn fix(buf: &mut Cdr, t: u64, i: u64) {
     for v in [0.25, 0.0, 0.0, 0.0, 0.25, 0.0, 0.0, 0.0, 1.0] {
         buf.f64(v);
     }
-    buf.0.push(2); // position_covariance_type: diagonal known
+    buf.u8(2); // position_covariance_type: diagonal known
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -193,19 +165,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let imu_channel = w.add_channel(imu_schema, "/imu", "cdr", &BTreeMap::new())?;
     let fix_channel = w.add_channel(fix_schema, "/gnss/fix", "cdr", &BTreeMap::new())?;
     let t0 = 1_700_000_000_000_000_000u64;
-    let mut buf = Cdr::new();
+    let mut buf = CdrWriter::new();
     let (mut i, mut written, mut fixes) = (0u64, 0u64, 0u32);
     while written < n {
         let t = t0 + i * 10_000_000;
         imu(&mut buf, t, i);
         let h = MessageHeader { channel_id: imu_channel, sequence: i as u32, log_time: t, publish_time: t };
-        w.write_to_known_channel(&h, &buf.0)?;
+        w.write_to_known_channel(&h, buf.bytes())?;
         written += 1;
         if i % 10 == 3 && written < n {
             let t = t + 3_000_000;
             fix(&mut buf, t, i);
             let h = MessageHeader { channel_id: fix_channel, sequence: fixes, log_time: t, publish_time: t };
-            w.write_to_known_channel(&h, &buf.0)?;
+            w.write_to_known_channel(&h, buf.bytes())?;
             fixes += 1;
             written += 1;
         }

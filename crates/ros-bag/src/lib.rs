@@ -96,6 +96,7 @@
 
 mod bag;
 mod cdr;
+mod cdr_writer;
 mod container;
 mod copy;
 mod decoder;
@@ -108,6 +109,7 @@ mod rows;
 mod writer;
 
 pub use bag::{Bag, DEFAULT_MAX_CHUNK_BYTES};
+pub use cdr_writer::CdrWriter;
 pub use copy::TopicCopy;
 pub use error::{Error, Location, Result};
 pub use inspect::{Inspection, TopicInfo};

@@ -8,42 +8,7 @@ use std::path::{Path, PathBuf};
 
 use common::{fixture, ros2_mapping};
 use mcap::records::MessageHeader;
-use ros_bag::{Bag, Error, LogSpec, Row, Stamps};
-
-/// Little-endian CDR with alignment counted after the 4-byte header.
-struct Cdr(Vec<u8>);
-
-impl Cdr {
-    fn new() -> Self {
-        Self(vec![0, 1, 0, 0])
-    }
-    fn align(&mut self, n: usize) {
-        while (self.0.len() - 4) % n != 0 {
-            self.0.push(0);
-        }
-    }
-    fn u32(mut self, v: u32) -> Self {
-        self.align(4);
-        self.0.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-    fn i32(mut self, v: i32) -> Self {
-        self.align(4);
-        self.0.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-    fn f64(mut self, v: f64) -> Self {
-        self.align(8);
-        self.0.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-    fn string(mut self, s: &str) -> Self {
-        self = self.u32(s.len() as u32 + 1);
-        self.0.extend_from_slice(s.as_bytes());
-        self.0.push(0);
-        self
-    }
-}
+use ros_bag::{Bag, CdrWriter, Error, LogSpec, Row, Stamps};
 
 struct Channel<'a> {
     topic: &'a str,
@@ -80,11 +45,12 @@ fn bag(dir: &Path, channels: &[Channel<'_>], messages: &[(usize, u64, Vec<u8>)],
 }
 
 fn value(x: f64, data: &[f64]) -> Vec<u8> {
-    let mut c = Cdr::new().f64(x).u32(data.len() as u32);
+    let mut c = CdrWriter::new();
+    c.f64(x).u32(data.len() as u32);
     for d in data {
-        c = c.f64(*d);
+        c.f64(*d);
     }
-    c.0
+    c.bytes().to_vec()
 }
 
 fn rows_then_error(bag: &Bag, spec: &LogSpec) -> (Vec<Row>, Option<Error>) {
@@ -177,7 +143,7 @@ fn a_schema_that_does_not_parse_names_its_line() {
     let dir = tempfile::tempdir().unwrap();
     let bad =
         Channel { topic: "/bad", encoding: "cdr", schema: Some(("p/msg/Bad", "ros2msg", "float64 x\nfloat64[x] y\n")) };
-    let path = bag(dir.path(), &[bad], &[(0, 1, Cdr::new().f64(1.0).0)], true);
+    let path = bag(dir.path(), &[bad], &[(0, 1, CdrWriter::new().f64(1.0).bytes().to_vec())], true);
     let e = Bag::open(&path).unwrap().rows(&LogSpec::fixed_step(0.1).input("u", "/bad", "x")).unwrap_err();
     assert!(matches!(&e, Error::Schema { schema, line: 2, .. } if schema == "p/msg/Bad"), "{e}");
     assert!(e.to_string().contains("float64[x] y"), "{e}");
@@ -209,7 +175,7 @@ fn an_undecodable_message_names_topic_time_and_offset() {
 #[test]
 fn a_huge_sequence_length_is_refused_before_allocating() {
     let dir = tempfile::tempdir().unwrap();
-    let mut huge = Cdr::new().f64(1.0).u32(1 << 31).0;
+    let mut huge = CdrWriter::new().f64(1.0).u32(1 << 31).bytes().to_vec();
     huge.extend_from_slice(&[0; 64]);
     let path = bag(dir.path(), &[VALUE], &[(0, 1, huge)], true);
     let b = Bag::open(&path).unwrap();
@@ -281,7 +247,7 @@ fn an_input_without_messages_and_a_zero_header_stamp() {
             "std_msgs/Header header\nfloat64 x\n===\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n",
         )),
     };
-    let msg = Cdr::new().i32(0).u32(0).string("f").f64(2.5).0;
+    let msg = CdrWriter::new().i32(0).u32(0).string("f").f64(2.5).bytes().to_vec();
     let path = bag(dir.path(), &[stamped], &[(0, 5, msg)], false);
     let b = Bag::open(&path).unwrap();
     let e = b.read_rows(&LogSpec::fixed_step(0.1).input("x", "/stamped", "x").stamps(Stamps::Header)).unwrap_err();
