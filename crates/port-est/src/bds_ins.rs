@@ -796,18 +796,19 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let cfg = dir.join("c.toml");
         let read = |cfg: &Path| read_config(Some(cfg), &Limits::default());
-        std::fs::write(&cfg, "ts = 0.5\nlatitude_deg = 45.0\nsigma0 = 0.05\np0_sigma = [1.0]\n").unwrap();
-        let e = read(&cfg).unwrap_err().to_string();
-        assert!(e.contains("c.toml:4:12: `p0_sigma`: expected 13 entries, found 1"), "{e}");
-        std::fs::write(&cfg, "ts = 0.5\nflat = true\nsigma0 = -1\n").unwrap();
-        let e = read(&cfg).unwrap_err().to_string();
-        assert!(e.contains("c.toml:3:10: `sigma0`: must be positive"), "{e}");
-        std::fs::write(&cfg, "ts = 0.5\nlatitude = 3\n").unwrap();
-        let e = read(&cfg).unwrap_err().to_string();
-        assert!(e.contains("c.toml:2:1"), "{e}");
-        std::fs::write(&cfg, "ts = 0.5\nlatitude_deg = 95.0\n").unwrap();
-        let e = read(&cfg).unwrap_err().to_string();
-        assert!(e.contains("c.toml:2:16: `latitude_deg`: must lie in [-89, 89] degrees"), "{e}");
+        for (text, expected) in [
+            (
+                "ts = 0.5\nlatitude_deg = 45.0\nsigma0 = 0.05\np0_sigma = [1.0]\n",
+                "c.toml:4:12: `p0_sigma`: expected 13 entries, found 1",
+            ),
+            ("ts = 0.5\nflat = true\nsigma0 = -1\n", "c.toml:3:10: `sigma0`: must be positive"),
+            ("ts = 0.5\nlatitude = 3\n", "c.toml:2:1"),
+            ("ts = 0.5\nlatitude_deg = 95.0\n", "c.toml:2:16: `latitude_deg`: must lie in [-89, 89] degrees"),
+        ] {
+            std::fs::write(&cfg, text).unwrap();
+            let e = read(&cfg).unwrap_err().to_string();
+            assert!(e.contains(expected), "{text}: {e}");
+        }
         std::fs::write(&cfg, "ts = 0.5\nlatitude_deg = 45.0\nsigma0 = 0.05\n").unwrap();
         let s = read(&cfg).unwrap();
         assert_eq!((s.model.ts, s.sigma0), (0.5, 0.05));

@@ -40,7 +40,7 @@ use models::{DifferentiableModel, Dims};
 
 use self::arrival::{Arrival, Prior, StartSample};
 use self::qp::{ConstrainedStep, constrained_step};
-use self::window::{Rings, Weights, Window};
+use self::window::{Rings, Span, Weights, Window};
 use crate::error::EstimatorError;
 use crate::kalman::GaussianEstimate;
 use crate::mhe::estimator::window_outcome;
@@ -391,9 +391,10 @@ impl NonlinearMhe {
         let (rings, win) = (&self.rings, &mut self.window);
         let wts =
             Weights { q_inv: &self.q_inv, r_inv: &self.r_inv, prior_mean: &self.next.mean, prior_inv: &self.next.inv };
+        let span = Span { rings, wts, start, len };
         let tolerance = self.settings.tolerance;
         let (w_box, v_box) = (self.settings.w_box.as_ref(), self.settings.v_box.as_ref());
-        let mut cost = win.cost(model, rings, &wts, start, len, false)?;
+        let mut cost = win.cost(model, &span, false)?;
         let mut mu = 0.0_f64;
         let mut status = WindowStatus::NotConverged;
         let mut iterations = 0;
@@ -410,14 +411,14 @@ impl NonlinearMhe {
         let mut factor_at_last_point = false;
         while iterations < budget {
             iterations += 1;
-            win.linearise(model, rings, &wts, start, len)?;
+            win.linearise(model, &span)?;
             if constrained {
                 // Sequential QP: the Gauss–Newton step with the linearised boxes (full steps).
-                match constrained_step(win, rings, &wts, start, len, w_box, v_box) {
+                match constrained_step(win, &span, w_box, v_box) {
                     ConstrainedStep::Solved => {
                         let negligible = win.step_is_negligible(len, tolerance);
                         win.apply_step(len);
-                        cost = win.cost(model, rings, &wts, start, len, false)?;
+                        cost = win.cost(model, &span, false)?;
                         if negligible {
                             status = WindowStatus::Converged;
                             break;
@@ -438,7 +439,7 @@ impl NonlinearMhe {
             // Damped solve; raise μ until the cost does not increase (beyond rounding).
             let mut accepted = false;
             for _ in 0..30 {
-                if !win.factor_and_solve(rings, &wts, start, len, mu) {
+                if !win.factor_and_solve(&span, mu) {
                     mu = if mu == 0.0 { 1e-8 * win.max_diag(len) } else { mu * 10.0 };
                     continue;
                 }
@@ -450,7 +451,7 @@ impl NonlinearMhe {
                 }
                 let ratio = win.step_ratio(len);
                 win.set_trial(len);
-                let trial = win.cost(model, rings, &wts, start, len, true)?;
+                let trial = win.cost(model, &span, true)?;
                 if trial.is_finite() && trial <= cost + 1e-13 * cost.abs() {
                     win.accept_trial(len);
                     cost = trial;
@@ -496,8 +497,8 @@ impl NonlinearMhe {
         // matrix = (L_last L_lastᵀ)⁻¹ of the (undamped) block Cholesky.
         let have_cov =
             factor_current || (real_time && status == WindowStatus::RealTimeIteration && factor_at_last_point) || {
-                win.linearise(model, rings, &wts, start, len)?;
-                win.factor_and_solve(rings, &wts, start, len, 0.0)
+                win.linearise(model, &span)?;
+                win.factor_and_solve(&span, 0.0)
             };
         // Commit.
         for j in 0..len {

@@ -13,7 +13,7 @@ use clarabel_qp::algebra::CscMatrix;
 use clarabel_qp::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
 use nalgebra::DVector;
 
-use super::window::{Rings, Weights, Window};
+use super::window::{Span, Weights, Window};
 
 /// Outcome of a constrained Gauss–Newton step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,14 +79,8 @@ fn hessian_columns(win: &Window, wts: &Weights<'_>, n: usize, len: usize) -> Vec
 }
 
 /// The linearised boxes as rows `a·Δ ≤ b` (one per finite side).
-fn constraint_rows(
-    win: &Window,
-    rings: &Rings,
-    start: usize,
-    len: usize,
-    w_box: Option<&Bounds>,
-    v_box: Option<&Bounds>,
-) -> Rows {
+fn constraint_rows(win: &Window, span: &Span<'_>, w_box: Option<&Bounds>, v_box: Option<&Bounds>) -> Rows {
+    let Span { rings, start, len, .. } = *span;
     let n = win.x[0].len();
     let mut rows = Rows::new();
     if let Some((lo, hi)) = w_box {
@@ -142,19 +136,17 @@ fn constraint_rows(
 /// [`Window::linearise`]), into the window's `step`.
 pub(super) fn constrained_step(
     win: &mut Window,
-    rings: &Rings,
-    wts: &Weights<'_>,
-    start: usize,
-    len: usize,
+    span: &Span<'_>,
     w_box: Option<&Bounds>,
     v_box: Option<&Bounds>,
 ) -> ConstrainedStep {
+    let (wts, len) = (&span.wts, span.len);
     let n = win.x[0].len();
     let nv = n * len;
-    win.build_blocks(rings, wts, start, len, 0.0);
+    win.build_blocks(span, 0.0);
     let cols = hessian_columns(win, wts, n, len);
     let q: Vec<f64> = win.g[..len].iter().flat_map(|g| g.iter().copied()).collect();
-    let rows = constraint_rows(win, rings, start, len, w_box, v_box);
+    let rows = constraint_rows(win, span, w_box, v_box);
     let mut a_cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nv];
     for (r, (row, _)) in rows.iter().enumerate() {
         for &(c, v) in row {
@@ -214,7 +206,7 @@ mod tests {
         let mut cs = Case::new(len);
         let (start, len) = (cs.start, cs.len);
         let (win, rings, wts, model) = cs.parts();
-        win.linearise(model, rings, &wts, start, len).unwrap();
+        win.linearise(model, &Span { rings, wts, start, len }).unwrap();
         cs
     }
 
@@ -224,17 +216,17 @@ mod tests {
         let (start, len) = (cs.start, cs.len);
         let (win, rings, wts, _) = cs.parts();
         let mut free = win.clone();
-        assert!(free.factor_and_solve(rings, &wts, start, len, 0.0));
+        assert!(free.factor_and_solve(&Span { rings, wts, start, len }, 0.0));
         let wide = (DVector::from_element(3, -1e3), DVector::from_element(3, f64::INFINITY));
         let v_wide = (DVector::from_element(2, f64::NEG_INFINITY), DVector::from_element(2, 1e3));
         let mut boxed = win.clone();
-        let got = constrained_step(&mut boxed, rings, &wts, start, len, Some(&wide), Some(&v_wide));
+        let got = constrained_step(&mut boxed, &Span { rings, wts, start, len }, Some(&wide), Some(&v_wide));
         assert_eq!(got, ConstrainedStep::Solved);
         for j in 0..len {
             assert!((&boxed.step[j] - &free.step[j]).amax() < 1e-7, "Δ_{j}");
         }
         // No box at all: no constraint rows, the same step.
-        assert_eq!(constrained_step(win, rings, &wts, start, len, None, None), ConstrainedStep::Solved);
+        assert_eq!(constrained_step(win, &Span { rings, wts, start, len }, None, None), ConstrainedStep::Solved);
         for j in 0..len {
             assert!((&win.step[j] - &free.step[j]).amax() < 1e-7, "Δ_{j}");
         }
@@ -248,8 +240,8 @@ mod tests {
         let v_box = (DVector::from_element(2, -0.2), DVector::from_element(2, 0.2));
         let (win, rings, wts, _) = cs.parts();
         let mut free = win.clone();
-        assert!(free.factor_and_solve(rings, &wts, start, len, 0.0));
-        let got = constrained_step(win, rings, &wts, start, len, Some(&w_box), Some(&v_box));
+        assert!(free.factor_and_solve(&Span { rings, wts, start, len }, 0.0));
+        let got = constrained_step(win, &Span { rings, wts, start, len }, Some(&w_box), Some(&v_box));
         assert_eq!(got, ConstrainedStep::Solved);
         let (omega, nu) = residuals(&cs);
         let tol = 1e-7;
@@ -271,7 +263,7 @@ mod tests {
         let w_box = (DVector::from_element(3, -1e-9), DVector::from_element(3, 1e-9));
         let v_box = (DVector::from_element(2, -1e-9), DVector::from_element(2, 1e-9));
         let (win, rings, wts, _) = cs.parts();
-        let got = constrained_step(win, rings, &wts, start, len, Some(&w_box), Some(&v_box));
+        let got = constrained_step(win, &Span { rings, wts, start, len }, Some(&w_box), Some(&v_box));
         assert_eq!(got, ConstrainedStep::Infeasible);
     }
 }

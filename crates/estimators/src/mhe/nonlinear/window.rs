@@ -77,6 +77,16 @@ pub(super) struct Weights<'a> {
     pub(super) prior_inv: &'a DMatrix<f64>,
 }
 
+/// The samples one window solve reads: `len` of the rings' slots from sample `start`, and the
+/// weights of its cost.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Span<'a> {
+    pub(super) rings: &'a Rings,
+    pub(super) wts: Weights<'a>,
+    pub(super) start: usize,
+    pub(super) len: usize,
+}
+
 /// The Gauss–Newton iterate of a window of up to `N + 1` states and its buffers (allocated once).
 #[derive(Debug, Clone)]
 pub(super) struct Window {
@@ -153,12 +163,10 @@ impl Window {
     pub(super) fn cost<M: DifferentiableModel + ?Sized>(
         &mut self,
         model: &M,
-        rings: &Rings,
-        wts: &Weights<'_>,
-        start: usize,
-        len: usize,
+        span: &Span<'_>,
         trial: bool,
     ) -> Result<f64, EstimatorError> {
+        let Span { rings, wts, start, len } = *span;
         let xs = if trial { &self.x_trial } else { &self.x };
         let mut total = 0.0;
         self.tmp_n.copy_from(&xs[0]);
@@ -188,11 +196,9 @@ impl Window {
     pub(super) fn linearise<M: DifferentiableModel + ?Sized>(
         &mut self,
         model: &M,
-        rings: &Rings,
-        wts: &Weights<'_>,
-        start: usize,
-        len: usize,
+        span: &Span<'_>,
     ) -> Result<(), EstimatorError> {
+        let Span { rings, wts, start, len } = *span;
         for j in 0..len {
             let sl = rings.slot(start + j);
             if j + 1 < len {
@@ -232,7 +238,8 @@ impl Window {
 
     /// The diagonal blocks `D_j + μ I` of the Gauss–Newton matrix into `d` (the off-diagonal
     /// blocks are `O_j = −Q⁻¹ A_j`, below the diagonal).
-    pub(super) fn build_blocks(&mut self, rings: &Rings, wts: &Weights<'_>, start: usize, len: usize, mu: f64) {
+    pub(super) fn build_blocks(&mut self, span: &Span<'_>, mu: f64) {
+        let Span { rings, wts, start, len } = *span;
         let n = self.n;
         for j in 0..len {
             let sl = rings.slot(start + j);
@@ -260,16 +267,9 @@ impl Window {
 
     /// Builds `D_j + μ I`, factorises by block Cholesky and solves `H Δ = −g` into `step`
     /// ([`Window::factor_and_back_substitute`]). False if a pivot block is not positive definite.
-    pub(super) fn factor_and_solve(
-        &mut self,
-        rings: &Rings,
-        wts: &Weights<'_>,
-        start: usize,
-        len: usize,
-        mu: f64,
-    ) -> bool {
-        self.build_blocks(rings, wts, start, len, mu);
-        self.factor_and_back_substitute(wts.q_inv, len)
+    pub(super) fn factor_and_solve(&mut self, span: &Span<'_>, mu: f64) -> bool {
+        self.build_blocks(span, mu);
+        self.factor_and_back_substitute(span.wts.q_inv, span.len)
     }
 
     /// Block Cholesky of the matrix whose diagonal blocks are in `d` and whose off-diagonal
@@ -473,8 +473,8 @@ pub(super) mod tests {
         // gradient as they are (the residuals wrapped to (−π, π]); undeclared, they do not.
         let cost_and_gradient = |cs: &mut Case| {
             let (window, rings, wts, model) = cs.parts();
-            let cost = window.cost(model, rings, &wts, 5, 4, false).unwrap();
-            window.linearise(model, rings, &wts, 5, 4).unwrap();
+            let cost = window.cost(model, &Span { rings, wts, start: 5, len: 4 }, false).unwrap();
+            window.linearise(model, &Span { rings, wts, start: 5, len: 4 }).unwrap();
             (cost, window.g.clone())
         };
         let mut plain = Case::new(4);
@@ -500,8 +500,8 @@ pub(super) mod tests {
         let mut cs = Case::new(4);
         let (h, g) = cs.dense_system();
         let wts = Weights { q_inv: &cs.q_inv, r_inv: &cs.r_inv, prior_mean: &cs.prior_mean, prior_inv: &cs.prior_inv };
-        cs.window.linearise(&cs.model, &cs.rings, &wts, cs.start, cs.len).unwrap();
-        cs.window.build_blocks(&cs.rings, &wts, cs.start, cs.len, 0.0);
+        cs.window.linearise(&cs.model, &Span { rings: &cs.rings, wts, start: cs.start, len: cs.len }).unwrap();
+        cs.window.build_blocks(&Span { rings: &cs.rings, wts, start: cs.start, len: cs.len }, 0.0);
         let n = 3;
         for j in 0..cs.len {
             assert!((&cs.window.g[j] - g.rows(j * n, n)).amax() < 1e-12, "g_{j}");
@@ -513,13 +513,15 @@ pub(super) mod tests {
         }
         // The cost is ‖r‖²_W: at a step Δ along the exact quadratic, cost(x + Δ) − cost(x) =
         // 2 gᵀΔ + ΔᵀHΔ for this linear model.
-        let base = cs.window.cost(&cs.model, &cs.rings, &wts, cs.start, cs.len, false).unwrap();
+        let base =
+            cs.window.cost(&cs.model, &Span { rings: &cs.rings, wts, start: cs.start, len: cs.len }, false).unwrap();
         let delta = rand(n * cs.len, 1, 99).column(0).into_owned() * 0.1;
         for j in 0..cs.len {
             cs.window.step[j].copy_from(&delta.rows(j * n, n));
         }
         cs.window.set_trial(cs.len);
-        let moved = cs.window.cost(&cs.model, &cs.rings, &wts, cs.start, cs.len, true).unwrap();
+        let moved =
+            cs.window.cost(&cs.model, &Span { rings: &cs.rings, wts, start: cs.start, len: cs.len }, true).unwrap();
         let expected = 2.0 * g.dot(&delta) + delta.dot(&(&h * &delta));
         assert!((moved - base - expected).abs() < 1e-12 * base.max(1.0), "{} vs {expected}", moved - base);
     }
@@ -531,8 +533,8 @@ pub(super) mod tests {
             let (h, g) = cs.dense_system();
             let wts =
                 Weights { q_inv: &cs.q_inv, r_inv: &cs.r_inv, prior_mean: &cs.prior_mean, prior_inv: &cs.prior_inv };
-            cs.window.linearise(&cs.model, &cs.rings, &wts, cs.start, len).unwrap();
-            assert!(cs.window.factor_and_solve(&cs.rings, &wts, cs.start, len, mu));
+            cs.window.linearise(&cs.model, &Span { rings: &cs.rings, wts, start: cs.start, len }).unwrap();
+            assert!(cs.window.factor_and_solve(&Span { rings: &cs.rings, wts, start: cs.start, len }, mu));
             let damped = &h + DMatrix::identity(3 * len, 3 * len) * mu;
             let chol = damped.clone().cholesky().unwrap();
             let reference = chol.solve(&(-&g));
@@ -555,9 +557,9 @@ pub(super) mod tests {
     fn an_indefinite_pivot_block_is_refused() {
         let mut cs = Case::new(3);
         let wts = Weights { q_inv: &cs.q_inv, r_inv: &cs.r_inv, prior_mean: &cs.prior_mean, prior_inv: &cs.prior_inv };
-        cs.window.linearise(&cs.model, &cs.rings, &wts, cs.start, cs.len).unwrap();
+        cs.window.linearise(&cs.model, &Span { rings: &cs.rings, wts, start: cs.start, len: cs.len }).unwrap();
         // A large negative damping makes the first block indefinite.
-        assert!(!cs.window.factor_and_solve(&cs.rings, &wts, cs.start, cs.len, -1e6));
+        assert!(!cs.window.factor_and_solve(&Span { rings: &cs.rings, wts, start: cs.start, len: cs.len }, -1e6));
         assert!(cs.window.max_diag(cs.len) > 0.0);
     }
 
