@@ -12,6 +12,38 @@ use svg_plot::{BarChart, Chart, Grid};
 
 use super::runner::Run;
 
+/// `v` with three significant digits (`–` when not finite).
+#[must_use]
+pub fn sig3(v: f64) -> String {
+    if !v.is_finite() {
+        return "–".into();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// Text for a Markdown table cell (a `|` would end the cell).
+#[must_use]
+pub fn cell(text: &str) -> String {
+    text.replace('|', "\\|")
+}
+
+/// One of a paper's claims (or one of a campaign's targets), the verdict of this reproduction
+/// (`reproduced`, `partly reproduced (…)`, `not reproduced`, `not testable as published`; `met`,
+/// `not met`) and the numbers behind it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Claim {
+    /// The claim, as the paper makes it, or the target.
+    pub claim: String,
+    /// The verdict.
+    pub verdict: String,
+    /// The numbers behind the verdict.
+    pub evidence: String,
+}
+
 /// Where and how a reproduction ran, in its `summary.json` (never in a snapshot): read at the
 /// start of the run, the wall-clock total at its end.
 #[derive(Debug, Clone, Serialize)]

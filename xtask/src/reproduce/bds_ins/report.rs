@@ -3,22 +3,11 @@
 use estimators::registry::names;
 use std::fmt::Write as _;
 
-use serde::Serialize;
-
-use super::super::truck::report::sig3;
 use super::run::WindowStats;
 use super::{FieldSummary, FilterSummary, PAPER_FKF_INCREASE, ReadingSummary, Summary, TARGET_KF_INCREASE, WINDOWS_A};
+use crate::reproduce::outputs::{cell, sig3};
 
-/// One of the paper's claims and the verdict of this reproduction.
-#[derive(Debug, Clone, Serialize)]
-pub struct Claim {
-    /// The claim, as the paper makes it.
-    pub claim: String,
-    /// `reproduced`, `partly reproduced (…)`, `not reproduced`.
-    pub verdict: String,
-    /// The numbers behind the verdict.
-    pub evidence: String,
-}
+pub use crate::reproduce::outputs::Claim;
 
 /// Claim 1: "equal to the KF" means mean horizontal errors within this fraction.
 pub const EQUAL_FRACTION: f64 = 0.05;
@@ -39,10 +28,6 @@ fn pct(v: f64) -> String {
 
 fn find<'a>(r: &'a ReadingSummary, id: &str) -> Option<&'a FilterSummary> {
     r.filters.iter().find(|f| f.id == id)
-}
-
-fn cell(text: &str) -> String {
-    text.replace('|', "\\|")
 }
 
 /// The paper's claims (digest §5), judged on this run.

@@ -21,16 +21,7 @@ pub struct Inconsistency {
     pub detail: String,
 }
 
-/// One of the paper's claims and the verdict of this reproduction.
-#[derive(Debug, Serialize)]
-pub struct Claim {
-    /// The claim, as the paper makes it.
-    pub claim: String,
-    /// `reproduced`, `not reproduced`, `partly reproduced` or `not testable as published`.
-    pub verdict: String,
-    /// The numbers behind the verdict.
-    pub evidence: String,
-}
+pub use crate::reproduce::outputs::Claim;
 
 fn find<'a>(s: &'a ScenarioSummary, label: &str) -> Option<&'a Metrics> {
     s.estimators.iter().find(|m| m.estimator == label)

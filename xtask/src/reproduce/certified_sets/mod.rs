@@ -37,16 +37,7 @@ impl Paper for CertifiedSetsPaper {
     }
 }
 
-/// A target and whether it is met.
-#[derive(Debug, Clone, Serialize)]
-pub struct Claim {
-    /// The target.
-    pub claim: String,
-    /// `met` or `not met`.
-    pub verdict: String,
-    /// The numbers behind the verdict.
-    pub evidence: String,
-}
+pub use crate::reproduce::outputs::Claim;
 
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]

@@ -3,21 +3,12 @@
 
 use std::fmt::Write as _;
 
-use serde::Serialize;
+use crate::reproduce::outputs::sig3;
 
 use super::run::{HEADING_BAND_DEG, POSITION_BAND_M, Spread};
 use super::{ResultSummary, Summary};
 
-/// One of the paper's claims and the verdict of this reproduction.
-#[derive(Debug, Clone, Serialize)]
-pub struct Claim {
-    /// The claim, as the paper makes it.
-    pub claim: String,
-    /// `reproduced`, `partly reproduced (…)`, `not reproduced`.
-    pub verdict: String,
-    /// The numbers behind the verdict.
-    pub evidence: String,
-}
+pub use crate::reproduce::outputs::Claim;
 
 /// Claim 1: "arrives within" this many seconds **\[P\]**.
 pub const ARRIVAL_LIMIT_S: f64 = 100.0;
@@ -40,18 +31,6 @@ pub const VARIANCE_RATIO: f64 = 0.5;
 /// The note on the estimators that every verdict carries.
 pub const ESTIMATOR_NOTE: &str = "Each (scenario, estimator) is judged: `mhe-ukf` is the paper's estimator (MHE with \
                                a UKF arrival cost), `ekf` and `ukf` are baselines on the same noise.";
-
-/// `v` with three significant digits.
-pub fn sig3(v: f64) -> String {
-    if !v.is_finite() {
-        return "–".into();
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
-    format!("{v:.decimals$}")
-}
 
 fn spread(s: &Spread) -> String {
     let missing = if s.missing > 0 { format!(" ({} never)", s.missing) } else { String::new() };

@@ -29,8 +29,8 @@ use svg_plot::{Chart, Grid, PALETTE, Series};
 use truck_dynamics::{TruckEkfModel, TruthTrajectory};
 
 use super::outputs::{self, WriteFigure as _};
-use super::report::sig3;
 use super::run::{P0_SIGMA, QC, SIGMA, StepTiming, X0};
+use crate::reproduce::outputs::sig3;
 use crate::reproduce::runner::{bounding_boxes, median};
 
 /// Half-width of the noise boxes in standard deviations of the EKF's Gaussian settings.

@@ -2,6 +2,8 @@
 
 use std::fmt::Write as _;
 
+use crate::reproduce::outputs::{cell, sig3};
+
 use serde::Serialize;
 
 use super::run::{self, SETTLE_TIME, SIGMA, Spread, StatsSpread, StepTiming};
@@ -35,23 +37,6 @@ pub const VX_MAX_FRACTION: f64 = 0.01;
 pub const INITIAL_ERROR_FACTOR: f64 = 2.0;
 /// The digest's sanity bound: a nominal `β` RMSE above about 0.1° signals a bug.
 pub const SANITY_BETA_RMSE_DEG: f64 = 0.1;
-
-/// `v` with three significant digits.
-pub fn sig3(v: f64) -> String {
-    if !v.is_finite() {
-        return "–".into();
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
-    format!("{v:.decimals$}")
-}
-
-/// Text for a Markdown table cell (a `|` would end the cell).
-fn cell(text: &str) -> String {
-    text.replace('|', "\\|")
-}
 
 fn mean_range(s: &Spread) -> String {
     if s.min == s.max { sig3(s.mean) } else { format!("{} [{}–{}]", sig3(s.mean), sig3(s.min), sig3(s.max)) }
