@@ -33,7 +33,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("ros-bag", &["atomic-output"]),
     ("intervals", &[]),
     ("models", &["dense-kernels", "intervals"]),
-    ("equation-models", &["models", "intervals"]),
+    ("equation-models", &["models", "dense-kernels", "intervals"]),
     ("ellipsoid", &["dense-kernels"]),
     ("constrained-zonotope", &["intervals"]),
     ("lmi", &["dense-kernels"]),

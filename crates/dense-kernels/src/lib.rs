@@ -133,6 +133,24 @@ fn scale_col(c: &mut [f64], beta: f64) {
     }
 }
 
+/// `out = A B` on column-major slices: `A` is `rows × inner`, `B` is `inner × cols`, `out` is
+/// `rows × cols` (lengths checked by `debug_assert!`). Each entry is summed over the inner index
+/// in order from 0, so the numbers are those of the plain triple loop bit for bit. For a
+/// row-major `P = X Y`, pass `Y` as `a` and `X` as `b` (`Pᵀ = Yᵀ Xᵀ`).
+pub fn mul_slices(rows: usize, inner: usize, cols: usize, a: &[f64], b: &[f64], out: &mut [f64]) {
+    debug_assert!(a.len() >= rows * inner && b.len() >= inner * cols && out.len() >= rows * cols);
+    for col in 0..cols {
+        let b_col = &b[col * inner..(col + 1) * inner];
+        for r in 0..rows {
+            let mut s = 0.0;
+            for (k, &bk) in b_col.iter().enumerate() {
+                s += a[k * rows + r] * bk;
+            }
+            out[col * rows + r] = s;
+        }
+    }
+}
+
 /// `Σ aᵢ bᵢ`; for matrices of equal shape, the Frobenius inner product `⟨A, B⟩ = tr(Aᵀ B)`.
 #[inline]
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -192,6 +210,19 @@ mod tests {
     use super::*;
 
     use crate::test_data::centred_matrix as m;
+
+    #[test]
+    fn slice_products_match_nalgebra_and_the_row_major_reading() {
+        let (a, b) = (m(3, 4, 11), m(4, 2, 12));
+        let mut out = vec![0.0; 6];
+        mul_slices(3, 4, 2, a.as_slice(), b.as_slice(), &mut out);
+        assert!((DMatrix::from_column_slice(3, 2, &out) - &a * &b).amax() < 1e-15);
+        // Row-major X (2 × 3) and Y (3 × 2): P = X Y from the column-major reading of the same arrays.
+        let (x, y) = ([1.0, 2.0, 3.0, 4.0, 5.0, 6.0], [7.0, 8.0, 9.0, 10.0, 11.0, 12.0]);
+        let mut p = [0.0; 4];
+        mul_slices(2, 3, 2, &y, &x, &mut p);
+        assert_eq!(p, [58.0, 64.0, 139.0, 154.0]);
+    }
 
     #[test]
     fn kernels_match_nalgebra() {

@@ -438,15 +438,8 @@ impl EquationModel {
                                         tmp[i * n + c] = id + prev[i * n + c] * offsets[s];
                                     }
                                 }
-                                for i in 0..n {
-                                    for c in 0..n {
-                                        let mut acc = 0.0;
-                                        for l in 0..n {
-                                            acc += jst[i * n + l] * tmp[l * n + c];
-                                        }
-                                        prev[i * n + c] = acc;
-                                    }
-                                }
+                                // Row-major D_s = J(x_s) tmp, read column-major as D_sᵀ = tmpᵀ Jᵀ.
+                                dense_kernels::mul_slices(n, n, n, tmp, jst, prev);
                                 for (a, &d) in sum.iter_mut().zip(prev.iter()) {
                                     *a += d * weights[s];
                                 }

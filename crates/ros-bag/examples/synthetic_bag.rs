@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use mcap::records::MessageHeader;
-use ros_bag::{Bag, CdrWriter, LogSpec};
+use ros_bag::{Bag, CdrWriteError, CdrWriter, LogSpec};
 
 /// The definitions a message's `std_msgs/Header` brings into its schema.
 macro_rules! header_definitions {
@@ -98,8 +98,8 @@ y1 = { topic = "/imu", field = "angular_velocity.z" }
 y2 = { topic = "/gnss/fix", field = "latitude" }
 "#;
 
-fn imu(buf: &mut CdrWriter, t: u64, i: u64) {
-    buf.clear().header(t, "imu_link");
+fn imu(buf: &mut CdrWriter, t: u64, i: u64) -> Result<(), CdrWriteError> {
+    buf.clear().header(t, "imu_link")?;
     let s = i as f64 * 1e-3;
     for v in [0.0, 0.0, 0.0, 1.0] {
         buf.f64(v);
@@ -119,10 +119,11 @@ fn imu(buf: &mut CdrWriter, t: u64, i: u64) {
     for _ in 0..9 {
         buf.f64(0.0);
     }
+    Ok(())
 }
 
-fn fix(buf: &mut CdrWriter, t: u64, i: u64) {
-    buf.clear().header(t, "gnss");
+fn fix(buf: &mut CdrWriter, t: u64, i: u64) -> Result<(), CdrWriteError> {
+    buf.clear().header(t, "gnss")?;
     buf.u8(0); // status.status (int8)
     buf.u16(1); // status.service
     let s = i as f64 * 1e-3;
@@ -133,6 +134,7 @@ fn fix(buf: &mut CdrWriter, t: u64, i: u64) {
         buf.f64(v);
     }
     buf.u8(2); // position_covariance_type: diagonal known
+    Ok(())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -169,13 +171,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut i, mut written, mut fixes) = (0u64, 0u64, 0u32);
     while written < n {
         let t = t0 + i * 10_000_000;
-        imu(&mut buf, t, i);
+        imu(&mut buf, t, i)?;
         let h = MessageHeader { channel_id: imu_channel, sequence: i as u32, log_time: t, publish_time: t };
         w.write_to_known_channel(&h, buf.bytes())?;
         written += 1;
         if i % 10 == 3 && written < n {
             let t = t + 3_000_000;
-            fix(&mut buf, t, i);
+            fix(&mut buf, t, i)?;
             let h = MessageHeader { channel_id: fix_channel, sequence: fixes, log_time: t, publish_time: t };
             w.write_to_known_channel(&h, buf.bytes())?;
             fixes += 1;

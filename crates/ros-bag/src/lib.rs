@@ -109,7 +109,7 @@ mod rows;
 mod writer;
 
 pub use bag::{Bag, DEFAULT_MAX_CHUNK_BYTES};
-pub use cdr_writer::CdrWriter;
+pub use cdr_writer::{CdrWriteError, CdrWriter};
 pub use copy::TopicCopy;
 pub use error::{Error, Location, Result};
 pub use inspect::{Inspection, TopicInfo};

@@ -247,7 +247,7 @@ fn an_input_without_messages_and_a_zero_header_stamp() {
             "std_msgs/Header header\nfloat64 x\n===\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n",
         )),
     };
-    let msg = CdrWriter::new().i32(0).u32(0).string("f").f64(2.5).bytes().to_vec();
+    let msg = CdrWriter::new().i32(0).u32(0).string("f").unwrap().f64(2.5).bytes().to_vec();
     let path = bag(dir.path(), &[stamped], &[(0, 5, msg)], false);
     let b = Bag::open(&path).unwrap();
     let e = b.read_rows(&LogSpec::fixed_step(0.1).input("x", "/stamped", "x").stamps(Stamps::Header)).unwrap_err();

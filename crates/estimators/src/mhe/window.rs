@@ -161,15 +161,7 @@ impl WindowProblem {
             let (head, tail) = self.maps.split_at_mut((j + 1) * n * cap);
             let cur = &head[j * n * cap..j * n * cap + n * nz];
             let next = &mut tail[..n * nz];
-            for col in 0..nz {
-                for r in 0..n {
-                    let mut s = 0.0;
-                    for k in 0..n {
-                        s += a_buf[k * n + r] * cur[col * n + k];
-                    }
-                    next[col * n + r] = s;
-                }
-            }
+            dense_kernels::mul_slices(n, n, nz, &a_buf[..n * n], cur, next);
             for r in 0..n {
                 next[(n * (1 + blk) + r) * n + r] += 1.0;
             }
