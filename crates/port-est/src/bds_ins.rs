@@ -406,17 +406,9 @@ pub fn bds_ins(options: &BdsInsOptions) -> Result<BdsInsSummary, Error> {
     }
     let mut out = OutputFile::create(&options.output, &inputs)?;
     let settings = read_config(options.config.as_deref(), &options.limits)?;
-    let (scaling, probe) = scaling(options, settings.sigma0)?;
+    let (mut runner, scaling) = Runner::new(&settings, options)?;
     let mut data = DataReader::open(&options.input, 3, 5)?;
-    let rules = Rules { probe, path: options.fis.clone() };
     let mut tally = StatusTally::default();
-    let mut runner = Runner {
-        settings: &settings,
-        coding: options.rtk_coding,
-        status: options.status,
-        checks: options.checks,
-        rules,
-    };
     match runner.run(scaling, &mut data, &mut out, &options.output, &mut tally) {
         Ok(()) => {
             out.commit()?;
@@ -520,7 +512,17 @@ struct Runner<'a> {
     rules: Rules,
 }
 
-impl Runner<'_> {
+impl<'a> Runner<'a> {
+    /// The runner of `options` on `settings`, and the noise scaling of its steps (the rule file's,
+    /// or none).
+    fn new(settings: &'a Settings, options: &BdsInsOptions) -> Result<(Self, Scaling), Error> {
+        let (scaling, probe) = scaling(options, settings.sigma0)?;
+        let rules = Rules { probe, path: options.fis.clone() };
+        let runner =
+            Self { settings, coding: options.rtk_coding, status: options.status, checks: options.checks, rules };
+        Ok((runner, scaling))
+    }
+
     /// A step's error at its data row: the receiver status at its cell (with a hint for RTK
     /// codes), a noise scale the rule file gave naming the rule file.
     fn step_error<R: Read>(
@@ -685,17 +687,9 @@ mod tests {
 
     pub(super) fn run_with(text: &str, options: &BdsInsOptions) -> Result<(String, BdsInsSummary), Error> {
         let settings = read_config(None, &Limits::default())?;
-        let (scaling, probe) = scaling(options, settings.sigma0)?;
+        let (mut runner, scaling) = Runner::new(&settings, options)?;
         let mut data = DataReader::from_text(Path::new("d.csv"), text, 3, 5)?;
         let mut out = Vec::new();
-        let rules = Rules { probe, path: options.fis.clone() };
-        let mut runner = Runner {
-            settings: &settings,
-            coding: options.rtk_coding,
-            status: options.status,
-            checks: options.checks,
-            rules,
-        };
         let mut tally = StatusTally::default();
         runner.run(scaling, &mut data, &mut out, Path::new("o.csv"), &mut tally)?;
         let summary = BdsInsSummary { epochs: tally.steps, outages: tally.predicted, tally };
