@@ -112,12 +112,7 @@ impl ZonotopeReport {
 /// A guaranteed constrained zonotope and its certified interval hull.
 #[derive(Debug, Clone)]
 pub struct ZonotopeEstimate {
-    center: DVector<f64>,
-    shape: DMatrix<f64>,
-    lower: DVector<f64>,
-    upper: DVector<f64>,
-    status: StepStatus,
-    report: ZonotopeReport,
+    published: Published,
     set: ConstrainedZonotope,
 }
 
@@ -131,19 +126,19 @@ impl ZonotopeEstimate {
     /// The certified lower bounds.
     #[must_use]
     pub fn lower(&self) -> &DVector<f64> {
-        &self.lower
+        &self.published.lower
     }
 
     /// The certified upper bounds.
     #[must_use]
     pub fn upper(&self) -> &DVector<f64> {
-        &self.upper
+        &self.published.upper
     }
 
     /// The filter's report.
     #[must_use]
     pub fn report(&self) -> ZonotopeReport {
-        self.report
+        self.published.report
     }
 }
 
@@ -152,19 +147,20 @@ impl Estimate for ZonotopeEstimate {
         EstimateKind::GuaranteedConstrainedZonotope
     }
     fn center(&self) -> &DVector<f64> {
-        &self.center
+        &self.published.center
     }
     fn shape(&self) -> &DMatrix<f64> {
-        &self.shape
+        &self.published.shape
     }
     fn bounds(&self, i: usize) -> Option<(f64, f64)> {
-        (i < self.lower.len()).then(|| (self.lower[i], self.upper[i]))
+        let p = &self.published;
+        (i < p.lower.len()).then(|| (p.lower[i], p.upper[i]))
     }
     fn status(&self) -> StepStatus {
-        self.status
+        self.published.status
     }
     fn details(&self) -> StepDetails {
-        self.report.details()
+        self.published.report.details()
     }
     fn constrained_zonotope(&self) -> Option<&ConstrainedZonotope> {
         Some(&self.set)
@@ -209,7 +205,9 @@ fn radii(g: &DMatrix<f64>) -> Vec<f64> {
     z.map(|z| z.zonotope_hull().1.iter().copied().collect()).unwrap_or_else(|_| vec![f64::INFINITY; g.nrows()])
 }
 
-/// A published interval before the set it belongs to is attached ([`Published::with_set`]).
+/// What a step publishes besides its set: the centre and shape, the certified interval, the
+/// status and the report ([`Published::with_set`] attaches the set).
+#[derive(Debug, Clone)]
 struct Published {
     center: DVector<f64>,
     shape: DMatrix<f64>,
@@ -222,10 +220,10 @@ struct Published {
 impl Published {
     /// The estimate of the (reduced) `set`, its size in the report.
     fn with_set(self, set: ConstrainedZonotope) -> ZonotopeEstimate {
-        let Published { center, shape, lower, upper, status, mut report } = self;
-        report.generators = set.generators();
-        report.constraints = set.constraints();
-        ZonotopeEstimate { center, shape, lower, upper, status, report, set }
+        let mut published = self;
+        published.report.generators = set.generators();
+        published.report.constraints = set.constraints();
+        ZonotopeEstimate { published, set }
     }
 }
 
@@ -328,16 +326,18 @@ impl ConstrainedZonotopeFilter {
             last_u: DVector::zeros(dims.inputs),
             lost: false,
             estimate: ZonotopeEstimate {
-                center: DVector::zeros(n),
-                shape: DMatrix::zeros(n, n),
-                lower: lo,
-                upper: hi,
-                status: StepStatus {
-                    outcome: SolveOutcome::Initial,
-                    data: DataCheck::NotChecked,
-                    guarantee: Guarantee::Holds,
+                published: Published {
+                    center: DVector::zeros(n),
+                    shape: DMatrix::zeros(n, n),
+                    lower: lo,
+                    upper: hi,
+                    status: StepStatus {
+                        outcome: SolveOutcome::Initial,
+                        data: DataCheck::NotChecked,
+                        guarantee: Guarantee::Holds,
+                    },
+                    report: ZonotopeReport::default(),
                 },
-                report: ZonotopeReport::default(),
                 set: ConstrainedZonotope::zonotope(DVector::zeros(n), DMatrix::zeros(n, 0))
                     .map_err(|e| set_error("X0", e))?,
             },
@@ -345,7 +345,7 @@ impl ConstrainedZonotopeFilter {
             h_enclosure: TaylorEnclosure::new(m, n),
         };
         let hull = set.interval_hull().map_err(|e| set_error("X0", e))?;
-        let status = filter.estimate.status;
+        let status = filter.estimate.published.status;
         let (published, _) = filter.publish(&hull, filter.observer.clone(), status, 0)?;
         filter.estimate = published.with_set(set);
         Ok(filter)
@@ -378,7 +378,7 @@ impl ConstrainedZonotopeFilter {
 
     /// The box the next extension is taken over: the published interval.
     fn current_box(&self) -> Vec<Interval> {
-        boxed(&self.estimate.lower, &self.estimate.upper)
+        boxed(&self.estimate.published.lower, &self.estimate.published.upper)
     }
 
     /// The published interval from a set's hull, the interval observer's box and the bounds
