@@ -78,22 +78,6 @@ pub mod intersection;
 mod linalg;
 pub mod minkowski;
 
-/// Short constructors for the unit tests.
-#[cfg(test)]
-mod test_util {
-    use nalgebra::{DMatrix, DVector};
-
-    /// A column vector.
-    pub(crate) fn v(x: &[f64]) -> DVector<f64> {
-        DVector::from_column_slice(x)
-    }
-
-    /// An `r × c` matrix from its rows.
-    pub(crate) fn m(r: usize, c: usize, x: &[f64]) -> DMatrix<f64> {
-        DMatrix::from_row_slice(r, c, x)
-    }
-}
-
 pub use crate::ellipsoid::Ellipsoid;
 pub use crate::error::{EllipsoidError, Result};
 pub use crate::intersection::{IntersectionBound, MeasurementSet};
@@ -113,3 +97,19 @@ pub const RANK_RELATIVE_TOLERANCE: f64 = 1e-12;
 /// Containment tolerance on the normalised distance: `x ∈ 𝓔` when
 /// `(x − c)ᵀ P⁻¹ (x − c) ≤ 1 + CONTAINMENT_TOLERANCE`, and likewise for ellipsoids.
 pub const CONTAINMENT_TOLERANCE: f64 = 1e-9;
+
+/// Short constructors for the unit tests.
+#[cfg(test)]
+mod test_util {
+    use nalgebra::{DMatrix, DVector};
+
+    /// A column vector.
+    pub(crate) fn v(x: &[f64]) -> DVector<f64> {
+        DVector::from_column_slice(x)
+    }
+
+    /// An `r × c` matrix from its rows.
+    pub(crate) fn m(r: usize, c: usize, x: &[f64]) -> DMatrix<f64> {
+        DMatrix::from_row_slice(r, c, x)
+    }
+}
