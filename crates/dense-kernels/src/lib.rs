@@ -15,7 +15,7 @@
 //!   skip a zero multiplier as the general kernels do, so the same bits on any data.
 //! * Validation ([`spd`]): symmetry and positive definiteness with the workspace's tolerances,
 //!   reporting the offending entry or pivot.
-//! * [`test_data`]: deterministic pseudo-random matrices for the workspace's tests and benches.
+//! * [`test_data`]: deterministic pseudo-random matrices for the workspace's tests.
 //!
 //! **The pivot rule.** Positive definite to working precision means that every Cholesky pivot
 //! `G_jj²` is finite and above `4 ε n` times its own diagonal entry ([`PD_RELATIVE_TOLERANCE`]
@@ -134,9 +134,13 @@ fn scale_col(c: &mut [f64], beta: f64) {
 }
 
 /// `out = A B` on column-major slices: `A` is `rows × inner`, `B` is `inner × cols`, `out` is
-/// `rows × cols` (lengths checked by `debug_assert!`). Each entry is summed over the inner index
-/// in order from 0, so the numbers are those of the plain triple loop bit for bit. For a
-/// row-major `P = X Y`, pass `Y` as `a` and `X` as `b` (`Pᵀ = Yᵀ Xᵀ`).
+/// `rows × cols`. Each entry is summed over the inner index in order from 0, so the numbers are
+/// those of the plain triple loop bit for bit. For a row-major `P = X Y`, pass `Y` as `a` and `X`
+/// as `b` (`Pᵀ = Yᵀ Xᵀ`).
+///
+/// # Panics
+/// If a slice is shorter than its matrix (the caller's sizes are an invariant of its buffers).
+#[inline]
 pub fn mul_slices(rows: usize, inner: usize, cols: usize, a: &[f64], b: &[f64], out: &mut [f64]) {
     debug_assert!(a.len() >= rows * inner && b.len() >= inner * cols && out.len() >= rows * cols);
     for col in 0..cols {

@@ -255,11 +255,7 @@ mod tests {
     use nalgebra::DMatrix;
 
     fn rand(r: usize, c: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        let mut m = DMatrix::from_fn(r, c, |_, _| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        });
+        let mut m = crate::test_data::centred_matrix(r, c, seed);
         // A zero multiplier, which the general path skips.
         m[(r - 1, 0)] = 0.0;
         m

@@ -1,6 +1,7 @@
-//! Deterministic pseudo-random matrices for tests and benchmarks: a seed gives the same entries
-//! on every machine. The generator is Knuth's 64-bit linear congruential generator (MMIX); its
-//! top 53 bits make a double in `[0, 1)`. Not for statistics: for reproducible test data.
+//! Deterministic pseudo-random matrices for tests: a seed gives the same entries on every
+//! machine. Two generators, each drawing a double in `[-0.5, 0.5)` from the top 53 bits of its
+//! state: Knuth's 64-bit linear congruential generator (MMIX, [`Lcg`]) and Marsaglia's xorshift64
+//! ([`XorShift`]). Not for statistics: for reproducible test data.
 
 use nalgebra::DMatrix;
 

@@ -24,8 +24,7 @@ use std::path::{Path, PathBuf};
 use estimators::registry::{self, names};
 use estimators::{AnyEstimator, EstimatorError, Setup};
 use models::DiscreteModel;
-use nalgebra::Vector3;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 use serde::Deserialize;
 use toml::Spanned;
 use truck_dynamics::{TruckEkfModel, TruckInput, TruckParams, TruthTrajectory};
@@ -345,8 +344,8 @@ fn run_truck<R: Read, W: Write>(
     Ok(())
 }
 
-/// Writes `(u_k, y_{k+1})` rows in the `DATA.csv` layout above, header first, `k` counting from
-/// 0 (see [`truth_rows`] for a simulated run's).
+/// Writes `(u_k, y_{k+1})` rows in the `DATA.csv` layout of `port-est truck` (this module's
+/// documentation), header first, `k` counting from 0 (see [`truth_rows`] for a simulated run's).
 ///
 /// # Errors
 /// What writing to `out` returns.

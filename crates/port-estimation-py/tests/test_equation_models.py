@@ -16,6 +16,7 @@ MODELS = Path(__file__).resolve().parent / "models"
 LINEAR = (MODELS / "linear.toml").read_text()
 PENDULUM = (MODELS / "pendulum.toml").read_text()
 
+
 def test_a_linear_model_written_as_equations_is_the_matrix_model():
     eq = pe.Model.from_equations(LINEAR, "linear.toml")
     assert eq.dims == (2, 1, 1) and eq.capability == "linear"

@@ -74,6 +74,9 @@
 //!
 //! # Writing
 //!
+//! [`CdrWriter`] encodes ROS 2 messages of one's own in CDR (synthetic bags for tests and
+//! examples, written with the `mcap` crate).
+//!
 //! [`EstimateWriter`] writes one JSON message per step on a topic, with a JSON schema of plain
 //! numbers named after the states (`{"k": 3, "t": 0.03, "x": {"px": 1.0}, "lower": {…},
 //! "upper": {…}, "status": "converged"}`), log and publish time the step's time, so that

@@ -6,24 +6,18 @@ use std::io::BufWriter;
 use std::time::Instant;
 
 use mcap::records::MessageHeader;
-use ros_bag::{Bag, LogSpec};
+use ros_bag::{Bag, CdrWriter, LogSpec};
 
 const IMU: &str = "std_msgs/Header header\nfloat64[9] orientation_covariance\nfloat64 wz\nfloat64 ax\nfloat64[27] more\n\
 ===\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n";
 
 fn imu(t: u64, wz: f64, ax: f64) -> Vec<u8> {
-    let mut b = vec![0, 1, 0, 0];
-    b.extend_from_slice(&((t / 1_000_000_000) as i32).to_le_bytes());
-    b.extend_from_slice(&((t % 1_000_000_000) as u32).to_le_bytes());
-    b.extend_from_slice(&9u32.to_le_bytes());
-    b.extend_from_slice(b"imu_link\0");
-    while (b.len() - 4) % 8 != 0 {
-        b.push(0);
+    let mut b = CdrWriter::new();
+    b.header(t, "imu_link").unwrap();
+    for &v in [0.0; 9].iter().chain(&[wz, ax]).chain(&[0.5; 27]) {
+        b.f64(v);
     }
-    for v in [0.0; 9].iter().chain(&[wz, ax]).chain(&[0.5; 27]) {
-        b.extend_from_slice(&v.to_le_bytes());
-    }
-    b
+    b.bytes().to_vec()
 }
 
 #[test]

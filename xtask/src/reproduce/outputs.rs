@@ -1,6 +1,8 @@
-//! Output files shared by every paper's reproduction: file-name slugs, per-run CSV files, and
-//! atomic writes (a temporary file in the target directory renamed into place, so that no
-//! half-written output is ever left behind).
+//! What every paper's reproduction writes alike: file-name slugs, per-run CSV files, atomic
+//! writes (a temporary file in the target directory renamed into place, so that no half-written
+//! output is ever left behind), the run's record in `summary.json` ([`RunInfo`]), the claims and
+//! their verdicts ([`Claim`]), and the numbers and cells of the Markdown reports ([`sig3`],
+//! [`cell`]).
 
 use std::fmt::Write as _;
 use std::path::Path;

@@ -521,15 +521,7 @@ impl MovingHorizonEstimator {
         };
         // mat_b holds S⁻¹; p_next = A S⁻¹ Aᵀ + Q.
         let a = &self.a_ring[slot * n * n..(slot + 1) * n * n];
-        for c in 0..n {
-            for r in 0..n {
-                let mut s = 0.0;
-                for k in 0..n {
-                    s += a[k * n + r] * self.mat_b[c * n + k];
-                }
-                self.mat_c[c * n + r] = s;
-            }
-        }
+        dense_kernels::mul_slices(n, n, n, a, &self.mat_b, &mut self.mat_c);
         for c in 0..n {
             for r in 0..n {
                 let mut s = self.q[c * n + r];

@@ -622,11 +622,8 @@ mod tests {
     fn closed_form_update_reproduces_the_builder() {
         // Pseudo-random data of several sizes: the values written by `update` equal those of a
         // fresh build with the builder, entry for entry.
-        let mut seed = 7u64;
-        let mut rnd = move || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut g = dense_kernels::test_data::Lcg(7);
+        let mut rnd = move || g.centred();
         for (n, m) in [(1, 1), (2, 1), (3, 2), (4, 3), (4, 4), (6, 2)] {
             let spd = |k: usize, rnd: &mut dyn FnMut() -> f64| {
                 let b = DMatrix::from_fn(k, k, |_, _| rnd());

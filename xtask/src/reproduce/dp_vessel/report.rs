@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use crate::reproduce::outputs::sig3;
+use crate::reproduce::outputs::{cell, sig3};
 
 use super::run::{HEADING_BAND_DEG, POSITION_BAND_M, Spread};
 use super::{ResultSummary, Summary};
@@ -278,7 +278,7 @@ pub fn markdown(s: &Summary) -> String {
     );
     let _ = writeln!(m, "## The paper's claims\n\n| claim | verdict |\n|---|---|");
     for c in &s.claims {
-        let _ = writeln!(m, "| {} | {} |", c.claim, c.verdict.replace('|', "\\|"));
+        let _ = writeln!(m, "| {} | {} |", c.claim, cell(&c.verdict));
     }
     let _ = writeln!(m);
     for (i, c) in s.claims.iter().enumerate() {
