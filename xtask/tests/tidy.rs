@@ -35,7 +35,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("models", &["dense-kernels", "intervals"]),
     ("equation-models", &["models", "dense-kernels", "intervals"]),
     ("ellipsoid", &["dense-kernels"]),
-    ("constrained-zonotope", &["intervals"]),
+    ("constrained-zonotope", &["dense-kernels", "intervals"]),
     ("lmi", &["dense-kernels"]),
     ("*-dynamics", &["models", "dense-kernels", "intervals"]),
     ("vessel-control", &["models", "dense-kernels", "vessel-dynamics", "estimators"]),

@@ -149,45 +149,24 @@ fn kkt_inverse_diagonal(g: &DMatrix<f64>, a: &DMatrix<f64>) -> Vec<f64> {
     let (gat, rest) = rest.split_at_mut(n * nc);
     let (u, rest) = rest.split_at_mut(ng * nc);
     let (sm, sinv) = rest.split_at_mut(nc * nc);
+    // The lower triangle of I + G Gᵀ, factorised with any positive pivot: its eigenvalues are at
+    // least 1, so only an overflow can make it fail.
     for c in 0..n {
         for r in c..n {
             let mut v = if r == c { 1.0 } else { 0.0 };
             for j in 0..ng {
                 v += g[(r, j)] * g[(c, j)];
             }
-            for k in 0..c {
-                v -= l[r + k * n] * l[c + k * n];
-            }
-            if r == c {
-                if !(v > 0.0 && v.is_finite()) {
-                    return singular();
-                }
-                l[c + c * n] = v.sqrt();
-            } else {
-                l[r + c * n] = v / l[c + c * n];
-            }
+            l[r + c * n] = v;
         }
+    }
+    if dense_kernels::cholesky_slice_with(l, n, 0.0).is_err() {
+        return singular();
     }
     // Z's columns by forward and back substitution; H⁻¹'s diagonal 1 − g_jᵀ z_j (Woodbury).
-    let mut diag = vec![0.0; ng];
-    for j in 0..ng {
-        let zj = &mut z[j * n..(j + 1) * n];
-        for r in 0..n {
-            let mut v = g[(r, j)];
-            for k in 0..r {
-                v -= l[r + k * n] * zj[k];
-            }
-            zj[r] = v / l[r + r * n];
-        }
-        for r in (0..n).rev() {
-            let mut v = zj[r];
-            for k in r + 1..n {
-                v -= l[k + r * n] * zj[k];
-            }
-            zj[r] = v / l[r + r * n];
-        }
-        diag[j] = 1.0 - (0..n).map(|r| g[(r, j)] * zj[r]).sum::<f64>();
-    }
+    z.copy_from_slice(g.as_slice());
+    dense_kernels::cholesky_solve(l, n, z);
+    let mut diag: Vec<f64> = (0..ng).map(|j| 1.0 - (0..n).map(|r| g[(r, j)] * z[r + j * n]).sum::<f64>()).collect();
     if nc == 0 {
         return diag;
     }

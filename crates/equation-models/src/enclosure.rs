@@ -114,13 +114,6 @@ fn identity_plus(n: usize, c: Interval, d: &[Interval], out: &mut [Interval]) {
 /// RK4's weights of its four stages (their offsets are 0, ts/2, ts/2, ts).
 const RK4_WEIGHTS: [f64; 4] = [1.0, 2.0, 2.0, 1.0];
 
-/// The point of an RK4 stage, `xs = x + c·k`.
-fn stage_point(x: &[Interval], c: Interval, k: &[Interval], xs: &mut [Interval]) {
-    for ((s, xi), ki) in xs.iter_mut().zip(x).zip(k) {
-        *s = *xi + c * *ki;
-    }
-}
-
 /// A stage's slope `g` added to the sum, `acc += w·g`, and kept for the next stage, `k = g`.
 fn accumulate(acc: &mut [Interval], g: &[Interval], w: f64, k: &mut [Interval]) {
     for (a, gi) in acc.iter_mut().zip(g) {
@@ -129,7 +122,8 @@ fn accumulate(acc: &mut [Interval], g: &[Interval], w: f64, k: &mut [Interval]) 
     k.copy_from_slice(g);
 }
 
-/// `value = x + c·slope`: Euler's step (`c = ts`), RK4's last (`c = ts/6`, the weighted sum).
+/// `value = x + c·slope`: Euler's step (`c = ts`), an RK4 stage's point (`c = c_s`, the previous
+/// stage's slope), RK4's last (`c = ts/6`, the weighted sum).
 fn advance(x: &[Interval], c: Interval, slope: &[Interval], value: &mut [Interval]) {
     for ((v, xi), si) in value.iter_mut().zip(x).zip(slope) {
         *v = *xi + c * *si;
@@ -198,7 +192,7 @@ impl SecondOrderModel for EquationModel {
                         acc.copy_from_slice(g);
                         k.copy_from_slice(g);
                         for s in 1..4 {
-                            stage_point(x, offsets[s], k, xs);
+                            advance(x, offsets[s], k, xs);
                             self.enclose(&self.rhs, xs, u.as_slice(), &mut work, g, jg);
                             identity_plus(n, offsets[s], prev, tmp);
                             for i in 0..n {
@@ -275,7 +269,7 @@ impl SecondOrderModel for EquationModel {
                 acc.copy_from_slice(g);
                 k.copy_from_slice(g);
                 for s in 1..4 {
-                    stage_point(x, offsets[s], k, xs);
+                    advance(x, offsets[s], k, xs);
                     self.enclose_values(&self.rhs, xs, u.as_slice(), values, g);
                     accumulate(acc, g, RK4_WEIGHTS[s], k);
                 }
